@@ -1,0 +1,124 @@
+"""Batched rotations and skew matrices.
+
+Every function accepts arrays with arbitrary leading (batch) axes: an angle array of shape ``(...)``
+gives rotation matrices of shape ``(..., 3, 3)``; a vector array ``(..., 3)`` gives ``(..., 3, 3)``.
+Angles are in radians. Conventions are those of the papers:
+
+* ``euler_zyx(a, b, c) = Rz(a) @ Ry(b) @ Rx(c)`` (intrinsic z-y'-x'', the usual yaw-pitch-roll);
+* ``euler_xyz(a, b, c) = Rx(a) @ Ry(b) @ Rz(c)`` (intrinsic x-y'-z'');
+* ``axis_angle(axis, angle)`` by Rodrigues' formula.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "rot_x",
+    "rot_y",
+    "rot_z",
+    "euler_zyx",
+    "euler_xyz",
+    "euler_zyx_from_matrix",
+    "euler_xyz_from_matrix",
+    "axis_angle",
+    "skew",
+    "unskew",
+    "unit",
+]
+
+
+def _rot(angle: ArrayLike, i: int, j: int) -> NDArray[np.float64]:
+    """Elementary rotation in the (i, j) coordinate plane, batched over ``angle``."""
+    t = np.asarray(angle, dtype=float)
+    c, s = np.cos(t), np.sin(t)
+    r = np.zeros(t.shape + (3, 3))
+    k = 3 - i - j  # the untouched axis
+    r[..., k, k] = 1.0
+    r[..., i, i] = c
+    r[..., j, j] = c
+    r[..., i, j] = -s
+    r[..., j, i] = s
+    return r
+
+
+def rot_x(angle: ArrayLike) -> NDArray[np.float64]:
+    """Rotation about x by ``angle`` (rad); shape ``angle.shape + (3, 3)``."""
+    return _rot(angle, 1, 2)
+
+
+def rot_y(angle: ArrayLike) -> NDArray[np.float64]:
+    """Rotation about y by ``angle`` (rad); shape ``angle.shape + (3, 3)``."""
+    return _rot(angle, 2, 0)
+
+
+def rot_z(angle: ArrayLike) -> NDArray[np.float64]:
+    """Rotation about z by ``angle`` (rad); shape ``angle.shape + (3, 3)``."""
+    return _rot(angle, 0, 1)
+
+
+def euler_zyx(a: ArrayLike, b: ArrayLike, c: ArrayLike) -> NDArray[np.float64]:
+    """``Rz(a) Ry(b) Rx(c)``: intrinsic z-y'-x'' Euler angles (yaw, pitch, roll)."""
+    return rot_z(a) @ rot_y(b) @ rot_x(c)
+
+
+def euler_xyz(a: ArrayLike, b: ArrayLike, c: ArrayLike) -> NDArray[np.float64]:
+    """``Rx(a) Ry(b) Rz(c)``: intrinsic x-y'-z'' Euler angles."""
+    return rot_x(a) @ rot_y(b) @ rot_z(c)
+
+
+def euler_zyx_from_matrix(r: ArrayLike) -> NDArray[np.float64]:
+    """Inverse of :func:`euler_zyx`: angles ``(..., 3)`` = (a, b, c) with b in [-pi/2, pi/2]."""
+    r = np.asarray(r, dtype=float)
+    b = np.arcsin(np.clip(-r[..., 2, 0], -1.0, 1.0))
+    a = np.arctan2(r[..., 1, 0], r[..., 0, 0])
+    c = np.arctan2(r[..., 2, 1], r[..., 2, 2])
+    return np.stack([a, b, c], axis=-1)
+
+
+def euler_xyz_from_matrix(r: ArrayLike) -> NDArray[np.float64]:
+    """Inverse of :func:`euler_xyz`: angles ``(..., 3)`` = (a, b, c) with b in [-pi/2, pi/2]."""
+    r = np.asarray(r, dtype=float)
+    b = np.arcsin(np.clip(r[..., 0, 2], -1.0, 1.0))
+    a = np.arctan2(-r[..., 1, 2], r[..., 2, 2])
+    c = np.arctan2(-r[..., 0, 1], r[..., 0, 0])
+    return np.stack([a, b, c], axis=-1)
+
+
+def skew(v: ArrayLike) -> NDArray[np.float64]:
+    """Skew-symmetric matrix ``[v]x`` with ``skew(v) @ w == cross(v, w)``; ``(..., 3) -> (..., 3, 3)``."""
+    v = np.asarray(v, dtype=float)
+    x, y, z = v[..., 0], v[..., 1], v[..., 2]
+    o = np.zeros_like(x)
+    return np.stack(
+        [np.stack([o, -z, y], -1), np.stack([z, o, -x], -1), np.stack([-y, x, o], -1)], axis=-2
+    )
+
+
+def unskew(m: ArrayLike) -> NDArray[np.float64]:
+    """Vector of the skew-symmetric part of ``m``: inverse of :func:`skew`."""
+    m = np.asarray(m, dtype=float)
+    return 0.5 * np.stack(
+        [m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0], m[..., 1, 0] - m[..., 0, 1]],
+        axis=-1,
+    )
+
+
+def unit(v: ArrayLike) -> NDArray[np.float64]:
+    """``v / |v|`` along the last axis; raises ``ValueError`` for a zero vector."""
+    v = np.asarray(v, dtype=float)
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    if np.any(n == 0):
+        raise ValueError("cannot normalise a zero vector (|v| = 0)")
+    return v / n
+
+
+def axis_angle(axis: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
+    """Rotation by ``angle`` (rad) about ``axis`` (need not be unit length), by Rodrigues' formula.
+
+    ``axis`` has shape ``(..., 3)`` and ``angle`` shape ``(...)``; both broadcast.
+    """
+    k = skew(unit(axis))
+    t = np.asarray(angle, dtype=float)[..., None, None]
+    return np.eye(3) + np.sin(t) * k + (1.0 - np.cos(t)) * (k @ k)

@@ -1,0 +1,18 @@
+"""Mechanisms: one module each, all implementing :class:`parakin.mechanisms.base.Mechanism`."""
+
+from parakin.mechanisms.base import Mechanism
+from parakin.mechanisms.p3p4s import P3P4S
+
+#: CLI name -> mechanism class (later papers add "2ups", "stewart12", "stewart36").
+REGISTRY: dict[str, type[Mechanism]] = {P3P4S.name: P3P4S}
+
+
+def get(name: str) -> type[Mechanism]:
+    """The mechanism class registered under CLI name ``name``."""
+    try:
+        return REGISTRY[name]
+    except KeyError:
+        raise KeyError(f"unknown mechanism {name!r}; known: {', '.join(sorted(REGISTRY))}") from None
+
+
+__all__ = ["Mechanism", "P3P4S", "REGISTRY", "get"]
