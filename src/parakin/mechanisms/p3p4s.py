@@ -230,10 +230,10 @@ class P3P4S(Mechanism):
             named[f"d_{i + 1}"] = pts["d"][i]
         frames = {"O": (np.zeros(3), np.eye(3)), "P": (x, np.eye(3))}
         for i in range(3):
-            # limb frame {u_i}: y_i along the rail (towards c_i), x_i horizontal and perpendicular
-            # to O u_i, z_i = x_i x y_i (paper §1.1)
+            # limb frame {u_i} = R(z, alpha_i) R(x, phi) with alpha_i = gamma_i + 90 deg: x_i
+            # horizontal and perpendicular to O u_i, y_i along the rail towards c_i, z_i = x_i x y_i
             y_i = self.m[i]
-            x_i = -t[i]
+            x_i = t[i]
             frames[f"u_{i + 1}"] = (pts["u"][i], np.stack([x_i, y_i, np.cross(x_i, y_i)], axis=-1))
         return Skeleton(
             points=named,
