@@ -81,6 +81,9 @@ class Mechanism(ABC):
     pose_units: ClassVar[tuple[str, ...]]
     #: SI unit of each joint.
     joint_units: ClassVar[tuple[str, ...]]
+    #: Units the paper prints poses and joints in (``--units paper`` in the CLI), e.g. mm and deg.
+    paper_pose_units: ClassVar[tuple[str, ...]]
+    paper_joint_units: ClassVar[tuple[str, ...]]
 
     # ------------------------------------------------------------------ what a mechanism defines
     @abstractmethod

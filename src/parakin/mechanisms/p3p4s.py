@@ -53,6 +53,8 @@ class P3P4S(Mechanism):
     joint_names: ClassVar[tuple[str, ...]] = ("l1", "l2", "l3")
     pose_units: ClassVar[tuple[str, ...]] = ("m", "m", "m")
     joint_units: ClassVar[tuple[str, ...]] = ("m", "m", "m")
+    paper_pose_units: ClassVar[tuple[str, ...]] = ("m", "m", "m")  # Table 1 is in metres
+    paper_joint_units: ClassVar[tuple[str, ...]] = ("m", "m", "m")
     #: limb azimuths gamma_i of the base vertices u_i (paper §1.1)
     gammas: ClassVar[tuple[float, ...]] = tuple(np.deg2rad([0.0, 120.0, 240.0]))
 

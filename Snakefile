@@ -1,0 +1,18 @@
+# parakin: reproduce every table and figure of the four papers.
+#   full:  snakemake --cores 2
+#   quick: snakemake --cores 2 --configfile config/quick.yaml   (CI / tests; writes under build/quick)
+# Every rule calls the `parakin` CLI; the code behind each output is one `parakin reproduce` artefact.
+
+configfile: "config/config.yaml"
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/zhao2017_3p4s.smk"
+include: "workflow/rules/report.smk"
+
+
+rule all:
+    default_target: True
+    input:
+        ZHAO2017_3P4S_OUTPUTS,
+        REPORT,

@@ -1,0 +1,193 @@
+"""The ``parakin`` command line: ``ik``, ``fk``, ``reproduce`` and ``report``.
+
+Bad input (a wrong number of values, an unreachable pose, an unknown solver, a malformed config)
+exits with status 2 and one line on stderr, never a traceback. SI units by default; ``--units
+paper`` reads and prints the units the paper uses.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from parakin import mechanisms
+from parakin.errors import ParakinError
+from parakin.units import from_si, parse_quantity, to_si
+
+EXIT_BAD_INPUT = 2
+EXIT_NOT_CONVERGED = 1
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):  # one line, status 2 (argparse prints usage too; keep it short)
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
+
+
+def _mechanism(name: str, params: Sequence[str]):
+    cls = mechanisms.get(name)
+    changes = {}
+    for item in params:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise ValueError(f"--param {item!r} must look like NAME=VALUE (e.g. phi=35deg)")
+        changes[key.strip()] = parse_quantity(value)
+    fields = cls.__dataclass_fields__
+    unknown = sorted(set(changes) - set(fields))
+    if unknown:
+        raise ValueError(f"unknown parameter(s) {unknown} of {name}; known: {sorted(fields)}")
+    return cls(**changes)
+
+
+def _batch(values: Sequence[float], n: int, what: str, names: Sequence[str]) -> np.ndarray:
+    if len(values) == 0 or len(values) % n:
+        raise ValueError(f"{what} needs a multiple of {n} values ({', '.join(names)}), got {len(values)}")
+    a = np.asarray(values, dtype=float).reshape(-1, n)
+    return a[0] if len(a) == 1 else a
+
+
+def _units(mech, kind: str, paper: bool) -> tuple[str, ...]:
+    return getattr(mech, f"paper_{kind}_units" if paper else f"{kind}_units")
+
+
+def _fmt_vector(names, values, units) -> str:
+    return "  ".join(f"{n} = {v:.10g} {u}" for n, v, u in zip(names, values, units))
+
+
+def cmd_ik(args) -> int:
+    mech = _mechanism(args.mechanism, args.param)
+    pu, ju = _units(mech, "pose", args.units == "paper"), _units(mech, "joint", args.units == "paper")
+    pose = to_si(_batch(args.pose, mech.n_pose, "--pose", mech.pose_names), pu)
+    joints = from_si(mech.ik(pose), ju)
+    if args.json:
+        print(json.dumps({"mechanism": mech.name, "parameters": mech.parameters(), "pose": from_si(pose, pu).tolist(),
+                          "pose_units": pu, "joints": joints.tolist(), "joint_units": ju}))
+    else:
+        for q in np.atleast_2d(joints):
+            print(_fmt_vector(mech.joint_names, q, ju))
+    return 0
+
+
+def cmd_fk(args) -> int:
+    from parakin.solvers import METHODS, solve_fk
+
+    mech = _mechanism(args.mechanism, args.param)
+    pu, ju = _units(mech, "pose", args.units == "paper"), _units(mech, "joint", args.units == "paper")
+    joints = to_si(_batch(args.joints, mech.n_joints, "--joints", mech.joint_names), ju)
+    method = args.solver or ("closed-form" if mech.fk is not None else "newton")
+    if method not in METHODS:
+        raise ValueError(f"unknown solver {method!r}; known: {', '.join(sorted(METHODS))}")
+    x0 = None if args.x0 is None else to_si(_batch(args.x0, mech.n_pose, "--x0", mech.pose_names), pu)
+    res = solve_fk(mech, joints, x0=x0, method=method, tol=args.tol, maxiter=args.maxiter)
+    pose = from_si(res.x, pu)
+    if args.json:
+        out = {"mechanism": mech.name, "parameters": mech.parameters(), "joints": from_si(joints, ju).tolist(),
+               "joint_units": ju, "pose_units": pu, **res.to_dict()}
+        out["x"] = pose.tolist()
+        print(json.dumps(out))
+    else:
+        for x in np.atleast_2d(pose):
+            print(_fmt_vector(mech.pose_names, x, pu))
+    if not np.all(res.success):
+        print(f"parakin fk: error: {res.message} (residual {np.max(res.residual):.3g} > tol {args.tol:g}; "
+              "the joints may be unreachable)", file=sys.stderr)
+        return EXIT_NOT_CONVERGED
+    return 0
+
+
+def _config(args) -> dict:
+    from parakin.config import DEFAULT_CONFIG, load_config, validate
+
+    if args.config_json:
+        return validate(json.loads(args.config_json))
+    return load_config(args.config or [DEFAULT_CONFIG])
+
+
+def cmd_reproduce(args) -> int:
+    from parakin.papers import PAPERS
+
+    if args.paper not in PAPERS:
+        raise ValueError(f"unknown paper {args.paper!r}; known: {', '.join(PAPERS)}")
+    artefacts = PAPERS[args.paper].ARTEFACTS
+    config = _config(args)
+    names = list(artefacts) if args.artefact == "all" else [args.artefact]
+    for name in names:
+        if name not in artefacts:
+            raise ValueError(f"unknown artefact {name!r} of {args.paper}; known: {', '.join(artefacts)}")
+        outdir = Path(args.outdir) if args.outdir else Path(config["figures_dir"]) / args.paper
+        for path in artefacts[name](config, outdir):
+            print(path)
+    return 0
+
+
+def cmd_report(args) -> int:
+    from parakin.report import write_report
+
+    config = _config(args)
+    figures = Path(args.figures or config["figures_dir"])
+    print(write_report(figures, Path(args.out) if args.out else figures / "REPORT.md"))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="parakin", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    names = sorted(mechanisms.REGISTRY)
+
+    def mech_args(p):
+        p.add_argument("mechanism", choices=names, help="mechanism name")
+        p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                       help="override a mechanism parameter (SI, or with a unit: phi=35deg, d=120mm)")
+        p.add_argument("--units", choices=["si", "paper"], default="si", help="units of input and output")
+        p.add_argument("--json", action="store_true", help="print a JSON object")
+
+    p = sub.add_parser("ik", help="inverse kinematics: joints of a pose")
+    mech_args(p)
+    p.add_argument("--pose", type=float, nargs="+", required=True, help="pose value(s), n per pose")
+    p.set_defaults(func=cmd_ik)
+
+    p = sub.add_parser("fk", help="forward kinematics: pose of joint values")
+    mech_args(p)
+    p.add_argument("--joints", type=float, nargs="+", required=True, help="joint value(s), m per pose")
+    p.add_argument("--solver", default=None, help="solver name (default: closed-form where one exists, else newton)")
+    p.add_argument("--x0", type=float, nargs="+", default=None, help="initial pose (default: the mechanism's home)")
+    p.add_argument("--tol", type=float, default=1e-10, help="residual tolerance (default 1e-10)")
+    p.add_argument("--maxiter", type=int, default=50, help="iteration limit (default 50)")
+    p.set_defaults(func=cmd_fk)
+
+    def config_args(p):
+        p.add_argument("--config", action="append", default=None, metavar="YAML",
+                       help="config file(s), later ones override earlier ones (default config/config.yaml)")
+        p.add_argument("--config-json", default=None, help="the whole config as JSON (what Snakemake passes)")
+
+    p = sub.add_parser("reproduce", help="compute one artefact (table or figure) of a paper")
+    p.add_argument("paper", help="paper key, e.g. zhao2017_3p4s")
+    p.add_argument("artefact", help="artefact name, e.g. table1, or 'all'")
+    p.add_argument("--outdir", default=None, help="output folder (default: <figures_dir>/<paper>)")
+    config_args(p)
+    p.set_defaults(func=cmd_reproduce)
+
+    p = sub.add_parser("report", help="write the claim-by-claim REPORT.md")
+    p.add_argument("--figures", default=None, help="figures folder (default: figures_dir of the config)")
+    p.add_argument("--out", default=None, help="output file (default: <figures>/REPORT.md)")
+    config_args(p)
+    p.set_defaults(func=cmd_report)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except (ParakinError, ValueError, KeyError, FileNotFoundError) as exc:
+        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+        print(f"parakin {args.command}: error: {message}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,10 @@
+"""One module per paper: the set-up of each table and figure, and the claims for the report."""
+
+from types import ModuleType
+
+from parakin.papers import zhao2017_3p4s
+
+#: paper key -> module with TITLE, ARTEFACTS, claims(figdir, ref), summary(figdir, ref)
+PAPERS: dict[str, ModuleType] = {zhao2017_3p4s.KEY: zhao2017_3p4s}
+
+__all__ = ["PAPERS"]

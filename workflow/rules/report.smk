@@ -1,0 +1,14 @@
+# The claim-by-claim report: published numbers (data/reference) beside our pipeline outputs.
+REPORT = f"{FIG}/REPORT.md"
+
+
+rule report:
+    input:
+        ZHAO2017_3P4S_OUTPUTS,
+        expand("data/reference/{paper}.csv", paper=["zhao2017_3p4s"]),
+    output:
+        REPORT,
+    params:
+        cfg=CONFIG_JSON,
+    shell:
+        "parakin report --figures {FIG} --out {output} --config-json {params.cfg}"
