@@ -252,7 +252,8 @@ class P3P4S(Mechanism):
         (= c_i - a e_i). Subtracting sphere 1 from spheres 2 and 3 leaves a line
         ``p = p0 + t u``; sphere 1 then gives a quadratic in ``t``. ``branch="upper"`` (default)
         takes the root with the larger z, the working mode of the paper (the other lies below the
-        rails, z ~ -0.17 m for Table 1). Raises UnreachableError where the spheres do not meet.
+        rails, z ~ -0.17 m for Table 1). Raises UnreachableError where the spheres do not meet, or
+        where the upper root has a rod in the other assembly mode (so that ``ik(fk(q)) == q``).
         """
         q = as_batch(joints, 3, "joints")
         c = self.delta * self.e + q[..., :, None] * self.m  # (..., 3, 3) sphere centres
@@ -282,4 +283,18 @@ class P3P4S(Mechanism):
         p2 = p0 + t2[..., None] * u
         upper_first = p1[..., 2] >= p2[..., 2]
         pick_first = upper_first if branch == "upper" else ~upper_first
-        return np.where(pick_first[..., None], p1, p2)
+        pose = np.where(pick_first[..., None], p1, p2)
+        if branch == "upper":
+            # working mode: every rod leans along its rail (n_i . m_i > 0), i.e. the strokes are
+            # the minus root of eq (5); otherwise ik(fk(q)) != q and the pose is another assembly
+            nm = np.einsum("...ij,ij->...i", self._rod(pose, q), self.m)
+            wrong = np.any(nm <= 0, axis=-1)
+            if np.any(wrong):
+                idx = tuple(np.argwhere(wrong)[0]) if wrong.ndim else ()
+                limb = int(np.argmax(nm[idx] <= 0)) + 1
+                raise UnreachableError(
+                    f"strokes (l1, l2, l3) = {tuple(np.round(q[idx], 6).tolist())} m assemble only with limb {limb} "
+                    f"in the other mode (n_{limb} . m_{limb} = {nm[idx][limb - 1] / self.L:.3g} <= 0, the plus root "
+                    f"of eq. 5){describe_first(wrong, q.shape[:-1])}"
+                )
+        return pose
