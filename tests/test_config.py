@@ -1,0 +1,62 @@
+"""The config schema rejects bad values with a message that names the key and the limit."""
+
+import copy
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from parakin.config import DEFAULT_CONFIG, QUICK_CONFIG, load_config, validate
+from parakin.errors import ConfigError
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_full_and_quick_configs_are_valid(quick_config):
+    full = load_config(DEFAULT_CONFIG)
+    assert quick_config["seed"] == full["seed"]  # quick overrides sizes, never the seed
+    assert quick_config["zhao2017_3p4s"]["table1"]["region"]["n_delta"] < full["zhao2017_3p4s"]["table1"]["region"]["n_delta"]
+    assert quick_config["figures_dir"] != full["figures_dir"]  # quick never overwrites committed figures
+
+
+@pytest.mark.parametrize(
+    "path, value, message",
+    [
+        (("seed",), -1, r"config key 'seed' = -1: -1 is less than the minimum of 0"),
+        (("zhao2017_3p4s", "table1", "region", "n_phi"), 2, r"'zhao2017_3p4s.table1.region.n_phi' = 2: .*minimum 5, maximum 2001"),
+        (("zhao2017_3p4s", "table1", "fit", "L"), "long", r"'zhao2017_3p4s.table1.fit.L' = \"long\": .* not of type 'number'"),
+        (("zhao2017_3p4s", "table1", "fit", "phi_range_deg"), [40, 30], r"lower bound must be < upper bound"),
+        (("zhao2017_3p4s", "table1", "fit", "phi_range_deg"), [10, 95], r"95 is greater than or equal to the maximum of 90"),
+    ],
+)
+def test_bad_values_are_rejected_by_name(quick_config, path, value, message):
+    cfg = copy.deepcopy(quick_config)
+    node = cfg
+    for key in path[:-1]:
+        node = node[key]
+    node[path[-1]] = value
+    with pytest.raises(ConfigError, match=message):
+        validate(cfg)
+
+
+def test_unknown_key_is_rejected(quick_config):
+    cfg = copy.deepcopy(quick_config)
+    cfg["zhao2017_3p4s"]["tabel1"] = {}
+    with pytest.raises(ConfigError, match=r"'tabel1' was unexpected"):
+        validate(cfg)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(ConfigError, match="does not exist"):
+        load_config(tmp_path / "nope.yaml")
+
+
+def test_snakemake_validates_the_config():
+    """The Snakefile's own validation (snakemake.utils.validate) stops a malformed run."""
+    res = subprocess.run(
+        [sys.executable, "-m", "snakemake", "-n", "--cores", "1", "--configfile", str(QUICK_CONFIG), "--config", "seed=-5"],
+        cwd=ROOT, capture_output=True, text=True, timeout=120,
+    )
+    assert res.returncode != 0
+    assert "seed" in res.stdout + res.stderr and "minimum" in res.stdout + res.stderr

@@ -1,0 +1,34 @@
+"""Atomic writes: an interrupted write leaves the previous file intact and no debris."""
+
+import pandas as pd
+import pytest
+
+from parakin.io import atomic_write_text, atomic_writer, markdown_table, write_table
+
+
+def test_interrupted_write_keeps_old_file(tmp_path):
+    target = tmp_path / "table.csv"
+    atomic_write_text(target, "old\n")
+
+    def half_then_crash(tmp):
+        tmp.write_text("half a ta")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        atomic_writer(target, half_then_crash)
+    assert target.read_text() == "old\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["table.csv"]
+
+
+def test_write_table_is_deterministic(tmp_path):
+    df = pd.DataFrame({"a": [0.1 + 0.2, 1e-17], "b": ["x", "y"]})
+    p1 = write_table(df, tmp_path / "one", title="T", notes="n")
+    p2 = write_table(df, tmp_path / "two", title="T", notes="n")
+    for a, b in zip(p1, p2):
+        assert a.read_bytes() == b.read_bytes()
+    assert pd.read_csv(p1[0])["a"].iloc[0] == 0.1 + 0.2  # full precision round trip
+
+
+def test_markdown_table_format():
+    md = markdown_table(pd.DataFrame({"x": [1.23456789], "n": ["a"]}), floatfmt={"x": ".3f"})
+    assert md.splitlines() == ["| x | n |", "|---|---|", "| 1.235 | a |"]
