@@ -51,10 +51,12 @@ def validate(config: dict, schema_path: Path = SCHEMA_PATH) -> dict:
     errors = sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.absolute_path)))
     if errors:
         raise ConfigError("; ".join(_describe(e) for e in errors))
-    for key in ("delta_range", "phi_range_deg"):
-        lo, hi = config["zhao2017_3p4s"]["table1"]["fit"][key]
-        if not lo < hi:
-            raise ConfigError(f"config key 'zhao2017_3p4s.table1.fit.{key}' = [{lo}, {hi}]: lower bound must be < upper bound")
+    for section in ("fit", "region"):
+        for key in ("delta_range", "phi_range_deg"):
+            lo, hi = config["zhao2017_3p4s"]["table1"][section][key]
+            if not lo < hi:
+                raise ConfigError(f"config key 'zhao2017_3p4s.table1.{section}.{key}' = [{lo}, {hi}]: "
+                                  "lower bound must be < upper bound")
     return config
 
 

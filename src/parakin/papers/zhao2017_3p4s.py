@@ -190,40 +190,63 @@ def table1(config: dict, outdir: Path) -> list[Path]:
 
 def table1_region(config: dict, outdir: Path) -> list[Path]:
     """extra_table1_region: max stroke error over (delta, phi) at L fixed, with the 5 mm contour."""
-    import matplotlib.pyplot as plt
-
-    from parakin.plot import save_figure, use_style
+    from parakin.plot import new_figure, save_figure, use_style
 
     cfg = config[KEY]["table1"]
-    fit = cfg["fit"]
+    L, region = cfg["fit"]["L"], cfg["region"]
     poses, printed_str = table1_inputs()
     printed = np.array(printed_str, dtype=float)
-    deltas = np.linspace(*fit["delta_range"], cfg["region"]["n_delta"])
-    phis = np.deg2rad(np.linspace(*fit["phi_range_deg"], cfg["region"]["n_phi"]))
-    err = error_map(poses, printed, fit["L"], deltas, phis)
+    deltas = np.linspace(*region["delta_range"], region["n_delta"])
+    phis = np.deg2rad(np.linspace(*region["phi_range_deg"], region["n_phi"]))
+    err = error_map(poses, printed, L, deltas, phis)
     geo = pd.read_csv(outdir / "extra_table1_fit.csv")
     dd, pp = np.meshgrid(deltas, np.rad2deg(phis))
     data = pd.DataFrame({"delta": dd.ravel(), "phi_deg": pp.ravel(), "max_abs_err": err.ravel()})
     paths = write_table(data, outdir / "extra_table1_region", title="Max stroke error over Table 1 (m)")[:1]
     with use_style():
-        fig, ax = plt.subplots(figsize=(5.0, 3.8))
+        fig, ax = new_figure((4.6, 3.4))
         mm = np.where(np.isfinite(err), err * 1e3, np.nan)
-        levels = [0, 2.5, 5, 10, 20, 40, 80, 160]
+        levels = [0, 2.5, 5, 7.5, 10, 15, 20, 30, 40]
         cs = ax.contourf(dd, pp, np.clip(mm, 0, levels[-1]), levels=levels, cmap="viridis_r")
-        ax.contour(dd, pp, mm, levels=[ROUNDING * 1e3], colors="w", linewidths=1.2)
-        fig.colorbar(cs, ax=ax, label="max |l_ours − l_paper| over Table 1 (mm)")
+        ax.contour(dd, pp, mm, levels=[ROUNDING * 1e3], colors="k", linewidths=1.0)
+        fig.colorbar(cs, ax=ax, label="max stroke error over Table 1 (mm)")
         markers = {"stated": ("o", "tab:red"), "best fit": ("*", "w"), "minimax": ("D", "tab:cyan"),
                    "optimised": ("s", "tab:orange")}
         for _, g in geo.iterrows():
             marker, colour = markers[g["geometry"]]
             ax.plot(g["delta"], g["phi_deg"], marker, color=colour, mec="k", ms=9 if marker == "*" else 6,
-                    label=f"{g['geometry']} ({1e3 * g['max_abs_err']:.1f} mm)")
+                    label=f"{g['geometry']}: {1e3 * g['max_abs_err']:.1f} mm", clip_on=False)
         ax.set_xlabel(r"$\Delta = r_b - r_a\cos\theta$ (m)")
         ax.set_ylabel(r"rail inclination $\varphi$ (deg)")
-        ax.set_title(f"Table 1 vs geometry (L = {fit['L']} m); white: 5 mm = print rounding", fontsize=9)
-        ax.legend(loc="lower right", fontsize=7)
-        paths.append(save_figure(fig, outdir / "extra_table1_region.png"))
+        ax.set_title(f"L = {L} m; black line: 5 mm (print rounding)")
+        ax.legend(loc="upper left", fontsize="small", framealpha=0.9, facecolor="white")
+    paths.append(save_figure(fig, outdir / "extra_table1_region.png"))
     return paths
+
+
+# ---------------------------------------------------------------------------------------- Figs 1-2
+def _mechanism_figure(outdir: Path, slug: str, labels: bool, title: str) -> list[Path]:
+    """The stated-geometry mechanism at Table 1's case 1 (the home pose), drawn from our model."""
+    from parakin.plot import draw_mechanism, save_figure, skeleton_table
+
+    mech = P3P4S.zhao2017()
+    sk = mech.skeleton(mech.home())
+    paths = write_table(skeleton_table(sk), outdir / slug, title=title)[:1]
+    ax = draw_mechanism(sk, labels=labels, frames=labels, title=title)
+    paths.append(save_figure(ax.figure, outdir / f"{slug}.png"))
+    return paths
+
+
+def fig01(config: dict, outdir: Path) -> list[Path]:
+    """Fig. 1: the 3-P(4S) mechanism (the paper shows a CAD model; we draw our kinematic model)."""
+    return _mechanism_figure(outdir, "fig01_mechanism", labels=False,
+                             title="3-P(4S) at (0, 0, 0.592) m, stated geometry")
+
+
+def fig02(config: dict, outdir: Path) -> list[Path]:
+    """Fig. 2: sketch with the frames {O}, {P}, {u_i} and the points u_i, c_i, d_i of §1.1."""
+    return _mechanism_figure(outdir, "fig02_sketch", labels=True,
+                             title="Frames and points of §1.1 (eqs 1-5)")
 
 
 # ---------------------------------------------------------------------------------------- report
@@ -272,4 +295,4 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
 
 
 #: artefact name -> function(config, outdir) writing that artefact's files
-ARTEFACTS = {"table1": table1, "table1_region": table1_region}
+ARTEFACTS = {"table1": table1, "table1_region": table1_region, "fig01": fig01, "fig02": fig02}
