@@ -15,7 +15,7 @@ from typing import Callable
 
 import pandas as pd
 
-__all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_writer", "write_table", "markdown_table"]
+__all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_writer", "write_csv", "write_table", "markdown_table"]
 
 
 def atomic_writer(path: str | os.PathLike, write: Callable[[Path], None]) -> Path:
@@ -67,6 +67,13 @@ def markdown_table(df: pd.DataFrame, floatfmt: str | dict[str, str] = ".6g") -> 
     return "\n".join([header, rule, *rows]) + "\n"
 
 
+def write_csv(df: pd.DataFrame, path: str | os.PathLike) -> Path:
+    """Write ``df`` as CSV (full precision, no index, ``\n`` line ends) atomically."""
+    buf = io.StringIO()
+    df.to_csv(buf, index=False, lineterminator="\n")
+    return atomic_write_text(path, buf.getvalue())
+
+
 def write_table(
     df: pd.DataFrame,
     stem: str | os.PathLike,
@@ -82,9 +89,7 @@ def write_table(
     layout of a long CSV); by default the Markdown shows ``df``.
     """
     stem = Path(stem)
-    buf = io.StringIO()
-    df.to_csv(buf, index=False, lineterminator="\n")
-    csv_path = atomic_write_text(stem.with_suffix(".csv"), buf.getvalue())
+    csv_path = write_csv(df, stem.with_suffix(".csv"))
     parts = [f"# {title}\n" if title else "", markdown_table(df if markdown is None else markdown, floatfmt)]
     if notes:
         parts.append("\n" + notes.strip() + "\n")

@@ -6,6 +6,8 @@ ZHAO2017_3P4S_OUTPUTS = [
     f"{Z3}/table1.md",
     f"{Z3}/extra_table1_fit.csv",
     f"{Z3}/extra_table1_region.png",
+    f"{Z3}/fig01_mechanism.png",
+    f"{Z3}/fig02_sketch.png",
 ]
 
 
@@ -34,3 +36,16 @@ rule zhao2017_3p4s_table1_region:
         cfg=CONFIG_JSON,
     shell:
         "parakin reproduce zhao2017_3p4s table1_region --outdir {Z3} --config-json {params.cfg}"
+
+
+rule zhao2017_3p4s_fig:
+    # Figs 1-2 redrawn from our model (the paper's are a CAD rendering and a sketch)
+    output:
+        f"{Z3}/fig{{n}}_{{slug}}.png",
+        f"{Z3}/fig{{n}}_{{slug}}.csv",
+    wildcard_constraints:
+        n="01|02",
+    params:
+        cfg=CONFIG_JSON,
+    shell:
+        "parakin reproduce zhao2017_3p4s fig{wildcards.n} --outdir {Z3} --config-json {params.cfg}"

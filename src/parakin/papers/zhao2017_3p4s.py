@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares, minimize
 
-from parakin.io import write_table
+from parakin.io import write_csv, write_table
 from parakin.mechanisms import P3P4S
 from parakin.report import Claim, load_reference, printed_value
 
@@ -202,7 +202,7 @@ def table1_region(config: dict, outdir: Path) -> list[Path]:
     geo = pd.read_csv(outdir / "extra_table1_fit.csv")
     dd, pp = np.meshgrid(deltas, np.rad2deg(phis))
     data = pd.DataFrame({"delta": dd.ravel(), "phi_deg": pp.ravel(), "max_abs_err": err.ravel()})
-    paths = write_table(data, outdir / "extra_table1_region", title="Max stroke error over Table 1 (m)")[:1]
+    paths = [write_csv(data, outdir / "extra_table1_region.csv")]
     with use_style():
         fig, ax = new_figure((4.6, 3.4))
         mm = np.where(np.isfinite(err), err * 1e3, np.nan)
@@ -231,7 +231,7 @@ def _mechanism_figure(outdir: Path, slug: str, labels: bool, title: str) -> list
 
     mech = P3P4S.zhao2017()
     sk = mech.skeleton(mech.home())
-    paths = write_table(skeleton_table(sk), outdir / slug, title=title)[:1]
+    paths = [write_csv(skeleton_table(sk), outdir / f"{slug}.csv")]
     ax = draw_mechanism(sk, labels=labels, frames=labels, title=title)
     paths.append(save_figure(ax.figure, outdir / f"{slug}.png"))
     return paths
