@@ -1,0 +1,51 @@
+"""Figure regression: the committed figures are what the code makes now.
+
+Each cheap artefact is regenerated with the full config into a temporary folder; every figure
+is compared with the committed PNG by image (matplotlib's RMS compare, tolerance below) and
+by the numbers it plots (the CSV beside it). A changed figure fails here; regenerate with
+``snakemake --cores 2`` and commit the result when the change is intended.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from matplotlib.testing.compare import compare_images
+
+from parakin.config import DEFAULT_CONFIG, load_config
+from parakin.papers import PAPERS
+
+ROOT = Path(__file__).resolve().parents[1]
+IMAGE_TOL = 2.0  # RMS over 0-255 grey levels: font hinting may differ between machines, a moved line does not
+
+#: (paper, artefact, prerequisite artefacts) regenerated here; expensive artefacts (training,
+#: optimisation) are checked by their own reproduction tests on the quick config instead
+CHEAP = [
+    ("zhao2017_3p4s", "fig01", ()),
+    ("zhao2017_3p4s", "fig02", ()),
+    ("zhao2017_3p4s", "table1_region", ("table1",)),
+]
+
+
+@pytest.mark.parametrize("paper, artefact, needs", CHEAP, ids=[f"{p}-{a}" for p, a, _ in CHEAP])
+def test_committed_figure_is_current(tmp_path, paper, artefact, needs):
+    config = load_config(DEFAULT_CONFIG)
+    artefacts = PAPERS[paper].ARTEFACTS
+    for name in needs:
+        artefacts[name](config, tmp_path)
+    produced = artefacts[artefact](config, tmp_path)
+    for path in produced:
+        committed = ROOT / "figures" / paper / path.name
+        assert committed.exists(), f"{committed} is not committed: run snakemake and commit figures/"
+        if path.suffix == ".png":
+            result = compare_images(str(committed), str(path), tol=IMAGE_TOL)
+            assert result is None, result
+        elif path.suffix == ".csv":
+            new, old = pd.read_csv(path), pd.read_csv(committed)
+            assert list(new.columns) == list(old.columns)
+            for col in new.columns:
+                if pd.api.types.is_numeric_dtype(new[col]):
+                    assert np.allclose(new[col], old[col], rtol=1e-9, atol=1e-12, equal_nan=True), col
+                else:
+                    assert (new[col].astype(str) == old[col].astype(str)).all(), col
