@@ -1,0 +1,74 @@
+"""Newton-Raphson forward kinematics, and the batched linear solve the other solvers share."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from parakin.mechanisms.base import Array, Mechanism
+from parakin.solvers.result import Evaluator, FKResult, State, StepInfo, inf_norm, iterate
+
+__all__ = ["newton", "solve_linear"]
+
+
+def solve_linear(a: Array, b: Array) -> Array:
+    """Solve ``a x = b`` for square ``a`` ``(k, n, n)``; ``b`` is ``(k, n)`` or ``(k, n, p)``.
+
+    LU (``numpy.linalg.solve``) where every matrix is regular; if one of them is exactly
+    singular the batch falls back to the minimum-norm least-squares solution ``pinv(a) b``,
+    so one singular pose never stops the others. Rows with a non-finite ``a`` or ``b`` give NaN.
+    """
+    vector = b.ndim == a.ndim - 1
+    rhs = b[..., None] if vector else b
+    out = np.full(rhs.shape, np.nan)
+    ok = np.all(np.isfinite(a), axis=(-2, -1)) & np.all(np.isfinite(rhs), axis=(-2, -1))
+    if ok.any():
+        try:
+            out[ok] = np.linalg.solve(a[ok], rhs[ok])
+        except np.linalg.LinAlgError:
+            out[ok] = np.linalg.pinv(a[ok]) @ rhs[ok]
+    return out[..., 0] if vector else out
+
+
+def _newton_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
+    """``x <- x - J(x)^-1 r(x)``: one Jacobian and one residual evaluation."""
+    dx = solve_linear(ev.jacobian(s["x"], rows), s["r"])
+    x = s["x"] - dx
+    return {"x": x, "r": ev.residual(x, rows)}, StepInfo(step=inf_norm(dx))
+
+
+def newton(
+    mech: Mechanism,
+    joints: Array,
+    x0: Array,
+    *,
+    tol: float,
+    maxiter: int,
+    xtol: float = 0.0,
+    callback: Callable[[int, Array, Array], Any] | None = None,
+) -> FKResult:
+    """Newton-Raphson on ``residual(x, q) = 0`` (Dennis & Schnabel 1996, ch. 5, Alg. 5.1.1).
+
+    One iteration is one full step ``x <- x - J^-1 r`` with ``J = jacobian_pose`` evaluated at
+    the current iterate (one Jacobian and one residual evaluation); no line search, so the
+    convergence is quadratic near a regular solution and the basin is that of pure Newton.
+    A singular ``J`` falls back to the least-squares step ``pinv(J) r`` (see
+    :func:`solve_linear`); a pose that diverges stops as non-finite. Needs ``m == n``.
+
+    Options: ``xtol`` (stop with success when the step inf-norm is ``<= xtol``; 0 = off),
+    ``callback(k, x, residual_norm)`` after every iteration.
+    """
+    return iterate(
+        mech,
+        joints,
+        x0,
+        step=_newton_step,
+        tol=tol,
+        maxiter=maxiter,
+        xtol=xtol,
+        callback=callback,
+        method="newton",
+    )

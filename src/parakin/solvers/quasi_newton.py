@@ -1,0 +1,228 @@
+"""Quasi-Newton forward kinematics: Broyden's method on the residual, BFGS on its squared norm.
+
+BFGS is the "quasi-Newton" with which Zhao et al. 2017 refine a network's guess (their stopping
+rule, "iteration error eps = 1e-7", is the ``xtol`` option below).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from parakin.mechanisms.base import Array, Mechanism
+from parakin.solvers.newton import solve_linear
+from parakin.solvers.result import Evaluator, FKResult, State, StepInfo, inf_norm, iterate
+
+__all__ = ["bfgs", "broyden"]
+
+Callback = Callable[[int, Array, Array], Any]
+
+
+def _dot(a: Array, b: Array) -> Array:
+    return np.einsum("...i,...i->...", a, b)
+
+
+def _matvec(a: Array, b: Array) -> Array:
+    return np.einsum("...ij,...j->...i", a, b)
+
+
+def _outer(a: Array, b: Array) -> Array:
+    return a[..., :, None] * b[..., None, :]
+
+
+# ---------------------------------------------------------------------------- Broyden
+def _broyden_init(ev: Evaluator, rows: NDArray[np.intp], s: State) -> State:
+    return {"B": ev.jacobian(s["x"], rows)}
+
+
+def _broyden_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
+    """``x+ = x - B^-1 r``, then ``B+ = B + (y - B d) d^T / d^T d`` with ``y = r+ - r``."""
+    d = -solve_linear(s["B"], s["r"])
+    x = s["x"] + d
+    r = ev.residual(x, rows)
+    dd = _dot(d, d)
+    gain = np.where(dd > 0, 1.0 / np.where(dd > 0, dd, 1.0), 0.0)  # no update for a zero step
+    b = s["B"] + _outer((r - s["r"] - _matvec(s["B"], d)) * gain[:, None], d)
+    return {"x": x, "r": r, "B": b}, StepInfo(step=inf_norm(d))
+
+
+def broyden(
+    mech: Mechanism,
+    joints: Array,
+    x0: Array,
+    *,
+    tol: float,
+    maxiter: int,
+    xtol: float = 0.0,
+    callback: Callback | None = None,
+) -> FKResult:
+    """Broyden's "good" method on ``residual(x, q) = 0``.
+
+    Broyden 1965; Dennis & Schnabel 1996, ch. 8.
+
+    The Jacobian approximation ``B`` starts as the analytic ``jacobian_pose`` at ``x0`` (one
+    Jacobian evaluation per pose that does not start converged) and is then corrected by the
+    rank-one secant update ``B += (y - B d) d^T / (d^T d)`` after each full step
+    ``d = -B^-1 r``. One iteration = one step = one residual evaluation, no Jacobian.
+    Superlinear near a solution, no line search. Needs ``m == n``.
+
+    Options: ``xtol`` (stop with success when the step inf-norm is ``<= xtol``; 0 = off),
+    ``callback(k, x, residual_norm)``.
+    """
+    return iterate(
+        mech,
+        joints,
+        x0,
+        init=_broyden_init,
+        step=_broyden_step,
+        tol=tol,
+        maxiter=maxiter,
+        xtol=xtol,
+        callback=callback,
+        method="broyden",
+    )
+
+
+# ---------------------------------------------------------------------------- BFGS
+def _gauss_newton_inverse(jac: Array, reg: float) -> Array:
+    """``(J^T J + lambda I)^-1`` with ``lambda = reg * max(diag(J^T J))`` (lambda > 0)."""
+    a = np.swapaxes(jac, -1, -2) @ jac
+    n = a.shape[-1]
+    lam = reg * np.maximum(np.max(np.diagonal(a, axis1=-2, axis2=-1), axis=-1), 1.0e-300)
+    return solve_linear(a + lam[:, None, None] * np.eye(n), np.broadcast_to(np.eye(n), a.shape))
+
+
+def _bfgs_init(reg: float) -> Callable[[Evaluator, NDArray[np.intp], State], State]:
+    def init(ev: Evaluator, rows: NDArray[np.intp], s: State) -> State:
+        jac = ev.jacobian(s["x"], rows)
+        return {
+            "g": _matvec(np.swapaxes(jac, -1, -2), s["r"]),
+            "H": _gauss_newton_inverse(jac, reg),
+        }
+
+    return init
+
+
+def _backtrack(
+    ev: Evaluator,
+    rows: NDArray[np.intp],
+    s: State,
+    p: Array,
+    slope: Array,
+    c1: float,
+    shrink: float,
+    maxls: int,
+) -> tuple[Array, Array, Array, NDArray[np.bool_]]:
+    """Armijo backtracking (Nocedal & Wright 2006, Alg. 3.1), batched: ``alpha = 1, shrink, ...``
+    until ``f(x + alpha p) <= f(x) + c1 alpha slope`` with ``f = |r|^2 / 2``.
+
+    Returns the step lengths, the accepted points and residuals (unchanged where none was found)
+    and the mask of poses where one was found. Each trial is one residual evaluation.
+    """
+    f0 = 0.5 * _dot(s["r"], s["r"])
+    alpha = np.ones(len(rows))
+    x, r = s["x"].copy(), s["r"].copy()
+    found = np.zeros(len(rows), dtype=bool)
+    todo = np.arange(len(rows))
+    for _ in range(maxls):
+        xt = s["x"][todo] + alpha[todo, None] * p[todo]
+        rt = ev.residual(xt, rows[todo])
+        ok = 0.5 * _dot(rt, rt) <= f0[todo] + c1 * alpha[todo] * slope[todo]  # NaN -> False
+        x[todo[ok]], r[todo[ok]], found[todo[ok]] = xt[ok], rt[ok], True
+        todo = todo[~ok]
+        if todo.size == 0:
+            break
+        alpha[todo] *= shrink
+    return alpha, x, r, found
+
+
+def _bfgs_step(c1: float, shrink: float, maxls: int) -> Callable[..., tuple[State, StepInfo]]:
+    def step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
+        g, h = s["g"], s["H"]
+        p = -_matvec(h, g)
+        slope = _dot(g, p)
+        uphill = ~(slope < 0)  # H lost positive definiteness to rounding: steepest descent
+        p[uphill] = -g[uphill]
+        slope[uphill] = -_dot(g[uphill], g[uphill])
+        alpha, x, r, found = _backtrack(ev, rows, s, p, slope, c1, shrink, maxls)
+        d = np.where(found[:, None], alpha[:, None] * p, 0.0)
+        # gradient at the new iterate (one Jacobian evaluation where a step was taken)
+        g_new = g.copy()
+        if found.any():
+            jac = ev.jacobian(x[found], rows[found])
+            g_new[found] = _matvec(np.swapaxes(jac, -1, -2), r[found])
+        # inverse update, N&W eq. (6.17), skipped unless y^T d > sqrt(eps) |y| |d| (curvature)
+        y = g_new - g
+        yd = _dot(y, d)
+        size = np.linalg.norm(y, axis=-1) * np.linalg.norm(d, axis=-1)
+        update = yd > np.sqrt(np.finfo(float).eps) * size
+        rho = np.where(update, 1.0 / np.where(update, yd, 1.0), 0.0)
+        hy = _matvec(h, y)
+        h_new = (
+            h
+            - rho[:, None, None] * (_outer(d, hy) + _outer(hy, d))
+            + (rho**2 * _dot(y, hy) + rho)[:, None, None] * _outer(d, d)
+        )
+        return (
+            {"x": x, "r": r, "g": g_new, "H": h_new},
+            StepInfo(step=inf_norm(alpha[:, None] * p), grad=inf_norm(g_new), stalled=~found),
+        )
+
+    return step
+
+
+def bfgs(
+    mech: Mechanism,
+    joints: Array,
+    x0: Array,
+    *,
+    tol: float,
+    maxiter: int,
+    xtol: float = 0.0,
+    gtol: float = 0.0,
+    c1: float = 1e-4,
+    shrink: float = 0.5,
+    maxls: int = 30,
+    reg: float = 1e-10,
+    callback: Callback | None = None,
+) -> FKResult:
+    """BFGS minimising ``f(x) = |residual(x, q)|^2 / 2`` (Nocedal & Wright 2006, Alg. 6.1).
+
+    Gradient ``g = J^T r`` from the analytic ``jacobian_pose``. Search direction ``p = -H g``,
+    step length by batched Armijo backtracking (``alpha = 1, shrink, ...``, at most ``maxls``
+    trials, sufficient-decrease constant ``c1``), inverse-Hessian update N&W eq. (6.17), skipped
+    where the curvature ``y^T s`` is not safely positive (Dennis & Schnabel 1996, ch. 9), which
+    keeps ``H`` positive definite without a Wolfe line search.
+
+    Initial inverse Hessian: the Gauss-Newton one, ``H0 = (J0^T J0 + lambda I)^-1`` at ``x0``
+    with ``lambda = reg * max diag(J0^T J0)``. The FK residual vanishes at the solution, so
+    ``J^T J`` *is* the Hessian there: the first step is a Gauss-Newton (= Newton) step, the
+    iteration does not depend on the units of the pose coordinates, and ``lambda`` only guards
+    a singular ``J0``. (The identity would make the first step steepest descent, badly scaled
+    for mixed m/rad poses.)
+
+    One iteration = one line search (one residual evaluation per trial) plus one Jacobian
+    evaluation at the accepted point. A pose whose line search finds no decrease stops as
+    failed (``Status.STALLED``): at a non-zero local minimum of ``|r|^2`` (unreachable joints)
+    or where ``tol`` is below the rounding floor of the residual.
+
+    Stopping: residual inf-norm ``<= tol``; optionally step inf-norm ``<= xtol`` (Zhao 2017's
+    "iteration error") or gradient inf-norm ``<= gtol`` (both off at 0). ``xtol``/``gtol``
+    accept a stationary point as success, as scipy does: check ``residual`` where it matters.
+    """
+    return iterate(
+        mech,
+        joints,
+        x0,
+        init=_bfgs_init(reg),
+        step=_bfgs_step(c1, shrink, maxls),
+        tol=tol,
+        maxiter=maxiter,
+        xtol=xtol,
+        gtol=gtol,
+        callback=callback,
+        method="bfgs",
+    )

@@ -1,0 +1,279 @@
+"""The result of a forward-kinematics solve, and the batched loop every iterative solver shares.
+
+:class:`FKResult` plays the part of ``scipy.optimize.OptimizeResult``: one object, the same fields
+for every method, per-pose arrays when the call was batched.
+
+:func:`iterate` is the one loop behind every iterative solver. A solver only supplies ``init``
+(extra per-pose state at the start, e.g. Broyden's first Jacobian) and ``step`` (one iteration on
+the poses still running); the loop keeps the ``active`` set, the per-pose counters, the
+convergence tests, the finiteness guard and the status codes, so that every solver stops, counts
+and fails in the same way:
+
+* a pose is *active* until it converges or fails; only active poses are stepped, and only their
+  residuals and Jacobians are evaluated (an :class:`Evaluator` counts them per pose);
+* a pose converges when the inf-norm of its residual is ``<= tol`` (or, where the caller asks for
+  it, its step is ``<= xtol`` or its gradient ``<= gtol``);
+* a pose whose new iterate or residual is not finite stops with ``success = False`` and keeps its
+  last finite iterate: no NaN ever leaves a solver.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable
+from enum import IntEnum
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from parakin.mechanisms.base import Array, Mechanism
+
+__all__ = ["Evaluator", "FKResult", "Status", "StepInfo", "inf_norm", "iterate", "summarize"]
+
+
+class Status(IntEnum):
+    """Why a pose stopped; ``>= 0`` is success, ``< 0`` failure (as ``FKResult.status``)."""
+
+    CONVERGED = 0  #: inf-norm of the residual <= tol
+    SMALL_STEP = 1  #: step inf-norm <= xtol (only where the caller set xtol > 0)
+    SMALL_GRADIENT = 2  #: gradient inf-norm <= gtol (only where the caller set gtol > 0)
+    MAXITER = -1  #: still running after maxiter iterations
+    NONFINITE = -2  #: the next iterate or its residual was not finite (x is the last finite one)
+    STALLED = -3  #: no acceptable step (line search exhausted its trials)
+    NO_SOLUTION = -4  #: the closed form has no (accurate enough) solution for these joints
+
+
+_RUNNING = 127  # internal status of a pose still iterating
+
+_WHY = {
+    Status.MAXITER: "reached maxiter={maxiter}",
+    Status.NONFINITE: "became non-finite",
+    Status.STALLED: "stalled (line search found no decrease)",
+    Status.NO_SOLUTION: "had no closed-form solution within tol",
+}
+
+
+def inf_norm(r: Array) -> Array:
+    """Inf-norm over the last axis (NaN where any entry is NaN)."""
+    return np.max(np.abs(r), axis=-1, initial=0.0)
+
+
+def summarize(status: NDArray[np.integer], maxiter: int | None = None) -> str:
+    """``"converged"``, or how many poses failed and why, e.g.
+    ``"3 of 1000 poses did not converge within maxiter=50"``."""
+    failed = status[status < 0]
+    if failed.size == 0:
+        return "converged"
+    head = f"{failed.size} of {status.size} pose{'s' if status.size != 1 else ''} did not converge"
+    codes, counts = np.unique(failed, return_counts=True)
+    if codes.tolist() == [Status.MAXITER]:
+        return f"{head} within maxiter={maxiter}"
+    why = [f"{c} {_WHY[Status(s)]}" for s, c in zip(codes, counts, strict=True)]
+    return f"{head}: " + ", ".join(why).format(maxiter=maxiter)
+
+
+def _to_json(a: Any) -> Any:
+    """Python lists/scalars; non-finite floats become None (JSON ``null``)."""
+    a = np.asarray(a)
+    if a.dtype.kind == "f":
+        a = np.where(np.isfinite(a), a, None)
+    return a.tolist()
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class FKResult:
+    """Forward-kinematics solution of a (batch of) joint vector(s).
+
+    Per-pose fields have the batch shape ``(...)`` of the call (0-d arrays for a single joint
+    vector); ``x`` has shape ``(..., n_pose)``.
+    """
+
+    x: Array  #: solution (the last finite iterate where a pose failed)
+    success: NDArray[np.bool_]  #: True where the pose met its stopping criterion
+    status: NDArray[np.int64]  #: :class:`Status` code per pose
+    nit: NDArray[np.int64]  #: iterations per pose (0 for a pose that starts converged)
+    nfev: NDArray[np.int64]  #: residual evaluations per pose (including the one at x0)
+    njev: NDArray[np.int64]  #: Jacobian evaluations per pose
+    residual: Array  #: inf-norm of the final residual per pose
+    wall_time: float  #: seconds for the whole call
+    method: str  #: the method's registered name
+    message: str  #: "converged" or a summary of the failures
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """The batch shape (``()`` for a single joint vector)."""
+        return self.success.shape
+
+    def reshape(self, shape: tuple[int, ...]) -> FKResult:
+        """The same result with per-pose fields reshaped to batch shape ``shape``."""
+        per_pose = {
+            f: getattr(self, f).reshape(shape)
+            for f in ("success", "status", "nit", "nfev", "njev", "residual")
+        }
+        return dataclasses.replace(self, x=self.x.reshape(*shape, self.x.shape[-1]), **per_pose)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every field as JSON-serialisable python lists/scalars (non-finite floats -> None)."""
+        return {
+            f.name: _to_json(getattr(self, f.name))
+            if isinstance(getattr(self, f.name), np.ndarray)
+            else getattr(self, f.name)
+            for f in dataclasses.fields(self)
+        }
+
+    def __repr__(self) -> str:
+        n = self.success.size
+        if self.shape == ():
+            x = np.array2string(self.x, precision=6)
+            what = f"x={x}, success={bool(self.success)}, nit={int(self.nit)}"
+        else:
+            nit = int(self.nit.max(initial=0))
+            what = f"shape={self.shape}, success={int(self.success.sum())}/{n}, nit<={nit}"
+        res = float(self.residual.max(initial=0.0)) if n else 0.0
+        return (
+            f"FKResult(method={self.method!r}, {what}, residual<={res:.2e}, "
+            f"wall_time={self.wall_time:.3g} s, message={self.message!r})"
+        )
+
+
+# ---------------------------------------------------------------------------- the shared loop
+class StepInfo(NamedTuple):
+    """What one solver step reports besides the new state, per stepped pose."""
+
+    step: Array  #: inf-norm of the step taken (or attempted), tested against xtol
+    grad: Array | None = None  #: inf-norm of the gradient at the new iterate, tested against gtol
+    stalled: NDArray[np.bool_] | None = None  #: True where no acceptable step was found
+
+
+class Evaluator:
+    """``mech.residual`` and ``mech.jacobian_pose`` on a subset ``rows`` of a flat batch.
+
+    Counts evaluations per pose in ``nfev`` / ``njev``. Rows whose pose is not finite are not
+    evaluated (the mechanism would reject them) and come back as NaN.
+    """
+
+    def __init__(self, mech: Mechanism, joints: Array) -> None:
+        self.mech, self.joints = mech, joints
+        self.nfev = np.zeros(len(joints), dtype=np.int64)
+        self.njev = np.zeros(len(joints), dtype=np.int64)
+
+    def residual(self, x: Array, rows: NDArray[np.intp]) -> Array:
+        """Residuals ``(len(rows), m)`` of poses ``x`` against the joints of ``rows``."""
+        return self._call(self.mech.residual, self.nfev, x, rows, (self.joints.shape[-1],))
+
+    def jacobian(self, x: Array, rows: NDArray[np.intp]) -> Array:
+        """``d residual / d pose`` ``(len(rows), m, n)`` at ``x``."""
+        return self._call(
+            self.mech.jacobian_pose, self.njev, x, rows, (self.joints.shape[-1], x.shape[-1])
+        )
+
+    def _call(
+        self,
+        f: Callable,
+        counter: NDArray[np.int64],
+        x: Array,
+        rows: NDArray[np.intp],
+        tail: tuple[int, ...],
+    ) -> Array:
+        ok = np.all(np.isfinite(x), axis=-1)
+        if ok.all() and ok.size:
+            counter[rows] += 1
+            return np.asarray(f(x, self.joints[rows]), dtype=float)
+        out = np.full((len(rows), *tail), np.nan)
+        if ok.any():
+            counter[rows[ok]] += 1
+            out[ok] = f(x[ok], self.joints[rows[ok]])
+        return out
+
+
+State = dict[str, Array]
+Init = Callable[[Evaluator, NDArray[np.intp], State], State]
+Step = Callable[[Evaluator, NDArray[np.intp], State], tuple[State, StepInfo]]
+
+
+def _take(state: State, rows: NDArray[Any]) -> State:
+    return {k: v[rows] for k, v in state.items()}
+
+
+def _put(state: State, rows: NDArray[np.intp], sub: State) -> None:
+    """Write ``sub`` into rows ``rows`` of ``state``, allocating keys it does not have yet."""
+    size = len(state["x"])
+    for k, v in sub.items():
+        if k not in state:
+            state[k] = np.zeros((size, *v.shape[1:]), dtype=v.dtype)
+        state[k][rows] = v
+
+
+def iterate(
+    mech: Mechanism,
+    joints: Array,
+    x0: Array,
+    *,
+    step: Step,
+    init: Init | None = None,
+    tol: float,
+    maxiter: int,
+    xtol: float = 0.0,
+    gtol: float = 0.0,
+    callback: Callable[[int, Array, Array], Any] | None = None,
+    method: str = "",
+) -> FKResult:
+    """Run ``step`` on the flat batch (``joints (N, m)``, ``x0 (N, n)``) until every pose stops.
+
+    ``state`` is a dict of per-pose arrays with at least ``"x"`` (iterate) and ``"r"`` (its
+    residual); ``init(ev, rows, state_rows)`` returns extra keys for the poses that do not start
+    converged, ``step(ev, rows, state_rows)`` returns the next state of ``rows`` and a
+    :class:`StepInfo`. One call of ``step`` is one iteration of each pose in ``rows``.
+    ``callback(k, x, residual_norm)``, if given, sees the whole batch after iteration ``k``
+    (``k = 0``: the start).
+    """
+    start = time.perf_counter()
+    ev = Evaluator(mech, joints)
+    nit = np.zeros(len(x0), dtype=np.int64)
+    with np.errstate(all="ignore"):  # non-finite values are detected below, never warned about
+        state: State = {"x": np.array(x0, dtype=float), "r": ev.residual(x0, np.arange(len(x0)))}
+        res = inf_norm(state["r"])
+        status = np.where(res <= tol, Status.CONVERGED, _RUNNING).astype(np.int64)
+        status[~np.isfinite(res)] = Status.NONFINITE
+        rows = np.flatnonzero(status == _RUNNING)
+        if init is not None and rows.size:
+            _put(state, rows, init(ev, rows, _take(state, rows)))
+        if callback is not None:
+            callback(0, state["x"].copy(), res.copy())
+        for k in range(1, maxiter + 1):
+            rows = np.flatnonzero(status == _RUNNING)
+            if rows.size == 0:
+                break
+            new, info = step(ev, rows, _take(state, rows))
+            nit[rows] += 1
+            new_res = inf_norm(new["r"])
+            finite = np.all(np.isfinite(new["x"]), axis=-1) & np.isfinite(new_res)
+            code = np.full(rows.size, _RUNNING, dtype=np.int64)
+            if xtol > 0:
+                code[info.step <= xtol] = Status.SMALL_STEP
+            if gtol > 0 and info.grad is not None:
+                code[info.grad <= gtol] = Status.SMALL_GRADIENT
+            if info.stalled is not None:
+                code[info.stalled] = Status.STALLED
+            code[new_res <= tol] = Status.CONVERGED
+            code[~finite] = Status.NONFINITE  # keeps its last finite iterate: not written back
+            _put(state, rows[finite], _take(new, finite))
+            res[rows[finite]] = new_res[finite]
+            status[rows] = code
+            if callback is not None:
+                callback(k, state["x"].copy(), res.copy())
+    status[status == _RUNNING] = Status.MAXITER
+    return FKResult(
+        x=state["x"],
+        success=status >= 0,
+        status=status,
+        nit=nit,
+        nfev=ev.nfev,
+        njev=ev.njev,
+        residual=res,
+        wall_time=time.perf_counter() - start,
+        method=method,
+        message=summarize(status, maxiter),
+    )
