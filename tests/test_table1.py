@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 
 from parakin.mechanisms import P3P4S
-from parakin.papers import zhao2017_3p4s as z
+from parakin.papers.zhao2017_3p4s import kinematics as z
 
 
 @pytest.fixture(scope="module")

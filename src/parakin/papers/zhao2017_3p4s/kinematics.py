@@ -1,9 +1,4 @@
-"""Zhao et al. 2017, 3-P(4S) parallel mechanism (Trans. CSAM 48(10)): the paper's experiments.
-
-One function per table or figure: configuration and published inputs in, files out (written
-atomically into the paper's figures folder). No kinematics lives here, only the set-up of each
-experiment; the mechanism is :class:`parakin.mechanisms.P3P4S`.
-"""
+"""Zhao 2017 §1.1: inverse kinematics (Table 1, eqs 1-5) and the mechanism (Figs 1-2)."""
 
 from __future__ import annotations
 
@@ -18,8 +13,8 @@ from parakin.io import write_csv, write_table
 from parakin.mechanisms import P3P4S
 from parakin.report import Claim, load_reference, printed_value
 
-KEY = "zhao2017_3p4s"
-TITLE = "Zhao et al. 2017 — 3-P(4S) parallel mechanism (Trans. CSAM 48(10))"
+from parakin.papers.zhao2017_3p4s.common import KEY
+
 ROUNDING = 0.005  # Table 1 prints strokes to 0.01 m
 
 
