@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import json
+import zlib
 from pathlib import Path
 from typing import Any, Iterable
 
@@ -12,7 +13,7 @@ import yaml
 
 from parakin.errors import ConfigError
 
-__all__ = ["load_config", "validate", "merge", "ROOT", "SCHEMA_PATH", "DEFAULT_CONFIG", "QUICK_CONFIG"]
+__all__ = ["load_config", "validate", "merge", "rng", "seed_for", "ROOT", "SCHEMA_PATH", "DEFAULT_CONFIG", "QUICK_CONFIG"]
 
 ROOT = Path(__file__).resolve().parents[2]
 SCHEMA_PATH = ROOT / "config" / "schema.yaml"
@@ -74,3 +75,16 @@ def load_config(paths: str | Path | Iterable[str | Path] = DEFAULT_CONFIG) -> di
             raise ConfigError(f"config file {str(path)!r} must hold a mapping, got {type(loaded).__name__}")
         config = merge(config, loaded)
     return validate(config)
+
+
+def seed_for(config: dict, stream: str) -> int:
+    """A seed for the named random ``stream`` (e.g. ``"zhao2017_3p4s.samples"``), derived from
+    the config's master seed, so that streams are independent and stable under reordering."""
+    return int(config["seed"]) * 1_000_003 + zlib.crc32(stream.encode())
+
+
+def rng(config: dict, stream: str):
+    """``numpy.random.Generator`` of the named stream (see :func:`seed_for`)."""
+    import numpy as np
+
+    return np.random.default_rng(seed_for(config, stream))

@@ -34,13 +34,31 @@ def half_ulp(printed: str) -> float:
     return 0.5 * 10.0 ** (-decimals + (int(exponent) if exponent else 0))
 
 
-def judge(printed: str, ours: float, tol: float | None = None) -> str:
+#: how a printed number is compared: its value, a bound it states, or its order of magnitude
+KINDS = ("value", "upper", "lower", "order")
+
+
+def judge(printed: str, ours: float, tol: float | None = None, kind: str = "value") -> str:
     """Verdict for our value against the printed one.
 
-    ``reproduced`` when ``|ours - paper| <= tol`` (a claim-specific tolerance, e.g. a solver's
-    accuracy), ``reproduced within rounding`` when the difference is within half a unit of the
-    last printed digit, ``differs`` otherwise.
+    ``kind="value"``: ``reproduced`` when ``|ours - paper| <= tol`` (a claim-specific tolerance,
+    e.g. a solver's accuracy), ``reproduced within rounding`` when the difference is within half a
+    unit of the last printed digit, ``differs`` otherwise. ``kind="upper"`` / ``"lower"``: the
+    paper states a bound ("within 20 ms", "at least ..."): ``reproduced`` when ours meets it.
+    ``kind="order"``: the paper states an order of magnitude ("10^-4 level"): ``reproduced``
+    when ours lies within half a decade of it.
     """
+    if kind not in KINDS:
+        raise ValueError(f"kind = {kind!r} must be one of {KINDS}")
+    if not math.isfinite(float(ours)):
+        return DIFFERS
+    if kind == "upper":
+        return REPRODUCED if float(ours) <= float(printed) else DIFFERS
+    if kind == "lower":
+        return REPRODUCED if float(ours) >= float(printed) else DIFFERS
+    if kind == "order":
+        ok = float(ours) > 0 and abs(math.log10(float(ours) / float(printed))) <= 0.5
+        return REPRODUCED if ok else DIFFERS
     diff = abs(float(ours) - float(printed))
     if tol is not None and diff <= tol:
         return REPRODUCED
@@ -62,10 +80,11 @@ class Claim:
     variant: str = ""  #: which of our computations (e.g. "stated geometry")
     tol: float | None = None  #: claim-specific tolerance for "reproduced"
     reason: str = ""  #: why it differs, or what was assumed
+    kind: str = "value"  #: "value", "upper"/"lower" (a bound the paper states), "order" (see judge)
     verdict: str = field(init=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "verdict", judge(self.printed, self.ours, self.tol))
+        object.__setattr__(self, "verdict", judge(self.printed, self.ours, self.tol, self.kind))
 
     @property
     def diff(self) -> float:
@@ -102,7 +121,7 @@ def claims_table(claims: list[Claim]) -> pd.DataFrame:
             "artefact": [c.artefact for c in claims],
             "quantity": [c.quantity for c in claims],
             "variant": [c.variant for c in claims],
-            "paper": [c.printed for c in claims],
+            "paper": [{"upper": "≤ ", "lower": "≥ ", "order": "~"}.get(c.kind, "") + c.printed for c in claims],
             "ours": [_fmt(c.ours) for c in claims],
             "difference": [_fmt(c.diff) for c in claims],
             "unit": [c.unit for c in claims],

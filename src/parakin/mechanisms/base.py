@@ -155,6 +155,14 @@ class Mechanism(ABC):
             )
         return np.ones(x.shape[:-1], dtype=bool)
 
+    def check_joints(self, joints: ArrayLike) -> None:
+        """Raise UnreachableError where ``joints`` cannot be assembled in the working mode.
+
+        The default accepts everything (a generic mechanism cannot tell cheaply; a numeric FK
+        solver then reports ``success=False``). Mechanisms with a closed-form test override it.
+        """
+        as_batch(joints, self.n_joints, "joints")
+
     def skeleton(self, pose: ArrayLike) -> Skeleton:
         """Points, links and frames of the assembly at one pose, for :func:`parakin.plot.draw_mechanism`."""
         raise NotImplementedError(f"{type(self).__name__} does not describe its drawing")

@@ -21,6 +21,7 @@ The kinematics sees the radial dimensions only through ``delta = r_b - a``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import ClassVar, Literal
 
 import numpy as np
@@ -85,28 +86,28 @@ class P3P4S(Mechanism):
         return cls(r_a=r_a, r_b=float(delta + np.sqrt(r_a**2 - d**2 / 4)), L=L, d=d, phi=phi)
 
     # ------------------------------------------------------------------ derived geometry
-    @property
+    @cached_property
     def theta(self) -> float:
         """Half the angle a short platform edge subtends at the centre, ``arcsin(d / 2 r_a)``."""
         return float(np.arcsin(self.d / (2 * self.r_a)))
 
-    @property
+    @cached_property
     def a(self) -> float:
         """Distance platform centre -> d_i, ``r_a cos(theta)`` (eq 1)."""
         return float(np.sqrt(self.r_a**2 - self.d**2 / 4))
 
-    @property
+    @cached_property
     def delta(self) -> float:
         """``r_b - a``: the only radial dimension the kinematics depends on."""
         return self.r_b - self.a
 
-    @property
+    @cached_property
     def e(self) -> Array:
         """Radial unit vectors e_i, rows of a (3, 3) array."""
         g = np.asarray(self.gammas)
         return np.stack([np.cos(g), np.sin(g), np.zeros(3)], axis=-1)
 
-    @property
+    @cached_property
     def m(self) -> Array:
         """Rail unit vectors m_i (inward and up), rows of a (3, 3) array."""
         return -np.cos(self.phi) * self.e + np.sin(self.phi) * _E_Z
@@ -247,6 +248,10 @@ class P3P4S(Mechanism):
             polygons=[("base", pts["u"]), ("platform", np.stack(hexagon))],
             frames=frames,
         )
+
+    def check_joints(self, joints: ArrayLike) -> None:
+        """Raise UnreachableError unless the strokes assemble in the working mode (via :meth:`fk`)."""
+        self.fk(joints)
 
     # ------------------------------------------------------------------ closed-form FK
     def fk(self, joints: ArrayLike, branch: Literal["upper", "lower"] = "upper") -> Array:

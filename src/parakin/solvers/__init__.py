@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 from parakin.errors import ParakinError, ShapeError
 from parakin.mechanisms.base import Array, Mechanism, as_batch
 from parakin.solvers.lm import levenberg_marquardt
+from parakin.solvers.hybrid import hybrid
 from parakin.solvers.newton import newton
 from parakin.solvers.quasi_newton import bfgs, broyden
 from parakin.solvers.result import FKResult, Status, inf_norm, summarize
@@ -62,6 +63,7 @@ register("newton")(newton)
 register("broyden")(broyden)
 register("bfgs")(bfgs)
 register("lm")(levenberg_marquardt)
+register("hybrid")(hybrid)
 
 
 def _fk_by_halves(

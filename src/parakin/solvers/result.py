@@ -43,6 +43,7 @@ class Status(IntEnum):
     NONFINITE = -2  #: the next iterate or its residual was not finite (x is the last finite one)
     STALLED = -3  #: no acceptable step (line search exhausted its trials)
     NO_SOLUTION = -4  #: the closed form has no (accurate enough) solution for these joints
+    LOCAL_MINIMUM = -5  #: the step became small at a large residual (unreachable joints?)
 
 
 _RUNNING = 127  # internal status of a pose still iterating
@@ -52,6 +53,7 @@ _WHY = {
     Status.NONFINITE: "became non-finite",
     Status.STALLED: "stalled (line search found no decrease)",
     Status.NO_SOLUTION: "had no closed-form solution within tol",
+    Status.LOCAL_MINIMUM: "stopped at a small step with a large residual",
 }
 
 

@@ -1,0 +1,69 @@
+"""The hybrid forward kinematics of Zhao et al. 2017 (§1.1, Fig. 3): a trained network's guess,
+refined by a quasi-Newton iteration.
+
+The network maps joints to an approximate pose (accuracy ~1e-4 m for the paper's BP network);
+the quasi-Newton method (BFGS by default, Broyden or Newton on request) then iterates from that
+guess until its step falls below the paper's "iteration error" ``eps`` (1e-7) or the residual
+below ``tol``. Any object with ``predict(joints) -> pose`` serves as the network (see
+:class:`parakin.nn.BPNetwork`), so the method works on every mechanism that has one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Protocol
+
+import numpy as np
+
+from parakin.mechanisms.base import Array, Mechanism
+from parakin.solvers.result import FKResult, Status, summarize
+
+__all__ = ["hybrid", "Network"]
+
+
+class Network(Protocol):
+    def predict(self, inputs: Array) -> Array: ...
+
+
+def hybrid(
+    mech: Mechanism,
+    joints: Array,
+    x0: Array,
+    *,
+    tol: float,
+    maxiter: int,
+    network: Network | None = None,
+    refine: str = "bfgs",
+    eps: float = 1e-7,
+    check: bool = True,
+    **options: Any,
+) -> FKResult:
+    """Network guess + quasi-Newton refinement (Zhao 2017, Fig. 3).
+
+    ``network``: required, an object with ``predict``; ``x0`` is ignored (the network gives the
+    start). ``refine``: the registered method that refines the guess (``"bfgs"``, the paper's
+    quasi-Newton; ``"broyden"``; ``"newton"``). ``eps``: the paper's iteration error, used as the
+    step tolerance ``xtol`` of the refinement. A pose converges when its residual is ``<= tol``,
+    or when the step is ``<= eps`` *and* the residual is ``<= 10 eps`` (a small step at a large
+    residual is a local minimum of unreachable joints, not a solution). ``nit`` counts the
+    quasi-Newton iterations (the network evaluation is not an iteration).
+
+    ``check``: first call ``mech.check_joints`` so that joints outside the reachable set raise
+    the mechanism's UnreachableError (the network would silently extrapolate).
+    """
+    from parakin.solvers import METHODS
+
+    if network is None:
+        raise ValueError("the hybrid method needs network=... (e.g. parakin.nn.BPNetwork.load(path))")
+    if refine == "hybrid" or refine not in METHODS:
+        raise ValueError(f"refine = {refine!r} must be one of {sorted(set(METHODS) - {'hybrid'})}")
+    if check:
+        mech.check_joints(joints)
+    guess = np.broadcast_to(np.asarray(network.predict(joints), dtype=float), x0.shape).copy()
+    res = METHODS[refine](mech, joints, guess, tol=tol, maxiter=maxiter, xtol=eps, **options)
+    # a step below eps counts only where the residual is at the level of eps too
+    ok = (res.residual <= tol) | ((res.status == Status.SMALL_STEP) & (res.residual <= 10 * eps))
+    status = np.where(ok | (res.status < 0), res.status, Status.LOCAL_MINIMUM).astype(np.int64)
+    return dataclasses.replace(
+        res, success=status >= 0, status=status, method="hybrid", message=summarize(status, maxiter)
+    )
