@@ -78,11 +78,13 @@ def cmd_fk(args) -> int:
     mech = _mechanism(args.mechanism, args.param)
     pu, ju = _units(mech, "pose", args.units == "paper"), _units(mech, "joint", args.units == "paper")
     joints = to_si(_batch(args.joints, mech.n_joints, "--joints", mech.joint_names), ju)
+    mech.check_joints(joints)  # unreachable joints: the mechanism's own error, whatever the solver
     method = args.solver or ("closed-form" if mech.fk is not None else "newton")
     if method not in METHODS:
         raise ValueError(f"unknown solver {method!r}; known: {', '.join(sorted(METHODS))}")
     x0 = None if args.x0 is None else to_si(_batch(args.x0, mech.n_pose, "--x0", mech.pose_names), pu)
-    res = solve_fk(mech, joints, x0=x0, method=method, tol=args.tol, maxiter=args.maxiter)
+    options = {"network": _network(mech, args.network)} if method == "hybrid" else {}
+    res = solve_fk(mech, joints, x0=x0, method=method, tol=args.tol, maxiter=args.maxiter, **options)
     pose = from_si(res.x, pu)
     if args.json:
         out = {"mechanism": mech.name, "parameters": mech.parameters(), "joints": from_si(joints, ju).tolist(),
@@ -94,9 +96,48 @@ def cmd_fk(args) -> int:
             print(_fmt_vector(mech.pose_names, x, pu))
     if not np.all(res.success):
         print(f"parakin fk: error: {res.message} (residual {np.max(res.residual):.3g} > tol {args.tol:g}; "
-              "the joints may be unreachable)", file=sys.stderr)
+              "raise --maxiter, or the joints may be unreachable)", file=sys.stderr)
         return EXIT_NOT_CONVERGED
     return 0
+
+
+#: mechanism name -> (paper key, file name) of the network the pipeline trains for it
+NETWORKS = {"3p4s": ("zhao2017_3p4s", "bp_network.npz")}
+
+
+def _network(mech, path: str | None):
+    """The trained network for the hybrid solver: ``--network PATH`` or the pipeline's output."""
+    from parakin.config import DEFAULT_CONFIG, load_config
+    from parakin.nn import BPNetwork
+
+    if path is None:
+        if mech.name not in NETWORKS:
+            raise ValueError(f"no trained network is known for {mech.name}: pass --network PATH")
+        key, name = NETWORKS[mech.name]
+        path = str(Path(load_config(DEFAULT_CONFIG)["generated_dir"]) / key / name)
+    return BPNetwork.load(path)
+
+
+def cmd_bench(args) -> int:
+    from parakin.config import DEFAULT_CONFIG, QUICK_CONFIG, load_config
+    from parakin.papers import PAPERS
+
+    paper, artefact = BENCHES[args.name]
+    config = load_config([DEFAULT_CONFIG, QUICK_CONFIG] if args.quick else [DEFAULT_CONFIG])
+    outdir = Path(args.outdir) if args.outdir else Path(config["figures_dir"]) / paper
+    paths = PAPERS[paper].ARTEFACTS[artefact](config, outdir)
+    csv = next(p for p in paths if p.suffix == ".csv")
+    if args.json:
+        import pandas as pd
+
+        print(pd.read_csv(csv).to_json(orient="records"))
+    else:
+        print(csv.with_suffix(".md").read_text())
+    return 0
+
+
+#: benchmark name -> (paper key, artefact)
+BENCHES = {"fk-3p4s": ("zhao2017_3p4s", "fk_benchmark")}
 
 
 def _config(args) -> dict:
@@ -157,7 +198,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--x0", type=float, nargs="+", default=None, help="initial pose (default: the mechanism's home)")
     p.add_argument("--tol", type=float, default=1e-10, help="residual tolerance (default 1e-10)")
     p.add_argument("--maxiter", type=int, default=50, help="iteration limit (default 50)")
+    p.add_argument("--network", default=None, help="trained network for --solver hybrid (default: the pipeline's)")
     p.set_defaults(func=cmd_fk)
+
+    p = sub.add_parser("bench", help="run a benchmark (every solver, same inputs, ratios in one run)")
+    p.add_argument("name", choices=sorted(BENCHES), help="benchmark name")
+    p.add_argument("--quick", action="store_true", help="small sizes (config/quick.yaml)")
+    p.add_argument("--outdir", default=None, help="output folder (default: <figures_dir>/<paper>)")
+    p.add_argument("--json", action="store_true", help="print the table as JSON records")
+    p.set_defaults(func=cmd_bench)
 
     def config_args(p):
         p.add_argument("--config", action="append", default=None, metavar="YAML",

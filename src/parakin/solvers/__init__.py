@@ -29,6 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 from parakin.errors import ParakinError, ShapeError
 from parakin.mechanisms.base import Array, Mechanism, as_batch
 from parakin.solvers.lm import levenberg_marquardt
+from parakin.solvers.baseline import scipy_root
 from parakin.solvers.hybrid import hybrid
 from parakin.solvers.newton import newton
 from parakin.solvers.quasi_newton import bfgs, broyden
@@ -64,6 +65,7 @@ register("broyden")(broyden)
 register("bfgs")(bfgs)
 register("lm")(levenberg_marquardt)
 register("hybrid")(hybrid)
+register("scipy-root")(scipy_root)
 
 
 def _fk_by_halves(

@@ -1,0 +1,54 @@
+"""The baseline a user would write: ``scipy.optimize.root`` called once per pose in a loop.
+
+It is registered as ``"scipy-root"`` so that benchmarks measure every solver against it in the
+same run (DESIGN: speed claims are ratios against a baseline). ``method="hybr"`` (MINPACK's
+Powell hybrid, scipy's default) with the mechanism's analytic Jacobian.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+from scipy.optimize import root
+
+from parakin.mechanisms.base import Array, Mechanism
+from parakin.solvers.result import FKResult, Status, inf_norm, summarize
+
+__all__ = ["scipy_root"]
+
+
+def scipy_root(
+    mech: Mechanism, joints: Array, x0: Array, *, tol: float, maxiter: int, root_method: str = "hybr", **options: Any
+) -> FKResult:
+    """``scipy.optimize.root(residual, x0, jac=jacobian_pose)`` pose by pose (a Python loop).
+
+    ``tol`` is passed to scipy as its own ``tol`` (for ``hybr``: relative error between two
+    iterates) and success is then judged like every other method: residual inf-norm ``<= tol``
+    with a floor of 1e-12 (hybr stops on the step, not the residual). ``maxiter`` bounds the
+    function evaluations (``maxfev = 20 * maxiter``). ``nit`` reports scipy's ``nfev``
+    (MINPACK counts evaluations, not iterations).
+    """
+    start = time.perf_counter()
+    n = len(joints)
+    x = np.array(x0, dtype=float)
+    nfev = np.zeros(n, dtype=np.int64)
+    njev = np.zeros(n, dtype=np.int64)
+    for i in range(n):
+        q = joints[i]
+        sol = root(
+            lambda p: mech.residual(p, q), x0[i], jac=lambda p: mech.jacobian_pose(p, q),
+            method=root_method, tol=tol, options={"maxfev": 20 * max(maxiter, 1), **options},
+        )
+        x[i] = sol.x
+        nfev[i] = sol.get("nfev", 0)
+        njev[i] = sol.get("njev", 0)
+    with np.errstate(all="ignore"):
+        res = inf_norm(mech.residual(x, joints))
+    ok = np.isfinite(res) & (res <= max(tol, 1e-12))
+    status = np.where(ok, Status.CONVERGED, Status.MAXITER).astype(np.int64)
+    return FKResult(
+        x=x, success=ok, status=status, nit=nfev.copy(), nfev=nfev, njev=njev, residual=res,
+        wall_time=time.perf_counter() - start, method="scipy-root", message=summarize(status, maxiter),
+    )
