@@ -49,3 +49,21 @@ def test_committed_figure_is_current(tmp_path, paper, artefact, needs):
                     assert np.allclose(new[col], old[col], rtol=1e-9, atol=1e-12, equal_nan=True), col
                 else:
                     assert (new[col].astype(str) == old[col].astype(str)).all(), col
+
+
+#: figures of expensive artefacts, redrawn from the committed numbers they plot:
+#: (paper, figure stem, function(data frame, outdir) -> paths)
+def _replot_targets():
+    from parakin.papers.zhao2017_3p4s import fk
+
+    return [("zhao2017_3p4s", "extra_bp_training", fk._training_figure)]
+
+
+@pytest.mark.parametrize("paper, stem, draw", _replot_targets(), ids=lambda v: v if isinstance(v, str) else "")
+def test_committed_figure_matches_its_numbers(tmp_path, paper, stem, draw):
+    """The committed PNG is what the plotting code draws from the committed CSV beside it."""
+    committed = ROOT / "figures" / paper
+    data = pd.read_csv(committed / f"{stem}.csv")
+    draw(data, tmp_path)
+    result = compare_images(str(committed / f"{stem}.png"), str(tmp_path / f"{stem}.png"), tol=IMAGE_TOL)
+    assert result is None, result
