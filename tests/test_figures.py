@@ -25,6 +25,8 @@ CHEAP = [
     ("zhao2017_3p4s", "fig01", ()),
     ("zhao2017_3p4s", "fig02", ()),
     ("zhao2017_3p4s", "table1_region", ("table1",)),
+    *[("zhao2017_3p4s", name, ()) for name in ("fig05", "fig06", "fig07", "fig08", "fig09", "fig10",
+                                               "power_balance", "dynamics_printed", "mujoco_tracking")],
 ]
 
 
@@ -46,7 +48,8 @@ def test_committed_figure_is_current(tmp_path, paper, artefact, needs):
             assert list(new.columns) == list(old.columns)
             for col in new.columns:
                 if pd.api.types.is_numeric_dtype(new[col]):
-                    assert np.allclose(new[col], old[col], rtol=1e-9, atol=1e-12, equal_nan=True), col
+                    # atol: some columns are differences at rounding level (~1e-10 between machines)
+                    assert np.allclose(new[col], old[col], rtol=1e-9, atol=1e-8, equal_nan=True), col
                 else:
                     assert (new[col].astype(str) == old[col].astype(str)).all(), col
 
