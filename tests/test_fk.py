@@ -85,3 +85,32 @@ def test_table2_on_quick_config(trained):
     assert (tab["time_ms"] < 20).all()
     # the network alone is far from 1e-8: the quasi-Newton step is what makes the accuracy
     assert (tab["e3_guess"] > 1e-6).all()
+
+
+def test_cli_hybrid_with_trained_network(trained, capsys):
+    import json
+
+    from parakin.cli import main
+
+    q = P3P4S().ik([0.03, -0.01, 0.565])
+    args = ["fk", "3p4s", "--joints", *map(repr, q.tolist()), "--solver", "hybrid",
+            "--network", str(fk.network_path(trained[0])), "--json"]
+    assert main(args) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["method"] == "hybrid" and out["success"] and out["nit"] <= 3
+    assert np.allclose(out["x"], [0.03, -0.01, 0.565], atol=1e-9)
+
+
+def test_benchmark_harness_reports_ratios(network, inputs):
+    from parakin.bench import SolverSpec, bench_fk
+
+    mech, poses, q = inputs
+    specs = [SolverSpec("hybrid", "hybrid", {"network": network}, start="network"),
+             SolverSpec("closed", "closed-form"),
+             SolverSpec("root", "scipy-root", batched=False)]
+    df = bench_fk(mech, specs, (q[:5], poses[:5]), (q, poses), repeats=1).set_index("solver")
+    assert (df["success_rate"] == 1.0).all()
+    assert df.loc["root", "speedup_single"] == 1.0 and df.loc["root", "speedup_per_solve"] == 1.0
+    # timings are reported, not asserted (speed claims live in the benchmark table)
+    assert np.isfinite(df[["median_latency_us", "throughput_per_s", "speedup_single", "speedup_per_solve"]]).all().all()
+    assert df.loc["closed", "median_nit"] == 0 and df.loc["hybrid", "max_err_m"] <= 1e-8
