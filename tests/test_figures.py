@@ -27,6 +27,8 @@ CHEAP = [
     ("zhao2017_3p4s", "table1_region", ("table1",)),
     *[("zhao2017_3p4s", name, ()) for name in ("fig05", "fig06", "fig07", "fig08", "fig09", "fig10",
                                                "power_balance", "dynamics_printed", "mujoco_tracking")],
+    *[("zhao2017_3p4s", name, ()) for name in ("fig11", "fig12", "fig14", "fig15", "fig17", "fig19", "fig21",
+                                               "fig23", "fig25", "index_convergence", "pareto")],
 ]
 
 

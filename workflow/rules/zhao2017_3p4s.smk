@@ -2,6 +2,24 @@
 Z3 = f"{FIG}/zhao2017_3p4s"
 G3 = f"{GEN}/zhao2017_3p4s"
 
+# §3 (src/parakin/papers/zhao2017_3p4s/optimization.py): artefact -> its files
+_ATLAS = {15: "dynamic_before", 17: "dynamic_after", 19: "stiffness_before", 21: "stiffness_after",
+          23: "speed_before", 25: "speed_after"}
+ZHAO2017_3P4S_OPTIMIZATION = {
+    "fig11": ["fig11_velocity_sphere.png", "fig11_velocity_sphere.csv"],
+    "fig12": ["fig12_velocity_ellipsoid.png", "fig12_velocity_ellipsoid.csv", "fig12_velocity_ellipsoid_axes.csv"],
+    **{f"fig{n:02d}": [f"fig{n:02d}_{s}_atlas.png", f"fig{n:02d}_{s}_atlas.csv",
+                       f"fig{n + 1:02d}_{s}_contour.png", f"fig{n + 1:02d}_{s}_contour.csv"] for n, s in _ATLAS.items()},
+    "global_indices": ["extra_global_indices.csv", "extra_global_indices.md"],
+    "index_convergence": ["extra_index_convergence.csv", "extra_index_convergence.md", "extra_index_convergence.png"],
+    "index_sensitivity": ["extra_index_sensitivity.csv", "extra_index_sensitivity.md"],
+    "index_benchmark": ["extra_index_benchmark.csv", "extra_index_benchmark.md"],
+    "fig14": ["fig14_ga_convergence.png", "fig14_ga_convergence.csv"],
+    "table3": ["table3.csv", "table3.md"],
+    "pareto": ["extra_pareto.png", "extra_pareto.csv", "extra_pareto_marks.csv"],
+    "ga_paper_box": ["extra_ga_paper_box.csv", "extra_ga_paper_box.md"],
+}
+
 # §1.2-2.4 (src/parakin/papers/zhao2017_3p4s/dynamics.py): figure stem -> artefact name
 ZHAO2017_3P4S_DYNAMICS = {
     "fig05_drive_velocities": "fig05",
@@ -27,6 +45,7 @@ ZHAO2017_3P4S_OUTPUTS = [
     f"{Z3}/fk_benchmark.md",
     *[f"{Z3}/{stem}.png" for stem in ZHAO2017_3P4S_DYNAMICS],
     f"{Z3}/extra_dynamics_slips.md",
+    *[f"{Z3}/{o}" for outs in ZHAO2017_3P4S_OPTIMIZATION.values() for o in outs],
 ]
 
 
@@ -150,3 +169,18 @@ rule zhao2017_3p4s_dynamics_slips:
         cfg=CONFIG_JSON,
     shell:
         "parakin reproduce zhao2017_3p4s dynamics_slips --outdir {Z3} --config-json {params.cfg}"
+
+
+# §3: indices, atlases, GA and Pareto front, one rule per artefact
+for _artefact, _files in ZHAO2017_3P4S_OPTIMIZATION.items():
+
+    rule:
+        name:
+            f"zhao2017_3p4s_{_artefact}"
+        output:
+            [f"{Z3}/{f}" for f in _files],
+        params:
+            cfg=CONFIG_JSON,
+            artefact=_artefact,
+        shell:
+            "parakin reproduce zhao2017_3p4s {params.artefact} --outdir {Z3} --config-json {params.cfg}"

@@ -12,12 +12,12 @@ from pathlib import Path
 
 import pandas as pd
 
-from parakin.papers.zhao2017_3p4s import dynamics, fk, kinematics
+from parakin.papers.zhao2017_3p4s import dynamics, fk, kinematics, optimization
 from parakin.papers.zhao2017_3p4s.common import KEY, TITLE
 from parakin.report import Claim
 
 #: the sections of the reproduction, in the paper's order
-SECTIONS = [kinematics, fk, dynamics]
+SECTIONS = [kinematics, fk, dynamics, optimization]
 
 #: artefact name -> function(config, outdir) writing that artefact's files
 ARTEFACTS = {name: fn for section in SECTIONS for name, fn in section.ARTEFACTS.items()}

@@ -1,0 +1,252 @@
+"""Particle swarm optimisation (Kennedy & Eberhart 1995; inertia weight of Shi & Eberhart 1998) as a
+forward-kinematics solver for any mechanism.
+
+One swarm per pose of the flat batch: all swarms advance together, vectorised over the particles
+*and* over the independent runs (rows), so 20 seeds x 5 inputs is one array computation. Each row
+draws its random numbers from its own ``numpy.random.Generator`` seeded by ``seed[row]``, in
+fixed-size blocks, so that a run gives the same result alone or inside any batch (reproducible per
+seed).
+
+Update per particle (standard global-best PSO)::
+
+    v <- w_k v + c1 r1 (pbest - x) + c2 r2 (gbest - x),   r1, r2 ~ U(0, 1) per component
+    v <- clip(v, -vmax, vmax)            (only if ``vclamp`` is given: vmax = vclamp * box range)
+    x <- clip(x + v, lower, upper)       (positions are kept inside the search box)
+
+Fitness: by default Li 2020's eq. (20), ``F = sum_j |f_j|`` with ``f = mech.residual`` (in the
+residual's units, metres for the papers' mechanisms, so the paper's ``F < 1e-6 mm`` is
+``ftol = 1e-9``); any ``fitness(x, joints) -> (runs, particles)`` replaces it.
+
+Inertia weight ``w_k``: ``"constant"`` (``w``; Table 1 of Li 2020 read as printed), ``"linear"``
+(``w`` -> ``w_end`` linearly over ``maxiter`` iterations: Shi & Eberhart's "improved" PSO), or any
+callable ``schedule(k, maxiter, rows) -> float | array (len(rows),)`` (``k = 1 .. maxiter``,
+``rows`` the indices of the runs still going), e.g. :class:`ChaoticLogistic` for a chaotic
+logistic-map weight.
+
+Registered as FK method ``"pso"``; :func:`pso` returns a :class:`PSOResult`, an
+:class:`~parakin.solvers.result.FKResult` with the best-fitness history per iteration.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from parakin.mechanisms.base import Array, Mechanism
+from parakin.solvers.result import FKResult, Status, inf_norm, summarize
+
+__all__ = ["pso", "PSOResult", "ChaoticLogistic", "linear_inertia", "inertia_schedule"]
+
+Schedule = Callable[[int, int, NDArray[np.intp]], "float | Array"]
+Fitness = Callable[[Array, Array], Array]
+
+_BLOCK = 64  # iterations of random numbers drawn per generator call (fixed: part of reproducibility)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class PSOResult(FKResult):
+    """:class:`FKResult` plus the swarm's record."""
+
+    fitness: Array = dataclasses.field(default_factory=lambda: np.zeros(0))  #: best fitness per run
+    history: Array = dataclasses.field(default_factory=lambda: np.zeros((0, 1)))  #: (..., maxiter + 1)
+    inertia: Array = dataclasses.field(default_factory=lambda: np.zeros(0))  #: w_k used, (maxiter + 1,) (k = 0: NaN)
+
+    def reshape(self, shape: tuple[int, ...]) -> "PSOResult":
+        base = super().reshape(shape)
+        return dataclasses.replace(
+            base, fitness=self.fitness.reshape(shape), history=self.history.reshape(*shape, self.history.shape[-1])
+        )
+
+
+def linear_inertia(w_start: float, w_end: float) -> Schedule:
+    """``w_k = w_start - (w_start - w_end) k / maxiter`` (Shi & Eberhart 1998)."""
+
+    def schedule(k: int, maxiter: int, rows: NDArray[np.intp]) -> float:
+        return w_start - (w_start - w_end) * k / max(maxiter, 1)
+
+    return schedule
+
+
+class ChaoticLogistic:
+    """A chaotic inertia weight: the logistic map ``z <- mu z (1 - z)`` (one ``z`` per run) turned
+    into ``w_k`` by ``combine(z, k, maxiter)``.
+
+    Default ``combine`` (Feng et al.'s chaotic descending weight):
+    ``w_k = (w_start - w_end) (maxiter - k) / maxiter + w_end * z_k``. Pass another
+    ``combine(z, k, maxiter) -> w`` to plug in a paper's own formula. Stateful: use a new instance
+    per solve (``z0`` may be a scalar or one value per run).
+    """
+
+    def __init__(self, w_start: float = 0.9, w_end: float = 0.4, z0: float | ArrayLike = 0.37, mu: float = 4.0,
+                 combine: Callable[[Array, int, int], Array] | None = None) -> None:
+        self.w_start, self.w_end, self.mu = w_start, w_end, mu
+        self.z0 = np.asarray(z0, dtype=float)
+        if np.any((self.z0 <= 0) | (self.z0 >= 1)) or np.any(np.isin(self.z0, [0.25, 0.5, 0.75])):
+            raise ValueError(f"z0 = {z0!r} must lie in (0, 1) and avoid the map's fixed/periodic points")
+        self.combine = combine or (lambda z, k, K: (self.w_start - self.w_end) * (K - k) / K + self.w_end * z)
+        self._z: Array | None = None
+
+    def __call__(self, k: int, maxiter: int, rows: NDArray[np.intp]) -> Array:
+        if self._z is None or k == 1:
+            n = int(rows.max(initial=-1)) + 1
+            self._z = np.broadcast_to(self.z0, (max(n, self.z0.size),)).copy()
+        self._z = self.mu * self._z * (1 - self._z)
+        return np.asarray(self.combine(self._z, k, maxiter), dtype=float)[rows]
+
+
+def inertia_schedule(inertia: str | Schedule, w: float, w_end: float) -> Schedule:
+    """The schedule named by ``inertia`` ("constant", "linear") or ``inertia`` itself if callable."""
+    if callable(inertia):
+        return inertia
+    if inertia == "constant":
+        return lambda k, maxiter, rows: w
+    if inertia == "linear":
+        return linear_inertia(w, w_end)
+    raise ValueError(f"inertia = {inertia!r} must be 'constant', 'linear' or a callable schedule(k, maxiter, rows)")
+
+
+def _eq20(mech: Mechanism) -> Fitness:
+    def fitness(x: Array, joints: Array) -> Array:
+        q = np.broadcast_to(joints[:, None, :], x.shape[:-1] + (joints.shape[-1],))
+        return np.sum(np.abs(mech.residual(x, q)), axis=-1)
+
+    return fitness
+
+
+def pso(
+    mech: Mechanism,
+    joints: Array,
+    x0: Array,
+    *,
+    tol: float,
+    maxiter: int,
+    swarm: int = 40,
+    c1: float = 2.0,
+    c2: float = 2.0,
+    inertia: str | Schedule = "constant",
+    w: float = 0.9,
+    w_end: float = 0.4,
+    bounds: tuple[ArrayLike, ArrayLike] | None = None,
+    vclamp: float | None = None,
+    fitness: Fitness | None = None,
+    ftol: float | None = None,
+    seed: int | ArrayLike = 0,
+    include_x0: bool = False,
+    callback: Callable[[int, Array, Array], Any] | None = None,
+    **options: Any,
+) -> PSOResult:
+    """PSO forward kinematics of the flat batch ``joints (N, m)`` (one swarm per row).
+
+    ``swarm`` particles per run, at most ``maxiter`` iterations; ``c1``, ``c2`` learning factors;
+    ``inertia``/``w``/``w_end`` the inertia weight (see module docstring); ``bounds`` the search
+    box (default ``mech.pose_bounds()``); initial positions uniform in the box, velocities zero
+    (with ``include_x0`` particle 0 starts at ``x0``). ``vclamp``: velocity limit as a fraction of
+    the box range per component (None: no clamp). A run stops when its best fitness is
+    ``<= ftol`` (default ``tol``); ``success`` means exactly that. ``seed``: one int, or one per
+    row (shape ``(N,)``): row ``i`` uses ``numpy.random.default_rng(seed[i])``.
+
+    ``residual`` of the result is the inf-norm of the mechanism residual at the best position;
+    ``nfev`` counts fitness evaluations (particles x iterations); ``nit`` the iterations run.
+    """
+    if options:
+        raise TypeError(f"pso() got unexpected options {sorted(options)}")
+    start = time.perf_counter()
+    n_runs, n = x0.shape
+    if swarm < 1 or int(swarm) != swarm:
+        raise ValueError(f"swarm = {swarm!r} must be a positive integer")
+    lo, hi = (np.asarray(b, dtype=float) for b in (bounds if bounds is not None else mech.pose_bounds()))
+    if lo.shape != (n,) or hi.shape != (n,) or np.any(hi <= lo):
+        raise ValueError(f"bounds must be two arrays of {n} values with lower < upper, got {lo}, {hi}")
+    span = hi - lo
+    vmax = None if vclamp is None else float(vclamp) * span
+    schedule = inertia_schedule(inertia, w, w_end)
+    fit = fitness or _eq20(mech)
+    ftol = tol if ftol is None else ftol
+    seeds = np.asarray(seed)
+    if seeds.ndim == 0:
+        seeds = np.full(n_runs, int(seeds))
+    seeds = seeds.reshape(-1)
+    if seeds.size != n_runs:
+        raise ValueError(f"seed must be one int or one per run ({n_runs}), got {seeds.size}")
+    gens = [np.random.default_rng(int(s)) for s in seeds]
+
+    # initial swarm: first draw of each generator
+    x = np.stack([g.uniform(lo, hi, size=(swarm, n)) for g in gens])  # (R, P, n)
+    if include_x0:
+        x[:, 0, :] = np.clip(x0, lo, hi)
+    v = np.zeros_like(x)
+    with np.errstate(all="ignore"):
+        f = fit(x, joints)
+    f = np.where(np.isfinite(f), f, np.inf)
+    pbest, pf = x.copy(), f.copy()
+    gi = np.argmin(pf, axis=1)
+    gbest = pbest[np.arange(n_runs), gi].copy()
+    gf = pf[np.arange(n_runs), gi].copy()
+    nfev = np.full(n_runs, swarm, dtype=np.int64)
+    nit = np.zeros(n_runs, dtype=np.int64)
+    history = np.empty((n_runs, maxiter + 1))
+    history[:, 0] = gf
+    weights = np.full(maxiter + 1, np.nan)
+    running = gf > ftol
+    rand = np.empty((n_runs, _BLOCK, 2, swarm, n))
+    if callback is not None:
+        callback(0, gbest.copy(), gf.copy())
+    for k in range(1, maxiter + 1):
+        rows = np.flatnonzero(running)
+        if rows.size == 0:
+            history[:, k:] = gf[:, None]
+            break
+        slot = (k - 1) % _BLOCK
+        if slot == 0:
+            for i in rows:
+                rand[i] = gens[i].random((_BLOCK, 2, swarm, n))
+        wk = schedule(k, maxiter, rows)
+        weights[k] = float(np.mean(wk))
+        wk = np.asarray(wk, dtype=float)
+        wk = wk[:, None, None] if wk.ndim == 1 else wk
+        full = rows.size == n_runs
+        idx = slice(None) if full else rows
+        xr, vr, pr = x[idx], v[idx], pbest[idx]
+        r = rand[idx, slot]
+        vr = wk * vr + c1 * r[:, 0] * (pr - xr) + c2 * r[:, 1] * (gbest[idx][:, None, :] - xr)
+        if vmax is not None:
+            vr = np.clip(vr, -vmax, vmax)
+        xr = np.clip(xr + vr, lo, hi)
+        with np.errstate(all="ignore"):
+            fr = fit(xr, joints[idx])
+        fr = np.where(np.isfinite(fr), fr, np.inf)
+        better = fr < pf[idx]
+        pr = np.where(better[..., None], xr, pr)
+        pfr = np.where(better, fr, pf[idx])
+        gi = np.argmin(pfr, axis=1)
+        sel = np.arange(len(pfr))
+        x[idx], v[idx], pbest[idx], pf[idx] = xr, vr, pr, pfr
+        gbest[idx] = pr[sel, gi]
+        gf[idx] = pfr[sel, gi]
+        nfev[idx] += swarm
+        nit[idx] += 1
+        history[:, k] = gf
+        running[idx] = gf[idx] > ftol
+        if callback is not None:
+            callback(k, gbest.copy(), gf.copy())
+    with np.errstate(all="ignore"):
+        res = inf_norm(mech.residual(gbest, joints))
+    status = np.where(gf <= ftol, Status.CONVERGED, Status.MAXITER).astype(np.int64)
+    return PSOResult(
+        x=gbest, success=status >= 0, status=status, nit=nit, nfev=nfev, njev=np.zeros(n_runs, dtype=np.int64),
+        residual=res, wall_time=time.perf_counter() - start, method="pso", message=summarize(status, maxiter),
+        fitness=gf, history=history, inertia=weights,
+    )
+
+
+# registration: at import when parakin.solvers is already initialised; when parakin.solvers imports
+# this module itself (circular import), it registers ``pso`` with its own ``register("pso")(pso)``.
+from parakin import solvers as _solvers  # noqa: E402
+
+if hasattr(_solvers, "register"):
+    _solvers.register("pso")(pso)

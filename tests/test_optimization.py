@@ -1,0 +1,122 @@
+"""The paper's GA (MATLAB ga semantics), the normalised weighted sum (eqs 38-40), NSGA-II, and the
+§3 section artefacts on a small configuration."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from parakin.config import DEFAULT_CONFIG, QUICK_CONFIG, load_config
+from parakin.errors import ConfigError
+from parakin.optimize import GAOptions, ga, non_dominated, normalised_sum, nsga2, rank_expectation
+from parakin.papers.zhao2017_3p4s import optimization as op
+from parakin.report import load_reference
+
+
+def sphere(X):
+    return np.sum((X - 0.3) ** 2, axis=1)
+
+
+LO, HI = np.full(4, -1.0), np.full(4, 1.0)
+
+
+def test_ga_reproducible_per_seed_and_converges():
+    a = ga(sphere, LO, HI, np.random.default_rng(7))
+    b = ga(sphere, LO, HI, np.random.default_rng(7))
+    c = ga(sphere, LO, HI, np.random.default_rng(8))
+    assert np.array_equal(a.x, b.x) and np.array_equal(a.best, b.best)
+    assert not np.array_equal(a.x, c.x)
+    assert a.fun < 1e-4 and np.all(np.diff(a.best) <= 0)  # elitism: the best never gets worse
+    assert a.nfev == 50 + 100 * 48 and len(a.best) == 101
+    assert np.all((a.population >= LO) & (a.population <= HI))
+
+
+def test_ga_handles_infeasible_and_fixed_variables():
+    lo, hi = np.array([-1.0, 0.5]), np.array([1.0, 0.5])
+    r = ga(lambda X: np.where(X[:, 0] < 0, np.inf, (X[:, 0] - 0.2) ** 2), lo, hi, np.random.default_rng(1),
+           GAOptions(population=20, generations=40))
+    assert abs(r.x[0] - 0.2) < 1e-2 and r.x[1] == 0.5
+    with pytest.raises(ValueError, match="lower <= upper"):
+        ga(sphere, HI, LO, np.random.default_rng(0))
+    with pytest.raises(ValueError, match="elite"):
+        GAOptions(population=10, elite=10)
+
+
+def test_rank_scaling_and_normalisation():
+    e = rank_expectation(np.array([3.0, 1.0, np.inf, 2.0]), 8)
+    assert e.sum() == pytest.approx(8) and e[1] > e[3] > e[0] > e[2]
+    f = normalised_sum(np.array([[10.0, 0.5, 2.0], [20.0, 0.1, 4.0]]), [10, 0.1, 2], [20, 0.5, 4],
+                       [False, True, False])
+    np.testing.assert_allclose(f, [0.0, 3.0])  # stiffness term flipped (notes G18)
+    with pytest.raises(ValueError, match="max > min"):
+        normalised_sum(np.ones((1, 3)), [1, 1, 1], [1, 2, 3], [False] * 3)
+
+
+def test_non_dominated_and_nsga2_front():
+    F = np.array([[1, 3], [2, 2], [3, 1], [2, 3], [3, 3]], dtype=float)
+    assert non_dominated(F).tolist() == [True, True, True, False, False]
+
+    def zdt(X):  # two objectives with a known convex front f2 = 1 - sqrt(f1) at X[:, 1:] = 0
+        g = 1 + 9 * X[:, 1:].mean(axis=1)
+        return np.stack([X[:, 0], g * (1 - np.sqrt(X[:, 0] / g))], axis=1)
+
+    res = nsga2(zdt, np.zeros(3), np.ones(3), 2, population=40, generations=60, seed=1)
+    assert non_dominated(res.F).all() and len(res.F) >= 10
+    assert np.max(res.F[:, 1] - (1 - np.sqrt(res.F[:, 0]))) < 0.1
+
+
+@pytest.fixture(scope="module")
+def small_config():
+    cfg = load_config([DEFAULT_CONFIG, QUICK_CONFIG])
+    cfg["zhao2017_3p4s"]["indices"] = {
+        "z0": 0.585, "half_width": 0.05, "z_half_height": 0.0, "quadrature": "gauss", "nodes": 6,
+        "atlas_grid": 9, "k": 1.0, "stiffness": "lambda", "convergence_nodes": [2, 4, 8], "benchmark_poses": 400,
+        "loop_poses": 20}
+    cfg["zhao2017_3p4s"]["optimization"] = {
+        "seeds": [1, 2], "population": 12, "generations": 5, "elite": 2, "crossover_fraction": 0.8, "ga_nodes": 3,
+        "max_speed": 50.0, "nsga2_population": 12, "nsga2_generations": 3,
+        "bounds": {"r_a": [0.15, 0.30], "r_b": [0.55, 0.80], "L": [0.30, 0.45], "d": [0.08, 0.16],
+                   "phi_deg": [20.0, 45.0]}}
+    return cfg
+
+
+def test_section_artefacts_write_their_files(small_config, tmp_path):
+    written = []
+    for name, fn in op.ARTEFACTS.items():
+        paths = fn(small_config, tmp_path)
+        assert paths and all(p.exists() and p.stat().st_size > 0 for p in paths), name
+        written += [p.name for p in paths]
+    for stem in ["fig11_velocity_sphere", "fig12_velocity_ellipsoid", "fig14_ga_convergence", "extra_pareto",
+                 *(f"fig{n:02d}_{k}_{w}_{kind}" for n0, k, w, *_ in op.ATLASES
+                   for n, kind in ((n0, "atlas"), (n0 + 1, "contour")))]:
+        assert f"{stem}.png" in written and f"{stem}.csv" in written, stem
+    assert {"table3.csv", "table3.md", "extra_index_convergence.csv", "extra_index_sensitivity.md",
+            "extra_index_benchmark.csv"} <= set(written)
+    t3 = pd.read_csv(tmp_path / "table3.csv")
+    assert {"ours seed 1", "ours seed 2", "paper before", "paper after"} <= set(t3["design"])
+    ref = load_reference("zhao2017_3p4s")
+    claims = op.claims(tmp_path, ref)
+    quantities = {c.quantity for c in claims}
+    assert {"sigma1.before", "sigma3.after", "f_min", "after.r_a", "gain.stiffness"} <= quantities
+    assert all(np.isfinite(c.ours) for c in claims)
+    text = op.summary(tmp_path, ref)
+    assert "sigma1" in text and "f_min" in text
+    # ellipsoid semi-axes are 1/sigma_i(J) at home: cond 9.936 (notes §3.5)
+    ax = pd.read_csv(tmp_path / "fig12_velocity_ellipsoid_axes.csv")
+    assert ax["semi_axis_m_s"].max() / ax["semi_axis_m_s"].min() == pytest.approx(9.936, abs=1e-3)
+
+
+def test_config_errors(small_config):
+    import copy
+
+    bad = copy.deepcopy(small_config)
+    bad["zhao2017_3p4s"]["indices"]["quadrature"] = "simpson"
+    with pytest.raises(ConfigError, match="quadrature"):
+        op.index_settings(bad)
+    bad = copy.deepcopy(small_config)
+    bad["zhao2017_3p4s"]["optimization"]["elite"] = 12
+    with pytest.raises(ConfigError, match="elite"):
+        op.opt_settings(bad)
+    bad = copy.deepcopy(small_config)
+    del bad["zhao2017_3p4s"]["optimization"]
+    with pytest.raises(ConfigError, match="optimization"):
+        op.opt_settings(bad)
