@@ -8,6 +8,7 @@ configfile: "config/config.yaml"
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/zhao2017_3p4s.smk"
+include: "workflow/rules/li2020_2ups.smk"
 include: "workflow/rules/report.smk"
 
 
@@ -15,4 +16,5 @@ rule all:
     default_target: True
     input:
         ZHAO2017_3P4S_OUTPUTS,
+        LI2020_2UPS_OUTPUTS,
         REPORT,

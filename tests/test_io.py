@@ -32,3 +32,12 @@ def test_write_table_is_deterministic(tmp_path):
 def test_markdown_table_format():
     md = markdown_table(pd.DataFrame({"x": [1.23456789], "n": ["a"]}), floatfmt={"x": ".3f"})
     assert md.splitlines() == ["| x | n |", "|---|---|", "| 1.235 | a |"]
+
+
+@pytest.mark.parametrize("name, timed", [("time_ms", True), ("median_latency_us", True), ("batched_s", True),
+                                         ("speedup_single", True), ("iteration", False), ("t_s", False),
+                                         ("mujoco_loop_error_m", False), ("e3", False)])
+def test_timing_columns_are_recognised(name, timed):
+    from parakin.io import is_timing_column
+
+    assert is_timing_column(name) is timed

@@ -12,6 +12,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from parakin.io import is_timing_column
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -42,24 +44,16 @@ def test_pipeline_writes_table1_and_report(two_runs):
     assert not list(figures.rglob(".*.tmp*")), "temporary files left behind"
 
 
-#: columns that carry wall-clock timings: outputs are compared without them
-TIMING_WORDS = ("time", "latency", "throughput", "speedup", "batched_s", "loop_s", "ratio", "wall")
-
-
-def _timing(column: str) -> bool:
-    return any(word in column for word in TIMING_WORDS)
-
-
 def _same(a: Path, b: Path) -> bool:
     if a.suffix == ".json":
         ja, jb = (json.loads(p.read_text()) for p in (a, b))
         return {k: v for k, v in ja.items() if "time" not in k} == {k: v for k, v in jb.items() if "time" not in k}
     if a.suffix == ".csv":
         da, db = pd.read_csv(a), pd.read_csv(b)
-        keep = [c for c in da.columns if not _timing(c)]
+        keep = [c for c in da.columns if not is_timing_column(c)]
         return list(da.columns) == list(db.columns) and da[keep].equals(db[keep])
     timed_csv = a.with_suffix(".csv")
-    if a.suffix == ".md" and timed_csv.exists() and any(_timing(c) for c in pd.read_csv(timed_csv).columns):
+    if a.suffix == ".md" and timed_csv.exists() and any(is_timing_column(c) for c in pd.read_csv(timed_csv).columns):
         return True  # the Markdown view of a timed table: its CSV is compared above
     if a.name == "REPORT.md":
         return True  # quotes timings; every number in it comes from the CSVs compared above

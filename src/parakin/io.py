@@ -15,7 +15,19 @@ from typing import Callable
 
 import pandas as pd
 
-__all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_writer", "write_csv", "write_table", "markdown_table"]
+__all__ = ["is_timing_column", "atomic_write_bytes", "atomic_write_text", "atomic_writer", "write_csv", "write_table", "markdown_table"]
+
+
+#: words that mark a table column as a wall-clock measurement (it differs run to run; the
+#: determinism and figure-regression tests compare tables without such columns)
+TIMING_WORDS = frozenset({"time", "timed", "latency", "throughput", "speedup", "wall", "ratio"})
+
+
+def is_timing_column(name: str) -> bool:
+    """True for a column that holds a timing: one of its ``_``-separated words is in
+    :data:`TIMING_WORDS` (``time_ms``, ``median_latency_us``, ``batched_s``; not ``iteration``)."""
+    name = name.lower()
+    return bool(TIMING_WORDS & set(name.split("_"))) or name.startswith(("batched_s", "loop_s"))
 
 
 def atomic_writer(path: str | os.PathLike, write: Callable[[Path], None]) -> Path:

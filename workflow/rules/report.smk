@@ -5,7 +5,8 @@ REPORT = f"{FIG}/REPORT.md"
 rule report:
     input:
         ZHAO2017_3P4S_OUTPUTS,
-        expand("data/reference/{paper}.csv", paper=["zhao2017_3p4s"]),
+        LI2020_2UPS_OUTPUTS,
+        expand("data/reference/{paper}.csv", paper=["zhao2017_3p4s", "li2020_2ups"]),
     output:
         REPORT,
     params:

@@ -2,9 +2,10 @@
 
 from parakin.mechanisms.base import Mechanism
 from parakin.mechanisms.p3p4s import P3P4S
+from parakin.mechanisms.ups2 import UPS2
 
 #: CLI name -> mechanism class (later papers add "2ups", "stewart12", "stewart36").
-REGISTRY: dict[str, type[Mechanism]] = {P3P4S.name: P3P4S}
+REGISTRY: dict[str, type[Mechanism]] = {P3P4S.name: P3P4S, UPS2.name: UPS2}
 
 
 def get(name: str) -> type[Mechanism]:
@@ -15,4 +16,4 @@ def get(name: str) -> type[Mechanism]:
         raise KeyError(f"unknown mechanism {name!r}; known: {', '.join(sorted(REGISTRY))}") from None
 
 
-__all__ = ["Mechanism", "P3P4S", "REGISTRY", "get"]
+__all__ = ["Mechanism", "P3P4S", "UPS2", "REGISTRY", "get"]

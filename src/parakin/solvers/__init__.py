@@ -67,6 +67,10 @@ register("lm")(levenberg_marquardt)
 register("hybrid")(hybrid)
 register("scipy-root")(scipy_root)
 
+from parakin.solvers.pso import pso as _pso  # noqa: E402  (pso.py imports register from here)
+
+register("pso")(_pso)
+
 
 def _fk_by_halves(
     fk: Callable[[Array], Array], joints: Array, n_pose: int

@@ -1,0 +1,280 @@
+"""Li 2020 §3: forward kinematics by PSO (eqs 18-20, Table 1), Table 2 recomputed, Fig. 2, the proof
+that Table 2 contradicts the paper's own IK, and a solver comparison (our addition).
+
+PSO variants (notes G8-G10, ASSUMED): ``as_printed`` = Table 1 literally (constant w = 0.9,
+c1 = c2 = 2, no velocity clamp); ``improved`` = inertia 0.9 -> 0.4 linearly (Shi-Eberhart), no clamp;
+``improved_clamped`` = the same with a velocity clamp of ``vclamp`` x box range.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+import parakin.solvers.pso  # noqa: F401  (registers "pso")
+from parakin.config import seed_for
+from parakin.io import write_csv, write_table
+from parakin.papers.li2020_2ups.common import CASES, KEY, mech, table2_inputs, table2_outputs, to_paper
+from parakin.plot import new_figure, save_figure
+from parakin.report import Claim, load_reference, printed_value
+from parakin.solvers import solve_fk
+
+VARIANTS = {
+    "as_printed": {"inertia": "constant", "vclamp": None},
+    "improved": {"inertia": "linear", "vclamp": None},
+    "improved_clamped": {"inertia": "linear", "vclamp": "cfg"},
+}
+
+
+def pso_options(config: dict, variant: str) -> dict:
+    p = config[KEY]["pso"]
+    v = VARIANTS[variant]
+    return {"swarm": p["swarm"], "maxiter": p["maxiter"], "c1": p["c1"], "c2": p["c2"], "w": p["w"],
+            "w_end": p["w_end"], "inertia": v["inertia"],
+            "vclamp": p["vclamp"] if v["vclamp"] == "cfg" else None, "tol": p["ftol_mm"] * 1e-3}
+
+
+def seeds(config: dict, variant: str) -> np.ndarray:
+    base = seed_for(config, f"{KEY}.pso.{variant}") % (2**31)
+    return base + np.arange(config[KEY]["seeds"])
+
+
+def run_pso(config: dict, variant: str, joints: np.ndarray, seed_list: np.ndarray):
+    """One PSO run per (input, seed), batched: result fields of shape (cases, seeds)."""
+    m = mech(config)
+    nq, ns = len(joints), len(seed_list)
+    q = np.repeat(joints, ns, axis=0)
+    s = np.tile(seed_list, nq)
+    res = solve_fk(m, q, method="pso", seed=s, **pso_options(config, variant))
+    return res.reshape((nq, ns))
+
+
+def table1(config: dict, outdir: Path) -> list[Path]:
+    """Table 1 as used: the paper's values beside ours, with what we had to assume."""
+    p = config[KEY]["pso"]
+    m = mech(config)
+    lo, hi = m.pose_bounds()
+    rows = [
+        ("swarm size", "40", p["swarm"], ""), ("max iterations", "1500", p["maxiter"], ""),
+        ("inertia weight", "0.9", p["w"], f"as_printed: constant; improved: linear {p['w']} -> {p['w_end']} (ASSUMED)"),
+        ("learning factor", "2", p["c1"], f"c1 = {p['c1']}, c2 = {p['c2']} (ASSUMED both)"),
+        ("search-space dimension", "3", 3, "x = (beta, gamma, Y)"),
+        ("beta range (deg)", "[-30, 30]", f"[{np.rad2deg(lo[0]):g}, {np.rad2deg(hi[0]):g}]", ""),
+        ("gamma range (deg)", "[-60, 60]", f"[{np.rad2deg(lo[1]):g}, {np.rad2deg(hi[1]):g}]", ""),
+        ("Y range (mm)", "[-20, 110]", f"[{lo[2]*1e3:g}, {hi[2]*1e3:g}]", ""),
+        ("stop: F below (mm)", "1e-6", p["ftol_mm"], "eq (20)"),
+        ("velocity clamp (x range)", "-", p["vclamp"], "improved_clamped only (ASSUMED)"),
+        ("initialisation", "-", "uniform in box, v = 0", "ASSUMED"),
+        ("runs per case", "-", config[KEY]["seeds"], "independent seeds"),
+    ]
+    df = pd.DataFrame(rows, columns=["parameter", "paper", "ours", "note"]).astype({"ours": str})
+    return write_table(df, outdir / "table1", title="Table 1 — PSO parameters as used")
+
+
+def table2(config: dict, outdir: Path) -> list[Path]:
+    """Table 2 recomputed: PSO (each variant, N seeds) on the paper's inputs, medians and spreads,
+    beside the exact FK (all-solutions polynomial) and the paper's printed outputs."""
+    ref = load_reference(KEY)
+    m = mech(config)
+    q = table2_inputs(ref)
+    paper = table2_outputs(ref)
+    exact = to_paper(m.fk(q))
+    rows = []
+    for variant in VARIANTS:
+        t0 = time.perf_counter()
+        res = run_pso(config, variant, q, seeds(config, variant))
+        wall = time.perf_counter() - t0
+        x = to_paper(res.x)  # (cases, seeds, 3)
+        for i, case in enumerate(CASES):
+            err = np.abs(x[i] - exact[i])
+            rows.append({
+                "case": case, "variant": variant,
+                **{f"{n}_median": float(np.median(x[i, :, j])) for j, n in enumerate(("beta", "gamma", "Y"))},
+                **{f"{n}_iqr": float(np.subtract(*np.percentile(x[i, :, j], [75, 25]))) for j, n in enumerate(("beta", "gamma", "Y"))},
+                **{f"{n}_maxerr": float(err[:, j].max()) for j, n in enumerate(("beta", "gamma", "Y"))},
+                "F_median_mm": float(np.median(res.fitness[i]) * 1e3), "F_max_mm": float(np.max(res.fitness[i]) * 1e3),
+                "converged": int(res.success[i].sum()), "runs": int(res.success[i].size),
+                "nit_median": float(np.median(res.nit[i])), "wall_s_all_cases": wall,
+            })
+    df = pd.DataFrame(rows)
+    for i, case in enumerate(CASES):
+        df.loc[df["case"] == case, ["beta_exact", "gamma_exact", "Y_exact"]] = exact[i]
+        df.loc[df["case"] == case, ["beta_paper", "gamma_paper", "Y_paper"]] = paper[i]
+    ik_paper = m.ik(np.concatenate([np.deg2rad(paper[:, :2]), paper[:, 2:] * 1e-3], axis=1)) * 1e3
+    for i, case in enumerate(CASES):
+        df.loc[df["case"] == case, ["l1_of_paper_pose", "l2_of_paper_pose", "l3_of_paper_pose"]] = ik_paper[i]
+    md = df[df["variant"] == "improved_clamped"][["case", "beta_paper", "gamma_paper", "Y_paper", "beta_median",
+                                                   "gamma_median", "Y_median", "beta_exact", "gamma_exact", "Y_exact",
+                                                   "converged", "runs"]]
+    paths = write_table(df, outdir / "table2", title="Table 2 — forward kinematics of the paper's inputs (deg, deg, mm)",
+                        markdown=md, floatfmt=".4g",
+                        notes="paper = printed outputs; median/iqr over seeds of our PSO; exact = polynomial FK "
+                              "(unique solution in the Table 1 box). Verdict: differs, paper inconsistent "
+                              "(see table2_consistency).")
+    return paths + consistency(config, outdir)
+
+
+def consistency_checks(ref: pd.DataFrame | None = None) -> dict[str, float]:
+    """The four geometry-independent contradictions of Table 2 with the paper's own IK (notes §4.3).
+
+    * ``same_l1_Y_spread_mm``: cases 1, 2 share l_i1 = 0, and Y depends on l1 only, yet Y differs;
+    * ``order_violations``: pairs (i, j) with l_i1(i) < l_i1(j) but Y(i) <= Y(j) (Y must decrease in l1);
+    * ``a_max_mm``/``c_max_mm``: cases 1 and 3 jointly bound a and c (any reference length);
+    * ``sign_violations``: cases where sign(beta) != sign(l_i3 - l_i2) (a zero difference needs beta = 0).
+    """
+    ref = load_reference(KEY) if ref is None else ref
+    q = table2_inputs(ref) * 1e3
+    out = table2_outputs(ref)
+    y = out[:, 2]
+    same = np.isclose(q[0, 0], q[1, 0])
+    order = sum(1 for i in range(5) for j in range(5) if q[i, 0] < q[j, 0] and y[i] <= y[j])
+    # l1^2 = K - (2/sqrt3) a Y with l1 = L + l_i1: cases 1 (l_i1 = 0) and 3 (l_i1 = -23)
+    d1, d3 = q[0, 0], q[2, 0]
+    a = np.linspace(1e-3, 200, 400001)
+    g = 2 / np.sqrt(3) * a
+    L = (g * (y[2] - y[0]) - d1**2 + d3**2) / (2 * (d1 - d3))  # 2L(d1 - d3) + d1^2 - d3^2 = g (Y3 - Y1)
+    c2 = 9 / 4 * ((L + d1) ** 2 - 0.75 * a**2 + g * y[0])
+    feasible = c2 > 0
+    positive = feasible & (L + d3 > 0) & (L + d1 > 0)  # both SPR lengths must be positive, too
+    sign_bad = int(np.sum(np.sign(out[:, 0]) != np.sign(np.round(q[:, 2] - q[:, 1], 9))))
+    return {
+        "same_l1_Y_spread_mm": float(abs(y[0] - y[1])) if same else 0.0,
+        "order_violations": float(order),
+        "a_max_mm": float(a[feasible].max()) if feasible.any() else 0.0,
+        "c_max_mm": float(np.sqrt(c2[feasible].max())) if feasible.any() else 0.0,
+        "a_max_with_positive_l1_mm": float(a[positive].max()) if positive.any() else 0.0,
+        "sign_violations": float(sign_bad),
+    }
+
+
+def consistency(config: dict, outdir: Path) -> list[Path]:
+    c = consistency_checks()
+    expl = {
+        "same_l1_Y_spread_mm": "l1^2 = 4c^2/9 + 3a^2/4 - (2/sqrt3) a Y: equal l_i1 must give equal Y (must be 0)",
+        "order_violations": "Y strictly decreasing in l1: pairs ordered the wrong way (must be 0)",
+        "a_max_mm": "largest base side a compatible with cases 1 and 3 (any reference length)",
+        "c_max_mm": "largest link c compatible with cases 1 and 3; Table 1's Y up to 110 mm needs c > 110",
+        "a_max_with_positive_l1_mm": "the same, also requiring l1 > 0 in case 3 (0 = no geometry at all)",
+        "sign_violations": "(l3^2 - l2^2)/2a = (rho + k sin g) sin b: sign(beta) = sign(l_i3 - l_i2) (must be 0)",
+    }
+    df = pd.DataFrame({"check": list(c), "value": list(c.values()), "meaning": [expl[k] for k in c]})
+    return write_table(df, outdir / "table2_consistency", title="Table 2 against the paper's own IK (any a, b, c)")
+
+
+def fig02(config: dict, outdir: Path) -> list[Path]:
+    """Fig. 2: best fitness F (mm) per iteration for the five cases, one seed, as printed vs improved."""
+    m = mech(config)
+    q = table2_inputs()
+    seed = config[KEY]["fig2_seed"]
+    frames = []
+    fig, _ = new_figure((6.8, 2.8))
+    fig.clear()
+    axs = fig.subplots(1, 2, sharey=True)
+    for ax, variant in zip(axs, ("as_printed", "improved")):
+        res = solve_fk(m, q, method="pso", seed=seed, **pso_options(config, variant))
+        hist = res.history * 1e3
+        for i, case in enumerate(CASES):
+            ax.semilogy(np.arange(hist.shape[1]), hist[i], lw=1.0, label=f"case {case}")
+            frames.append(pd.DataFrame({"variant": variant, "case": case, "iteration": np.arange(hist.shape[1]),
+                                        "F_mm": hist[i]}))
+        ax.axhline(config[KEY]["pso"]["ftol_mm"], color="0.4", ls="--", lw=0.8)
+        ax.set_title({"as_printed": "Table 1 as printed (w = 0.9)", "improved": "improved (w 0.9 → 0.4)"}[variant],
+                     fontsize="small")
+        ax.set_xlabel("iteration")
+    axs[0].set_ylabel("best fitness F (mm)")
+    from matplotlib.ticker import MaxNLocator
+    for ax in axs:
+        ax.xaxis.set_major_locator(MaxNLocator(4))
+    axs[1].legend(fontsize="x-small")
+    return [save_figure(fig, outdir / "fig02_fitness.png"), write_csv(pd.concat(frames), outdir / "fig02_fitness.csv")]
+
+
+def solver_comparison(config: dict, outdir: Path) -> list[Path]:
+    """Extra: every FK method on random poses of the Table 1 box (strokes by IK): success, iterations,
+    evaluations and time, batched; PSO (improved_clamped) on a subset."""
+    from parakin.config import rng
+
+    m = mech(config)
+    n = config[KEY]["compare_poses"]
+    lo, hi = m.pose_bounds()
+    poses = rng(config, f"{KEY}.compare").uniform(lo, hi, (n, 3))
+    q = m.ik(poses)
+    rows = []
+
+    def add(name: str, res, truth: np.ndarray) -> None:
+        err = np.abs(res.x - truth)
+        rows.append({"method": name, "poses": int(res.success.size), "success": int(res.success.sum()),
+                     "correct": int(np.sum(np.all(err < 1e-6, axis=-1))),
+                     "nit_median": float(np.median(res.nit)), "nfev_median": float(np.median(res.nfev)),
+                     "wall_ms_per_pose": 1e3 * res.wall_time / res.success.size})
+
+    for method in ("closed-form", "newton", "lm"):
+        add(method, solve_fk(m, q, method=method, tol=1e-12, maxiter=50), poses)
+    k = min(n, config[KEY]["compare_pso_poses"])
+    add("pso (improved_clamped)", solve_fk(m, q[:k], method="pso", seed=np.arange(k),
+                                            **pso_options(config, "improved_clamped")), poses[:k])
+    df = pd.DataFrame(rows)
+    return write_table(df, outdir / "extra_solvers", title="FK solvers on random poses of the Table 1 box",
+                       notes="correct: max |x - true| < 1e-6 (rad, m); PSO success = F below the paper's threshold.")
+
+
+ARTEFACTS = {"table1": table1, "table2": table2, "fig02": fig02, "solvers": solver_comparison}
+
+REASON_T2 = ("paper inconsistent: Table 2 contradicts its own IK for any a, b, c (table2_consistency: equal l_i1 "
+             "with different Y, Y not monotone in l_i1, cases 1+3 need a <= ~14.6 mm, 4 of 5 signs of beta wrong); "
+             "ours = median PSO (improved_clamped) with a, b, c = config (ASSUMED)")
+
+
+def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
+    out: list[Claim] = []
+    path = figdir / "table2.csv"
+    if path.exists():
+        df = pd.read_csv(path)
+        imp = df[df["variant"] == "improved_clamped"].set_index("case")
+        for case in CASES:
+            for n, unit in (("beta", "deg"), ("gamma", "deg"), ("Y", "mm")):
+                out.append(Claim(KEY, "table2", f"case{case}.{n}", printed_value(ref, "table2", f"case{case}.{n}"),
+                                 float(imp.loc[case, f"{n}_median"]), unit, variant="PSO improved_clamped, median",
+                                 reason=REASON_T2))
+        thr = printed_value(ref, "eq20", "fitness_threshold")
+        for variant in VARIANTS:
+            sub = df[df["variant"] == variant]
+            out.append(Claim(KEY, "eq20", "fitness_threshold", thr, float(sub["F_median_mm"].median()), "mm",
+                             variant=f"PSO {variant}: median final F over all runs", kind="upper",
+                             reason="" if variant != "as_printed" else
+                             "w = 0.9 with c1 + c2 = 4 lies outside the PSO stability region (c1 + c2 < 2(1 + w) = 3.8)"))
+    return out
+
+
+def summary(figdir: Path, ref: pd.DataFrame) -> str:
+    parts = []
+    path = figdir / "table2.csv"
+    if path.exists():
+        df = pd.read_csv(path)
+        agg = df.groupby("variant", sort=False).agg(conv=("converged", "sum"), runs=("runs", "sum"),
+                                                     F=("F_median_mm", "median"), nit=("nit_median", "median"))
+        parts.append("PSO on Table 2's inputs: " + "; ".join(
+            f"{v}: {int(r.conv)}/{int(r.runs)} runs reach F < threshold, median final F = {r.F:.3g} mm, median "
+            f"iterations {r.nit:.0f}" for v, r in agg.iterrows()) + ".")
+        d = df[df["variant"] == "improved_clamped"]
+        parts.append("Our converged poses vs the paper's (β°, γ°, Y mm): " + "; ".join(
+            f"case {int(r.case)}: ({r.beta_median:.3f}, {r.gamma_median:.3f}, {r.Y_median:.3f}) vs "
+            f"({r.beta_paper:.3f}, {r.gamma_paper:.3f}, {r.Y_paper:.3f})" for r in d.itertuples()) + ".")
+    path = figdir / "table2_consistency.csv"
+    if path.exists():
+        c = pd.read_csv(path).set_index("check")["value"]
+        parts.append(
+            "Table 2 cannot satisfy the paper's own IK for any geometry: cases 1 and 2 share l_i1 = 0 but their Y "
+            f"differ by {c['same_l1_Y_spread_mm']:.3f} mm; {int(c['order_violations'])} pair(s) violate the monotone "
+            f"Y(l1); cases 1 and 3 together need a ≤ {c['a_max_mm']:.1f} mm and c ≤ {c['c_max_mm']:.1f} mm "
+            f"(and no a at all once case 3's l1 must be positive: a_max = {c['a_max_with_positive_l1_mm']:.1f} mm); "
+            f"{int(c['sign_violations'])} of 5 rows have sign(β) ≠ sign(l_i3 − l_i2).")
+    path = figdir / "extra_solvers.csv"
+    if path.exists():
+        s = pd.read_csv(path)
+        parts.append("FK solvers on random box poses: " + "; ".join(
+            f"{r.method}: {r.correct}/{r.poses} correct, {r.wall_ms_per_pose:.3g} ms/pose" for r in s.itertuples()) + ".")
+    return "\n\n".join(parts)

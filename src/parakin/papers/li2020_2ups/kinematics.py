@@ -1,0 +1,191 @@
+"""Li 2020 §1-§2: the mechanism (Fig. 1), concomitant motion (eqs 6-8, 14), the IK, and our extras:
+the parasitic translations X, dZ the paper does not discuss, and the number of real FK solutions.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from parakin.config import rng
+from parakin.io import write_csv, write_table
+from parakin.papers.li2020_2ups.common import KEY, mech
+from parakin.papers.li2020_2ups.symbolic import derivation, loop_closure_model
+from parakin.plot import draw_mechanism, new_figure, save_figure, skeleton_table
+from parakin.report import Claim, printed_value
+
+#: pose drawn in Fig. 1 (deg, deg, mm): tilted so that both rotations are visible
+FIG1_POSE = (15.0, 20.0, 30.0)
+
+
+def fig01(config: dict, outdir: Path) -> list[Path]:
+    """Fig. 1 redrawn from our model at FIG1_POSE, with the plotted coordinates as CSV."""
+    m = mech(config)
+    pose = np.array([np.deg2rad(FIG1_POSE[0]), np.deg2rad(FIG1_POSE[1]), FIG1_POSE[2] * 1e-3])
+    sk = m.skeleton(pose)
+    ax = draw_mechanism(sk, frame_length=0.06,
+                        title=f"2-UPS/(S+SPR)R at β = {FIG1_POSE[0]:g}°, γ = {FIG1_POSE[1]:g}°, Y = {FIG1_POSE[2]:g} mm")
+    png = save_figure(ax.figure, outdir / "fig01_mechanism.png")
+    return [png, write_csv(skeleton_table(sk, frame_length=0.06), outdir / "fig01_mechanism.csv")]
+
+
+def concomitant(config: dict, outdir: Path) -> list[Path]:
+    """Symbolic derivation (sympy) that alpha = 0 and eq. (14) follow from (6), (12); the vector IK
+    against the scalar closed forms; a numeric check with an independent loop-closure model."""
+    cfg = config[KEY]
+    d = derivation()
+    m = mech(config)
+    model = loop_closure_model(cfg["concomitant_samples"], rng(config, f"{KEY}.concomitant"), c=m.c, a=m.a)
+    y = model["P"][:, 1]
+    rho = np.sqrt(m.c**2 - y**2)
+    rows = [
+        ("B2B3 = R (B3' - B2') equals eq (7)", "symbolic", float(d["eq7_ok"]), "1 = true"),
+        ("B2B3 . e_y", "symbolic", np.nan, str(d["constraint_y"])),
+        ("solutions alpha in [0, 2pi) for cos(beta) != 0", "symbolic", np.nan,
+         ", ".join(f"{v:.6g}" for v in d["alpha_solutions"]) + " (pi = flipped platform)"),
+        ("X from B2B3 . P = 0 at alpha = 0 (eq 8)", "symbolic", np.nan, str(d["X_of_Z"][0])),
+        ("eq (14) satisfies (6) and (12)", "symbolic", float(d["P_ok"]), "1 = true"),
+        ("|l1|^2 vector form = closed form", "symbolic", float(d["ik_ok"][0]), "1 = true"),
+        ("|l2|^2 vector form = closed form", "symbolic", float(d["ik_ok"][1]), "1 = true"),
+        ("|l3|^2 vector form = closed form", "symbolic", float(d["ik_ok"][2]), "1 = true"),
+        ("printed (16)^2 - vector |l2|^2", "symbolic", float(d["printed16_differs"]),
+         f"{d['printed16_minus_vector']} (nonzero: Y missing in the printed y term)"),
+        ("max |alpha| (rad), loop-closure model", "numeric", float(np.max(np.abs(model["alpha"]))),
+         f"{len(y)} random assemblies"),
+        ("max |X - rho sin beta| (m)", "numeric", float(np.max(np.abs(model["P"][:, 0] - rho * np.sin(model["beta"])))), ""),
+        ("max |Z - rho cos beta| (m)", "numeric", float(np.max(np.abs(model["P"][:, 2] - rho * np.cos(model["beta"])))), ""),
+        ("constraint Jacobian rank (DOF = 6 - rank)", "numeric", float(_dof(config)), "DOF at random poses"),
+    ]
+    df = pd.DataFrame(rows, columns=["check", "kind", "value", "detail"])
+    return write_table(df, outdir / "extra_concomitant", title="Concomitant motion: symbolic and numeric checks",
+                       notes="alpha = 0 follows from the first constraint of (6) alone; X and Z are functions of (beta, Y).")
+
+
+def _dof(config: dict) -> int:
+    """6 minus the rank of the Jacobian of constraints (6) + (12) in (alpha, beta, gamma, X, Y, Z) at
+    random admissible poses (the minimum DOF found)."""
+    m = mech(config)
+    g = rng(config, f"{KEY}.dof")
+    dofs = []
+    for _ in range(20):
+        beta, gamma, y = g.uniform(-0.5, 0.5), g.uniform(-1, 1), g.uniform(-0.02, 0.11)
+        rho = np.sqrt(m.c**2 - y**2)
+        z0 = np.array([0.0, beta, gamma, rho * np.sin(beta), y, rho * np.cos(beta)])
+
+        def cons(z: np.ndarray) -> np.ndarray:
+            al, be = z[0], z[1]
+            b2b3 = np.sqrt(2) * m.b * np.array([-np.cos(al) * np.cos(be), -np.sin(al) * np.cos(be), np.sin(be)])
+            return np.array([b2b3[1], b2b3 @ z[3:], z[3:] @ z[3:] - m.c**2])
+
+        jac = np.stack([(cons(z0 + e) - cons(z0 - e)) / 2e-7 for e in 1e-7 * np.eye(6)], axis=-1)
+        dofs.append(6 - np.linalg.matrix_rank(jac, tol=1e-8))
+    return int(min(dofs))
+
+
+def parasitic(config: dict, outdir: Path) -> list[Path]:
+    """Extra: the parasitic translations X = rho sin(beta) and dZ = c - rho cos(beta) over the
+    Table 1 box (beta, Y); gamma does not enter."""
+    m = mech(config)
+    n = config[KEY]["grid"]
+    lo, hi = m.pose_bounds()
+    beta = np.linspace(lo[0], hi[0], n)
+    y = np.linspace(lo[2], hi[2], n)
+    bb, yy = np.meshgrid(beta, y, indexing="ij")
+    p = m.position(np.stack([bb, np.zeros_like(bb), yy], axis=-1))
+    x_mm, dz_mm = p[..., 0] * 1e3, (m.c - p[..., 2]) * 1e3
+    df = pd.DataFrame({"beta_deg": np.rad2deg(bb).ravel(), "Y_mm": (yy * 1e3).ravel(),
+                       "X_mm": x_mm.ravel(), "dZ_mm": dz_mm.ravel()})
+    fig, axes = new_figure((6.6, 2.8))
+    fig.clear()
+    fig.set_layout_engine(None)
+    axs = fig.subplots(1, 2)
+    fig.subplots_adjust(left=0.09, right=0.92, bottom=0.17, top=0.86, wspace=0.62)
+    for ax, val, lab in zip(axs, (x_mm, dz_mm), ("X (mm)", "ΔZ = c − Z (mm)")):
+        cs = ax.contourf(np.rad2deg(bb), yy * 1e3, val, levels=15, cmap="viridis")
+        ax.contour(np.rad2deg(bb), yy * 1e3, val, levels=cs.levels[::3], colors="k", linewidths=0.4)
+        fig.colorbar(cs, ax=ax, label=lab)
+        ax.set_xlabel("β (deg)")
+        ax.set_ylabel("Y (mm)")
+        ax.set_xticks([-30, -15, 0, 15, 30])
+    fig.suptitle(f"Parasitic translations of B1 (a, b, c = {m.a*1e3:g}, {m.b*1e3:g}, {m.c*1e3:g} mm)")
+    return [save_figure(fig, outdir / "extra_parasitic.png"), write_csv(df, outdir / "extra_parasitic.csv")]
+
+
+def solution_count(config: dict, outdir: Path) -> list[Path]:
+    """Extra: number of real FK solutions (rho > 0 branch, all of beta, gamma) of the strokes of each
+    pose of a (beta, gamma) grid, at three Y across Table 1's range; and how many lie in the box."""
+    m = mech(config)
+    n = config[KEY]["grid"]
+    lo, hi = m.pose_bounds()
+    ys = np.array([lo[2], 0.5 * (lo[2] + hi[2]), hi[2]])
+    beta = np.linspace(lo[0], hi[0], n)
+    gamma = np.linspace(lo[1], hi[1], n)
+    bb, gg, yy = np.meshgrid(beta, gamma, ys, indexing="ij")
+    poses = np.stack([bb, gg, yy], axis=-1)
+    sols = m.fk_all(m.ik(poses))
+    real = np.all(np.isfinite(sols), axis=-1)
+    with np.errstate(invalid="ignore"):
+        inbox = real & np.all((sols >= lo - 1e-9) & (sols <= hi + 1e-9), axis=-1)
+    count, nbox = real.sum(-1), inbox.sum(-1)
+    df = pd.DataFrame({"beta_deg": np.rad2deg(bb).ravel(), "gamma_deg": np.rad2deg(gg).ravel(),
+                       "Y_mm": (yy * 1e3).ravel(), "n_real": count.ravel(), "n_in_box": nbox.ravel()})
+    fig, _ = new_figure((7.2, 2.6))
+    fig.clear()
+    axs = fig.subplots(1, 3, sharey=True)
+    levels = np.arange(-0.5, 9.5, 1.0)
+    for i, ax in enumerate(axs):
+        cs = ax.contourf(np.rad2deg(bb[..., i]), np.rad2deg(gg[..., i]), count[..., i], levels=levels, cmap="Blues")
+        ax.set_title(f"Y = {ys[i]*1e3:g} mm", fontsize="small")
+        ax.set_xlabel("β (deg)")
+    axs[0].set_ylabel("γ (deg)")
+    fig.colorbar(cs, ax=axs, label="real FK solutions", ticks=range(0, 9))
+    return [save_figure(fig, outdir / "extra_fk_solutions.png"), write_csv(df, outdir / "extra_fk_solutions.csv")]
+
+
+ARTEFACTS = {"fig01": fig01, "concomitant": concomitant, "parasitic": parasitic, "fk_solutions": solution_count}
+
+
+def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
+    out: list[Claim] = []
+    path = figdir / "extra_concomitant.csv"
+    if path.exists():
+        df = pd.read_csv(path).set_index("check")
+        rank_dof = float(df.loc["constraint Jacobian rank (DOF = 6 - rank)", "value"])
+        out.append(Claim(KEY, "text_s1.1", "dof", printed_value(ref, "text_s1.1", "dof"), rank_dof, "1",
+                         variant="6 - rank of the constraint Jacobian of (6)+(12)", tol=0.0))
+        alpha = float(df.loc["max |alpha| (rad), loop-closure model", "value"])
+        out.append(Claim(KEY, "eq8", "alpha", printed_value(ref, "eq8", "alpha"), float(np.rad2deg(alpha)), "deg",
+                         variant="max |alpha| over random assemblies of an independent loop-closure model",
+                         tol=1e-9, reason="also symbolic: B2B3.e_y = -sqrt2 b sin(alpha) cos(beta) = 0 gives alpha = 0 "
+                         "(pi = flipped platform); but X = rho sin(beta), Z = rho cos(beta) are parasitic translations"))
+    return out
+
+
+def summary(figdir: Path, ref: pd.DataFrame) -> str:
+    parts = []
+    path = figdir / "extra_concomitant.csv"
+    if path.exists():
+        df = pd.read_csv(path).set_index("check")
+        ok = all(df.loc[k, "value"] == 1.0 for k in df.index if "closed form" in k or "eq (7)" in k)
+        parts.append(
+            "Concomitant motion: sympy confirms eq (7) and that the first constraint of (6) reads "
+            f"`{df.loc['B2B3 . e_y', 'detail']} = 0`, so α = 0 (α = π is the flipped platform); an independent "
+            f"loop-closure model gives max |α| = {df.loc['max |alpha| (rad), loop-closure model', 'value']:.2g} rad. "
+            f"The vector IK (9)-(11) equals our scalar closed forms symbolically: {'yes' if ok else 'NO'}; the printed (16) "
+            f"differs from it by `{df.loc['printed (16)^2 - vector |l2|^2', 'detail'].split(' (')[0]}` (Y missing)."
+        )
+    path = figdir / "extra_parasitic.csv"
+    if path.exists():
+        df = pd.read_csv(path)
+        parts.append(f"Parasitic translations over the Table 1 box: |X| up to {df['X_mm'].abs().max():.1f} mm, "
+                     f"ΔZ up to {df['dZ_mm'].max():.1f} mm — 'no concomitant motion' holds only for the rotation about z.")
+    path = figdir / "extra_fk_solutions.csv"
+    if path.exists():
+        df = pd.read_csv(path)
+        counts = df["n_real"].value_counts().sort_index()
+        parts.append("Real FK solutions (ρ > 0 branch) over the box grid: "
+                     + ", ".join(f"{int(k)}: {int(v)} poses" for k, v in counts.items())
+                     + f"; solutions inside the Table 1 box: min {df['n_in_box'].min()}, max {df['n_in_box'].max()}.")
+    return "\n\n".join(parts)
