@@ -30,7 +30,8 @@ CHEAP = [
                                                "power_balance", "dynamics_printed", "mujoco_tracking")],
     *[("zhao2017_3p4s", name, ()) for name in ("fig11", "fig12", "fig14", "fig15", "fig17", "fig19", "fig21",
                                                "fig23", "fig25", "index_convergence", "pareto")],
-    *[("li2020_2ups", name, ()) for name in ("fig01", "parasitic", "fk_solutions", "table2", "fig02")],
+    *[("li2020_2ups", name, ()) for name in ("fig01", "parasitic", "fk_solutions", "table2", "fig02",
+                                             "singularity_workspace")],
 ]
 
 

@@ -11,6 +11,7 @@ LI2020_2UPS = {
     "table2": ["table2.csv", "table2.md", "table2_consistency.csv", "table2_consistency.md"],
     "fig02": ["fig02_fitness.png", "fig02_fitness.csv"],
     "solvers": ["extra_solvers.csv", "extra_solvers.md"],
+    "singularity_workspace": ["extra_singularity_workspace.png", "extra_singularity_workspace.csv"],
 }
 LI2020_2UPS_OUTPUTS = [f"{L2}/{f}" for files in LI2020_2UPS.values() for f in files]
 

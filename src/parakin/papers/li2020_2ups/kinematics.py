@@ -144,7 +144,49 @@ def solution_count(config: dict, outdir: Path) -> list[Path]:
     return [save_figure(fig, outdir / "extra_fk_solutions.png"), write_csv(df, outdir / "extra_fk_solutions.csv")]
 
 
-ARTEFACTS = {"fig01": fig01, "concomitant": concomitant, "parasitic": parasitic, "fk_solutions": solution_count}
+def singularity_workspace(config: dict, outdir: Path) -> list[Path]:
+    """Extra: det of the velocity Jacobian J (qdot = J posedot) over (beta, gamma) at three Y of
+    Table 1's box, with the region where eq (19)'s stroke limits hold; cond(J) beside it.
+    det J = 0 is a singularity (the pose cannot be held by the actuators)."""
+    from parakin.plot import use_style
+
+    m = mech(config)
+    n = config[KEY]["grid"]
+    lo, hi = m.pose_bounds()
+    ys = np.array([lo[2], 0.5 * (lo[2] + hi[2]), hi[2]])
+    bb, gg, yy = np.meshgrid(np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n), ys, indexing="ij")
+    poses = np.stack([bb, gg, yy], axis=-1)
+    jac = m.velocity_jacobian(poses)
+    det = np.linalg.det(jac)
+    cond = np.linalg.cond(jac)
+    inside = m.within_limits(m.ik(poses))
+    df = pd.DataFrame({"beta_deg": np.rad2deg(bb).ravel(), "gamma_deg": np.rad2deg(gg).ravel(),
+                       "Y_mm": (yy * 1e3).ravel(), "det_J_m2": det.ravel(), "cond_J": cond.ravel(),
+                       "within_eq19": inside.ravel()})
+    with use_style():
+        fig, _ = new_figure((7.2, 2.8))
+        fig.clear()
+        axs = fig.subplots(1, 3, sharey=True)
+        crosses = bool(det.min() < 0 < det.max())
+        levels = (np.linspace(-1, 1, 17) * np.abs(det).max()) if crosses else np.linspace(det.min(), det.max(), 13)
+        for i, ax in enumerate(axs):
+            cs = ax.contourf(np.rad2deg(bb[..., i]), np.rad2deg(gg[..., i]), det[..., i], levels=levels,
+                             cmap="RdBu_r" if crosses else "viridis")
+            ax.contour(np.rad2deg(bb[..., i]), np.rad2deg(gg[..., i]), det[..., i], levels=[0.0], colors="k", linewidths=1.2)
+            ax.contourf(np.rad2deg(bb[..., i]), np.rad2deg(gg[..., i]), (~inside[..., i]).astype(float), levels=[0.5, 1.5],
+                        colors="none", hatches=["////"])
+            ax.set_title(f"Y = {ys[i] * 1e3:g} mm", fontsize="small")
+            ax.set_xlabel("β (deg)")
+        axs[0].set_ylabel("γ (deg)")
+        fig.colorbar(cs, ax=axs, label="det J (m²)", format="%.1e")
+        fig.suptitle("Velocity Jacobian over Table 1's search box; hatched: strokes beyond eq. (19)"
+                     + ("; black: det J = 0" if crosses else "; det J never vanishes here"), fontsize="small")
+    return [save_figure(fig, outdir / "extra_singularity_workspace.png"),
+            write_csv(df, outdir / "extra_singularity_workspace.csv")]
+
+
+ARTEFACTS = {"fig01": fig01, "concomitant": concomitant, "parasitic": parasitic, "fk_solutions": solution_count,
+             "singularity_workspace": singularity_workspace}
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
@@ -165,6 +207,16 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
 
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
     parts = []
+    sw = figdir / "extra_singularity_workspace.csv"
+    if sw.exists():
+        d = pd.read_csv(sw)
+        sign_change = bool((d["det_J_m2"] > 0).any() and (d["det_J_m2"] < 0).any())
+        parts.append(
+            f"**Singularities and workspace (ours).** Over Table 1's search box, eq. (19)'s stroke limits hold on "
+            f"{d['within_eq19'].mean():.0%} of the (beta, gamma, Y) grid; det J "
+            f"{'changes sign (a singularity crosses the box)' if sign_change else 'keeps its sign (no singularity in the box)'}"
+            f", max cond(J) = {d['cond_J'].max():.3g} (`extra_singularity_workspace.png`)."
+        )
     path = figdir / "extra_concomitant.csv"
     if path.exists():
         df = pd.read_csv(path).set_index("check")
