@@ -1,0 +1,219 @@
+"""Li 2017 §2.2-§3: the chaotic inertia weight (eqs 7-9), Table 1, Fig. 2, and the PSO experiment of
+Fig. 3 (chaotic vs standard PSO, 50 runs) with the paper's fitness statistics, plus PSO + LM polish.
+
+Readings (notes §2, ASSUMED where marked): ``omega(t) = Z_t``, ``Z_{t+1} = mu Z_t (1 - Z_t)``,
+``Z_0 = 0.54``, one weight per iteration shared by the swarm; mu = 4 (the printed 0.4 is a misprint,
+notes G6, shown by the collapse); standard PSO = linearly decreasing weight 0.9 -> 0.4 (ASSUMED);
+velocity clamp ``vclamp`` x box width (ASSUMED); search box = ``Stewart36.pose_bounds`` (ASSUMED);
+fitness = eq. (4), F = sum f_i^2 with the squared-length residual (ASSUMED, notes G4).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+import parakin.solvers.pso  # noqa: F401  (registers "pso")
+from parakin.config import seed_for
+from parakin.io import write_csv, write_table
+from parakin.papers.li2017_stewart36.common import INPUT_NOTE, KEY, cfg, fk_input, mech
+from parakin.plot import new_figure, save_figure
+from parakin.report import Claim, printed_value
+from parakin.solvers import solve_fk
+from parakin.solvers.pso import ChaoticLogistic
+
+VARIANTS = ("chaotic", "standard")
+
+
+def logistic_weights(mu: float, z0: float, n: int) -> np.ndarray:
+    """``Z_1 .. Z_n`` of the logistic map (eq. 9) from ``Z_0 = z0``."""
+    z = np.empty(n)
+    v = float(z0)
+    for k in range(n):
+        v = mu * v * (1.0 - v)
+        z[k] = v
+    return z
+
+
+def arcsine_expected(n: int, bins: int) -> np.ndarray:
+    """Expected counts per equal bin of [0, 1] under the mu = 4 invariant density 1/(pi sqrt(z(1-z)))."""
+    edges = np.linspace(0, 1, bins + 1)
+    cdf = 2 / np.pi * np.arcsin(np.sqrt(edges))
+    return n * np.diff(cdf)
+
+
+def histogram(z: np.ndarray, bins: int) -> np.ndarray:
+    """Counts over ``bins`` equal bins of [0, 1] (last bin closed)."""
+    return np.histogram(np.clip(z, 0, 1), bins=bins, range=(0.0, 1.0))[0]
+
+
+def table1(config: dict, outdir: Path) -> list[Path]:
+    """Table 1 (body LOST): distribution of the chaotic weights over ten bins, mu = 4 and the printed
+    mu = 0.4 (collapse), beside the arcsine law."""
+    c = cfg(config)["chaos"]
+    n, bins = int(c["n_weights"]), int(c["bins"])
+    edges = np.linspace(0, 1, bins + 1)
+    z4 = logistic_weights(c["mu"], c["z0"], n)
+    z04 = logistic_weights(c["mu_printed"], c["z0"], n)
+    exp = arcsine_expected(n, bins)
+    h4 = histogram(z4, bins)
+    df = pd.DataFrame({"bin_lo": edges[:-1], "bin_hi": edges[1:], f"count_mu{c['mu']:g}": h4,
+                       f"count_mu{c['mu_printed']:g}": histogram(z04, bins), "arcsine_expected": exp})
+    chi2 = float(np.sum((h4 - exp) ** 2 / exp))
+    stats = pd.DataFrame({
+        "mu": [c["mu"], c["mu_printed"]], "mean": [z4.mean(), z04.mean()], "min": [z4.min(), z04.min()],
+        "max": [z4.max(), z04.max()], "frac_above_0.1": [np.mean(z4 >= 0.1), np.mean(z04 >= 0.1)],
+        "last": [z4[-1], z04[-1]], "chi2_vs_arcsine": [chi2, float(np.sum((histogram(z04, bins) - exp) ** 2 / exp))],
+        "chi2_dof": [bins - 1, bins - 1],
+    })
+    return (write_table(df, outdir / "table1", title=f"Table 1 — {n} chaotic weights (Z0 = {c['z0']}) over {bins} bins",
+                        notes=f"Body of the paper's Table 1 lost; described as 'more at both ends, fairly uniform in "
+                              f"between'. mu = {c['mu']:g} is our reading; mu = {c['mu_printed']:g} as printed "
+                              "collapses to 0 (notes G6). Exact counts are floating-point sensitive (chaos); "
+                              "compare the distribution (chi2, 9 dof).")
+            + write_table(stats, outdir / "table1_stats", title="Table 1 — statistics of the weight sequences"))
+
+
+def fig02(config: dict, outdir: Path) -> list[Path]:
+    """Fig. 2: the weight sequence omega(t) = Z_t, t = 1..1000, for mu = 4 (and mu = 0.4 as printed)."""
+    c = cfg(config)["chaos"]
+    n = int(c["n_weights"])
+    t = np.arange(1, n + 1)
+    z4 = logistic_weights(c["mu"], c["z0"], n)
+    z04 = logistic_weights(c["mu_printed"], c["z0"], n)
+    fig, ax = new_figure((6.4, 2.8))
+    ax.plot(t, z4, ".", ms=2.0, color="C0", label=f"μ = {c['mu']:g} (our reading)")
+    ax.plot(t, z04, "-", lw=1.2, color="C3", label=f"μ = {c['mu_printed']:g} (as printed)")
+    ax.set_xlabel("iteration t")
+    ax.set_ylabel("inertia weight ω(t) = Z_t")
+    ax.set_ylim(-0.02, 1.02)
+    ax.legend(loc="center right", fontsize="x-small")
+    df = pd.DataFrame({"t": t, f"w_mu{c['mu']:g}": z4, f"w_mu{c['mu_printed']:g}": z04})
+    return [save_figure(fig, outdir / "fig02_chaotic_weights.png"), write_csv(df, outdir / "fig02_chaotic_weights.csv")]
+
+
+def schedule(config: dict, variant: str, mu: float | None = None):
+    """The inertia schedule of a variant: chaotic omega(t) = Z_t, or LDIW w_start -> w_end."""
+    c = cfg(config)["chaos"]
+    if variant == "chaotic":
+        return ChaoticLogistic(z0=c["z0"], mu=c["mu"] if mu is None else mu, combine=lambda z, k, K: z)
+    return "linear"
+
+
+def run_pso(config: dict, variant: str, runs: int | None = None, b: float | None = None):
+    """``runs`` independent PSO runs (batched) on the reconstructed input; returns the PSOResult."""
+    p = cfg(config)["pso"]
+    runs = int(p["runs"] if runs is None else runs)
+    m = mech(config, b)
+    q = np.broadcast_to(fk_input(config, b), (runs, 6))
+    seeds = seed_for(config, f"{KEY}.pso.{variant}") % (2**31) + np.arange(runs)
+    fit = lambda x, joints: m.objective(x, joints[:, None, :])  # noqa: E731  eq. (4)
+    return solve_fk(m, q, method="pso", seed=seeds, tol=0.0, maxiter=int(p["maxiter"]), swarm=int(p["swarm"]),
+                    c1=float(p["c1"]), c2=float(p["c2"]), inertia=schedule(config, variant), w=float(p["w_start"]),
+                    w_end=float(p["w_end"]), vclamp=p["vclamp"], fitness=fit)
+
+
+def polish(config: dict, res) -> tuple[np.ndarray, np.ndarray]:
+    """Levenberg-Marquardt polish of PSO end points; returns (poses, F of eq. 4)."""
+    p = cfg(config)["pso"]
+    m = mech(config)
+    q = np.broadcast_to(fk_input(config), res.x.shape)
+    lm = solve_fk(m, q, x0=res.x, method="lm", tol=1e-15, maxiter=int(p["polish_maxiter"]))
+    return lm.x, m.objective(lm.x, q)
+
+
+def fig03(config: dict, outdir: Path) -> list[Path]:
+    """Fig. 3: best fitness F (eq. 4) per iteration, median and 10-90 % band over the runs, chaotic vs
+    standard PSO; the fitness statistics beside the paper's (best 0, worst 1.38e-30, mean 2.05e-31),
+    with PSO + LM polish as a third variant."""
+    frames, stats = [], []
+    fig, ax = new_figure((6.4, 3.2))
+    for color, variant in zip(("C0", "C1"), VARIANTS):
+        t0 = time.perf_counter()
+        res = run_pso(config, variant)
+        wall = time.perf_counter() - t0
+        h = np.maximum(res.history, 1e-300)
+        it = np.arange(h.shape[1])
+        lo, med, hi = np.percentile(h, [10, 50, 90], axis=0)
+        ax.fill_between(it, lo, hi, color=color, alpha=0.2, lw=0)
+        ax.semilogy(it, med, color=color, lw=1.3, label=f"{variant} PSO (median, 10–90 %)")
+        frames.append(pd.DataFrame({"variant": variant, "iteration": it, "F_median": med, "F_q10": lo, "F_q90": hi}))
+        t1 = time.perf_counter()
+        _, fpol = polish(config, res)
+        wall_pol = time.perf_counter() - t1
+        ax.plot(np.full(len(fpol), it[-1] * (1.02 if variant == "chaotic" else 1.05)), np.maximum(fpol, 1e-33), "o",
+                mfc="none", color=color, ms=4, label=f"{variant} PSO + LM polish (final F, each run)")
+        for name, f, w in ((f"{variant} PSO", res.fitness, wall), (f"{variant} PSO + LM", fpol, wall_pol)):
+            stats.append({"variant": name, "runs": len(f), "best": float(np.min(f)), "worst": float(np.max(f)),
+                          "mean": float(np.mean(f)), "median": float(np.median(f)),
+                          "runs_below_1e-25": int(np.sum(f < 1e-25)), "wall_time_s": w})
+    ax.set_xlabel("iteration")
+    ax.set_ylabel("best fitness F (eq. 4)")
+    ax.set_ylim(bottom=1e-33)
+    ax.axhline(1.380507e-30, color="0.3", ls=":", lw=0.8)
+    ax.text(it[-1] * 0.55, 3e-30, "paper's worst 1.38e-30", fontsize="x-small", color="0.3")
+    ax.legend(fontsize="x-small", loc="lower left")
+    st = pd.DataFrame(stats)
+    p = cfg(config)["pso"]
+    return [save_figure(fig, outdir / "fig03_convergence.png"), write_csv(pd.concat(frames), outdir / "fig03_convergence.csv")] + \
+        write_table(st, outdir / "fitness_stats", floatfmt=".3g",
+                    title=f"§3 — fitness over {p['runs']} runs (n = {p['swarm']}, {p['maxiter']} iterations, c1 = c2 = {p['c1']:g})",
+                    notes=f"Paper: best 0, worst 1.380507E-30, mean 2.051038E-31. {INPUT_NOTE}; b = {cfg(config)['b']}. "
+                          "'+ LM' = Levenberg-Marquardt polish of each PSO end point (our addition).")
+
+
+ARTEFACTS = {"table1": table1, "fig02": fig02, "fig03": fig03}
+
+
+def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
+    out: list[Claim] = []
+    path = figdir / "table1_stats.csv"
+    if path.exists():
+        st = pd.read_csv(path)
+        printed_mu = printed_value(ref, "eq9", "mu")
+        row = st[np.isclose(st["mu"], float(printed_mu))]
+        if len(row):
+            frac = float(row["frac_above_0.1"].iloc[0])
+            good = st[~np.isclose(st["mu"], float(printed_mu))]
+            out.append(Claim(KEY, "eq9", "mu", printed_mu, float(good["mu"].iloc[0]), "1", variant="mu that gives Fig. 2 / Table 1",
+                             reason=f"misprint: with mu = {printed_mu} the weights collapse to 0 (fraction >= 0.1: {frac:.3f}, "
+                                    f"last {float(row['last'].iloc[0]):.2g}); mu = {float(good['mu'].iloc[0]):g} fills [0,1] "
+                                    f"with chi2 = {float(good['chi2_vs_arcsine'].iloc[0]):.1f} (9 dof) vs the arcsine law"))
+    path = figdir / "fitness_stats.csv"
+    if path.exists():
+        st = pd.read_csv(path).set_index("variant")
+        for variant in ("chaotic PSO", "chaotic PSO + LM"):
+            if variant not in st.index:
+                continue
+            r = st.loc[variant]
+            why = ("PSO alone stalls far above machine precision (c1 = c2 = 2 with arcsine-distributed w keeps the swarm "
+                   "exploring; notes §4.5)" if "LM" not in variant else
+                   "a local LM polish reaches machine precision: a plausible source of the paper's numbers (unverified)")
+            out.append(Claim(KEY, "sec3", "fitness_best", printed_value(ref, "sec3", "fitness_best"), float(r["best"]), "1",
+                             variant=variant, kind="upper", reason=why))
+            out.append(Claim(KEY, "sec3", "fitness_worst", printed_value(ref, "sec3", "fitness_worst"), float(r["worst"]), "1",
+                             variant=variant, kind="upper", reason=why))
+            out.append(Claim(KEY, "sec3", "fitness_mean", printed_value(ref, "sec3", "fitness_mean"), float(r["mean"]), "1",
+                             variant=variant, kind="order", reason=why))
+    return out
+
+
+def summary(figdir: Path, ref: pd.DataFrame) -> str:
+    parts = []
+    path = figdir / "table1.csv"
+    if path.exists():
+        t = pd.read_csv(path)
+        cols = [c for c in t.columns if c.startswith("count_mu")]
+        parts.append("Chaotic weights per 0.1 bin: " + "; ".join(
+            f"{c.replace('count_mu', 'mu = ')}: {', '.join(str(int(v)) for v in t[c])}" for c in cols)
+            + f" (arcsine law: {', '.join(f'{v:.1f}' for v in t['arcsine_expected'])}).")
+    path = figdir / "fitness_stats.csv"
+    if path.exists():
+        st = pd.read_csv(path)
+        parts.append("Fitness over the runs (best / median / worst; runs < 1e-25): " + "; ".join(
+            f"{r['variant']}: {r['best']:.2g} / {r['median']:.2g} / {r['worst']:.2g}; "
+            f"{int(r['runs_below_1e-25'])}/{int(r['runs'])}" for _, r in st.iterrows()) + ". Paper: 0 / – / 1.38e-30 (mean 2.05e-31).")
+    return "\n\n".join(parts)

@@ -1,0 +1,261 @@
+"""Li 2017 §3 Table 3 and the "all forward solutions" claim, against a certified all-solutions FK
+(degree-16 polynomial, :meth:`parakin.mechanisms.stewart36.Stewart36.fk_all`); Fig. 1 redrawn; the
+real-solution counts over random inputs and over the b sweep (our addition); and a surrogate of the
+Adams study of §4 (Figs 5-11; the drive mapping is unknown, notes §5).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from parakin.config import rng
+from parakin.io import write_csv, write_table
+from parakin.mechanisms.stewart36 import pose_from_paper, pose_to_paper
+from parakin.papers.li2017_stewart36.common import INPUT_NOTE, KEY, POSE_COLS, cfg, fk_input, mech, table3
+from parakin.plot import draw_mechanism, new_figure, save_figure, skeleton_table
+from parakin.report import Claim, load_reference, printed_value
+from parakin.solvers import solve_fk
+
+RANGES = ("X", "Y", "Z", "angle1", "angle2", "angle3")
+
+
+def adams_ranges(ref: pd.DataFrame | None = None) -> dict[str, tuple[float, float]]:
+    """The CM ranges stated in §4 (from Figs 6-11), keyed by pose column."""
+    ref = load_reference(KEY) if ref is None else ref
+    cols = {"X": "X", "Y": "Y", "Z": "Z", "angle1": "alpha", "angle2": "beta", "angle3": "gamma"}
+    return {cols[q]: (float(printed_value(ref, "sec4", f"{q}_min")), float(printed_value(ref, "sec4", f"{q}_max")))
+            for q in RANGES}
+
+
+def table3_artefact(config: dict, outdir: Path) -> list[Path]:
+    """Table 3 decoded, each row's fitness and leg error under the reconstructed input (for every b of
+    the sweep), and whether it lies inside the §4 ranges."""
+    t = table3()
+    rngs = adams_ranges()
+    poses = pose_from_paper(t[list(POSE_COLS)].to_numpy(float))
+    for b in cfg(config)["b_sweep"]:
+        m = mech(config, b)
+        q = fk_input(config, b)
+        t[f"F_b{b:g}"] = m.objective(poses, q)
+        t[f"max_leg_err_b{b:g}"] = np.max(np.abs(m.ik(poses) - q), axis=-1)
+    inside = np.ones(len(t), bool)
+    for col, (lo, hi) in rngs.items():
+        inside &= (t[col] >= lo) & (t[col] <= hi)
+    t["inside_sec4_ranges"] = inside
+    b0 = cfg(config)["b"]
+    return write_table(t, outdir / "table3", floatfmt=".4g",
+                       title="Table 3 — the paper's 19 'forward solutions', decoded, with their residuals",
+                       notes=f"{INPUT_NOTE}. F = eq. (4) (squared-length residual); max_leg_err = max |IK(row) - L|. "
+                             f"Row 1 is exact by construction; a real solution would have F ~ 1e-30. Default b = {b0}.")
+
+
+def solutions_artefact(config: dict, outdir: Path) -> list[Path]:
+    """Our table of all real forward solutions of the reconstructed input, for every b of the sweep."""
+    rows, counts = [], []
+    for b in cfg(config)["b_sweep"]:
+        m = mech(config, b)
+        q = fk_input(config, b)
+        t0 = time.perf_counter()
+        sols, info = m.fk_all(q, return_info=True)
+        wall = time.perf_counter() - t0
+        real = sols[np.isfinite(sols[:, 0])]
+        for k, s in enumerate(real):
+            p = pose_to_paper(s)
+            rows.append({"b": b, "solution": k + 1, **dict(zip(POSE_COLS, p)),
+                         "ik_error": float(np.max(np.abs(m.ik(s) - q))), "above_base": bool(s[5] > 0),
+                         "is_table3_row1": bool(np.allclose(p, table3().iloc[0][list(POSE_COLS)].to_numpy(float), atol=1e-6)),
+                         "sigma_min_jacobian": float(np.linalg.svd(m.jacobian_pose(s), compute_uv=False)[-1])})
+        counts.append({"b": b, "complex_roots": int(info["n_complex"]), "real": int(info["n_real"]),
+                       "above_base": int(info["n_above"]), "degree_tail": float(info["tail"]), "wall_time_ms": wall * 1e3})
+    df = pd.DataFrame(rows)
+    md = df.copy()
+    return (write_table(df, outdir / "extra_solutions", floatfmt=".6g", markdown=md,
+                        title="All real forward solutions of the reconstructed input (certified, degree-16 polynomial)",
+                        notes=f"{INPUT_NOTE}. Angles in degrees. Each solution has its mirror (alpha, -beta, -gamma, X, Y, -Z).")
+            + write_table(pd.DataFrame(counts), outdir / "extra_solution_counts_b", floatfmt=".4g",
+                          title="Number of forward solutions per b (paper: 19, all above the base)",
+                          notes="degree_tail = size of the interpolated coefficients above degree 16 (relative): "
+                                "the polynomial has degree 16, so at most 16 complex and 8 above-base solutions."))
+
+
+def counts_artefact(config: dict, outdir: Path) -> list[Path]:
+    """Histogram of the number of real FK solutions over random inputs (random pose near Table 3 row 1,
+    IK, legs scaled by U[1 - s, 1 + s]), per b of the sweep."""
+    c = cfg(config)["counts"]
+    n, s = int(c["samples"]), float(c["scale"])
+    rows, frames = [], []
+    fig, ax = new_figure((6.4, 2.8))
+    bsw = list(cfg(config)["b_sweep"])
+    width = 0.8 / len(bsw)
+    for j, b in enumerate(bsw):
+        g = rng(config, f"{KEY}.counts.b{b:g}")
+        m = mech(config, b)
+        lo, hi = m.pose_bounds()
+        pose = m.home() + g.uniform(-1, 1, (n, 6)) * np.array([0.5, 0.5, 0.5, 0.3, 0.3, 0.3])
+        q = m.ik(pose) * g.uniform(1 - s, 1 + s, (n, 6))
+        t0 = time.perf_counter()
+        _, info = m.fk_all(q, return_info=True)
+        wall = time.perf_counter() - t0
+        assembl = info["n_complex"] > 0
+        best = int(np.argmax(info["n_real"]))
+        sb = _[best][np.isfinite(_[best][:, 0])]
+        frames.append(pd.DataFrame({"b": b, "sample": best, **{f"L{i + 1}": q[best, i] for i in range(6)},
+                                    "solution": np.arange(1, len(sb) + 1),
+                                    **{c: pose_to_paper(sb)[:, i] for i, c in enumerate(POSE_COLS)},
+                                    "ik_error": np.max(np.abs(m.ik(sb) - q[best]), axis=-1)}))
+        hist = np.bincount(info["n_real"][assembl], minlength=17)
+        rows.append({"b": b, "samples": n, "no_circles": int(np.sum(~assembl)),
+                     **{f"real_{k}": int(hist[k]) for k in range(0, 17, 2)},
+                     "max_real": int(info["n_real"].max()), "max_above_base": int(info["n_above"].max()),
+                     "max_ik_error": float(np.nanmax(info["ik_error"])) if np.isfinite(info["ik_error"]).any() else 0.0,
+                     "wall_time_ms_per_input": wall / n * 1e3})
+        ax.bar(np.arange(0, 17, 2) + (j - (len(bsw) - 1) / 2) * width * 2, hist[::2], width=2 * width, label=f"b = {b:g}")
+    ax.set_xlabel("number of real forward solutions")
+    ax.set_ylabel("inputs")
+    ax.set_xticks(list(range(0, 17, 2)) + [19])
+    ax.axvline(19, color="0.3", ls="--", lw=1.0)
+    ax.text(18.8, ax.get_ylim()[1] * 0.9, "paper: 19", ha="right", va="top", fontsize="x-small", color="0.3")
+    ax.axvline(16.5, color="0.6", ls=":", lw=0.8)
+    ax.set_xlim(-1.5, 20)
+    ax.legend(fontsize="x-small")
+    df = pd.DataFrame(rows)
+    return write_table(df, outdir / "extra_solution_counts", floatfmt=".3g",
+                       title="Real forward solutions over random inputs (certified all-solutions FK)",
+                       notes=f"{n} inputs per b: random pose near Table 3 row 1, IK, each leg scaled by U[{1 - s:g}, {1 + s:g}]; "
+                             "no_circles = a leg pair cannot reach its base edge.") + \
+        [save_figure(fig, outdir / "extra_solution_counts.png"),
+         write_csv(pd.concat(frames), outdir / "extra_solution_counts_richest.csv")]
+
+
+def fig01(config: dict, outdir: Path) -> list[Path]:
+    """Fig. 1 redrawn from our model at Table 3 row 1, plus every above-base solution of the
+    reconstructed input (Fig. 4's role: the model the paper simulated)."""
+    m = mech(config)
+    q = fk_input(config)
+    sols = m.fk_all(q)
+    up = sols[np.isfinite(sols[:, 0]) & (np.nan_to_num(sols[:, 5]) > 0)]
+    ax = draw_mechanism(m.skeleton(m.home()), frame_length=0.4, title=f"3-6 platform, b = {m.b:g}, Table 3 row 1")
+    paths = [save_figure(ax.figure, outdir / "fig01_structure.png"),
+             write_csv(skeleton_table(m.skeleton(m.home()), frame_length=0.4), outdir / "fig01_structure.csv")]
+    k = len(up)
+    fig, _ = new_figure((3.0 * k, 3.2))
+    fig.clear()
+    for i, s in enumerate(up):
+        a = fig.add_subplot(1, k, i + 1, projection="3d")
+        draw_mechanism(m.skeleton(s), ax=a, labels=False, frames=False, legend=False,
+                       title=f"({', '.join(f'{v:.1f}' for v in pose_to_paper(s)[:3])})°, Z = {s[5]:.3f}")
+    paths.append(save_figure(fig, outdir / "extra_solutions.png"))
+    return paths
+
+
+def adams_artefact(config: dict, outdir: Path) -> list[Path]:
+    """Surrogate of the Adams study (Figs 5-11; drive mapping unknown, notes §5): a pose trajectory whose
+    coordinates oscillate inside the stated ranges (periods 10, 6.67, 20 s from eq. 10: X and alpha
+    with 10 s, Y and beta 6.67 s, Z and gamma 20 s), IK -> leg lengths -> FK by warm-started Newton ->
+    recovered CM position, velocity (central differences) and Euler angles."""
+    a = cfg(config)["adams"]
+    m = mech(config)
+    rngs = adams_ranges()
+    t = np.linspace(0, float(a["t_end"]), int(a["samples"]))
+    periods = {"X": 10.0, "alpha": 10.0, "Y": 20 / 3, "beta": 20 / 3, "Z": 20.0, "gamma": 20.0}
+    traj = np.stack([(rngs[c][0] + rngs[c][1]) / 2 + (rngs[c][1] - rngs[c][0]) / 2 * np.sin(2 * np.pi * t / periods[c])
+                     for c in POSE_COLS], axis=-1)
+    truth = pose_from_paper(traj)
+    legs = m.ik(truth)
+    x = truth[0] + 1e-3
+    rec = np.empty_like(truth)
+    for k in range(len(t)):
+        r = solve_fk(m, legs[k], x0=x, method="newton", tol=1e-13, maxiter=30)
+        rec[k] = x = r.x
+    err = np.max(np.abs(rec - truth))
+    deg = pose_to_paper(rec)
+    vel = np.gradient(rec[:, 3:], t, axis=0)
+    df = pd.DataFrame({"t_s": t, **{c: deg[:, i] for i, c in enumerate(POSE_COLS)},
+                       "VX": vel[:, 0], "VY": vel[:, 1], "VZ": vel[:, 2], **{f"L{i + 1}": legs[:, i] for i in range(6)}})
+    paths = []
+    fig, ax = new_figure((6.4, 2.6))
+    for i, c in enumerate(("VX", "VY", "VZ")):
+        ax.plot(t, df[c], lw=1.0, label=c)
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("CM velocity (1/s)")
+    ax.legend(fontsize="x-small")
+    paths.append(save_figure(fig, outdir / "fig05_cm_velocity.png"))
+    paths.append(write_csv(df[["t_s", "VX", "VY", "VZ"]], outdir / "fig05_cm_velocity.csv"))
+    for stem, cols, unit in (("fig06_cm_position", ("X", "Y", "Z"), ""), ("fig09_euler_angles", ("alpha", "beta", "gamma"), " (°)")):
+        fig, _ = new_figure((6.4, 4.2))
+        fig.clear()
+        axs = fig.subplots(3, 1, sharex=True)
+        for axi, c in zip(axs, cols):
+            axi.plot(t, df[c], lw=1.0)
+            lo, hi = rngs[c]
+            axi.axhspan(lo, hi, color="0.85", zorder=0)
+            axi.set_ylabel(c + unit)
+        axs[-1].set_xlabel("t (s)")
+        paths.append(save_figure(fig, outdir / f"{stem}.png"))
+        paths.append(write_csv(df[["t_s", *cols]], outdir / f"{stem}.csv"))
+    paths.append(write_csv(df, outdir / "extra_adams_trajectory.csv"))
+    summ = pd.DataFrame([{"quantity": c, "stated_min": rngs[c][0], "stated_max": rngs[c][1], "ours_min": df[c].min(),
+                          "ours_max": df[c].max()} for c in POSE_COLS] + [{"quantity": "max_roundtrip_error", "ours_max": err}])
+    return paths + write_table(summ, outdir / "extra_adams_surrogate", floatfmt=".6g",
+                               title="Surrogate of the Adams study (drive mapping unknown; notes §5)",
+                               notes="A pose trajectory inside the stated ranges by construction, recovered by "
+                                     "warm-started Newton FK from its leg lengths; the check is the round trip.")
+
+
+ARTEFACTS = {"table3": table3_artefact, "extra_solutions": solutions_artefact, "extra_solution_counts": counts_artefact,
+             "fig01": fig01, "adams": adams_artefact}
+
+
+def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
+    out: list[Claim] = []
+    path = figdir / "extra_solution_counts_b.csv"
+    if path.exists():
+        c = pd.read_csv(path)
+        out.append(Claim(KEY, "table3", "n_solutions", printed_value(ref, "table3", "n_solutions"),
+                         float(c["above_base"].max()), "1", variant="certified FK: max above-base solutions over the b sweep",
+                         reason=f"the FK is a degree-16 polynomial (16 complex roots in mirror pairs, so <= 8 above the "
+                                f"base); we find {', '.join(f'{int(r.real)} real / {int(r.above_base)} above (b = {r.b:g})' for r in c.itertuples())}. "
+                                "Table 3's rows are not solutions of one input (see table3.csv residuals) and 3 are duplicates"))
+    path = figdir / "table3.csv"
+    if path.exists():
+        t = pd.read_csv(path)
+        outside = int((~t["inside_sec4_ranges"].astype(bool)).sum())
+        out.append(Claim(KEY, "sec4", "table3_rows_outside_ranges", printed_value(ref, "sec4", "table3_rows_outside_ranges"),
+                         float(outside), "1", variant="Table 3 against the stated §4 ranges",
+                         reason=f"rows outside: {', '.join(str(r) for r in t.loc[~t['inside_sec4_ranges'].astype(bool), 'row'])} "
+                                "(alpha > 80 deg or X < -0.30)"))
+    return out
+
+
+def summary(figdir: Path, ref: pd.DataFrame) -> str:
+    parts = []
+    path = figdir / "extra_solution_counts_b.csv"
+    if path.exists():
+        c = pd.read_csv(path)
+        parts.append("Certified all-solutions FK of the reconstructed input: " + "; ".join(
+            f"b = {r.b:g}: {int(r.complex_roots)} complex, {int(r.real)} real, {int(r.above_base)} above the base "
+            f"({r.wall_time_ms:.2g} ms)" for r in c.itertuples()) + ". The paper lists 19 'solutions', all above the base.")
+    path = figdir / "table3.csv"
+    if path.exists():
+        t = pd.read_csv(path)
+        fcols = [col for col in t.columns if col.startswith("F_b")]
+        parts.append("Table 3 rows 2-19 under L = IK(row 1): F (eq. 4) from " + "; ".join(
+            f"{col[2:]}: {t[col].iloc[1:].min():.2g}…{t[col].iloc[1:].max():.2g}" for col in fcols)
+            + f" (a solution has F ~ 1e-30); {int((~t['inside_sec4_ranges'].astype(bool)).sum())} of 19 rows lie outside the §4 ranges.")
+    path = figdir / "extra_solution_counts.csv"
+    if path.exists():
+        c = pd.read_csv(path)
+        cols = [col for col in c.columns if col.startswith("real_")]
+        parts.append("Real solutions over random inputs: " + "; ".join(
+            f"b = {r['b']:g}: " + ", ".join(f"{col[5:]}: {int(r[col])}" for col in cols if r[col]) +
+            f" (no circles: {int(r['no_circles'])}; max above base {int(r['max_above_base'])}; "
+            f"{r['wall_time_ms_per_input']:.2g} ms/input)" for _, r in c.iterrows()) + ".")
+    path = figdir / "extra_adams_surrogate.csv"
+    if path.exists():
+        s = pd.read_csv(path).set_index("quantity")
+        parts.append(f"Adams surrogate: round-trip error of the warm-started Newton FK {s.loc['max_roundtrip_error', 'ours_max']:.2g}.")
+    return "\n\n".join(parts)
