@@ -9,6 +9,7 @@ configfile: "config/config.yaml"
 include: "workflow/rules/common.smk"
 include: "workflow/rules/zhao2017_3p4s.smk"
 include: "workflow/rules/li2020_2ups.smk"
+include: "workflow/rules/ye_stewart12.smk"
 include: "workflow/rules/li2017_stewart36.smk"
 include: "workflow/rules/report.smk"
 
@@ -18,5 +19,6 @@ rule all:
     input:
         ZHAO2017_3P4S_OUTPUTS,
         LI2020_2UPS_OUTPUTS,
+        YE_STEWART12_OUTPUTS,
         LI2017_STEWART36_OUTPUTS,
         REPORT,

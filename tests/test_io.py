@@ -41,3 +41,13 @@ def test_timing_columns_are_recognised(name, timed):
     from parakin.io import is_timing_column
 
     assert is_timing_column(name) is timed
+
+
+def test_parse_quantity_units():
+    from parakin.units import parse_quantity
+
+    assert parse_quantity("0.21") == 0.21  # a trailing digit is not the unit "1"
+    assert parse_quantity("120mm") == pytest.approx(0.12)
+    assert parse_quantity("35deg") == pytest.approx(0.6108652381980153)
+    with pytest.raises(ValueError, match="cannot read 'abc'"):
+        parse_quantity("abc")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 #: factor that converts a value in the named unit to SI
-TO_SI: dict[str, float] = {"m": 1.0, "mm": 1e-3, "rad": 1.0, "deg": float(np.pi / 180)}
+TO_SI: dict[str, float] = {"m": 1.0, "mm": 1e-3, "rad": 1.0, "deg": float(np.pi / 180), "1": 1.0}
 
 
 def to_si(values, units: tuple[str, ...]) -> np.ndarray:
@@ -21,7 +21,7 @@ def from_si(values, units: tuple[str, ...]) -> np.ndarray:
 def parse_quantity(text: str) -> float:
     """'0.38' -> 0.38; '35deg' -> 0.6109 rad; '120mm' -> 0.12 m (a unit suffix converts to SI)."""
     s = text.strip()
-    for unit in sorted(TO_SI, key=len, reverse=True):
+    for unit in sorted((u for u in TO_SI if u.isalpha()), key=len, reverse=True):
         if s.endswith(unit) and s[: -len(unit)].strip():
             try:
                 return float(s[: -len(unit)]) * TO_SI[unit]

@@ -6,8 +6,9 @@ rule report:
     input:
         ZHAO2017_3P4S_OUTPUTS,
         LI2020_2UPS_OUTPUTS,
+        YE_STEWART12_OUTPUTS,
         LI2017_STEWART36_OUTPUTS,
-        expand("data/reference/{paper}.csv", paper=["zhao2017_3p4s", "li2020_2ups", "li2017_stewart36"]),
+        expand("data/reference/{paper}.csv", paper=["zhao2017_3p4s", "li2020_2ups", "ye_stewart12", "li2017_stewart36"]),
     output:
         REPORT,
     params:

@@ -30,6 +30,7 @@ from parakin.errors import ParakinError, ShapeError
 from parakin.mechanisms.base import Array, Mechanism, as_batch
 from parakin.solvers.lm import levenberg_marquardt
 from parakin.solvers.baseline import scipy_root
+from parakin.solvers.gauss_newton import broyden_ls, gauss_newton
 from parakin.solvers.hybrid import hybrid
 from parakin.solvers.newton import newton
 from parakin.solvers.quasi_newton import bfgs, broyden
@@ -66,6 +67,8 @@ register("bfgs")(bfgs)
 register("lm")(levenberg_marquardt)
 register("hybrid")(hybrid)
 register("scipy-root")(scipy_root)
+register("gauss-newton")(gauss_newton)  # least-squares Newton, m >= n (redundant drive modes)
+register("broyden-ls")(broyden_ls)
 
 from parakin.solvers.pso import pso as _pso  # noqa: E402  (pso.py imports register from here)
 

@@ -1,0 +1,87 @@
+"""Ye et al. reproduction: reference transcription, every artefact on the quick config, claims,
+and the notebook."""
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from parakin.config import DEFAULT_CONFIG, QUICK_CONFIG, load_config
+from parakin.papers import ye_stewart12 as Y
+from parakin.report import claims_table, load_reference
+
+ROOT = Path(__file__).resolve().parents[1]
+
+def quick_config() -> dict:
+    return load_config([DEFAULT_CONFIG, QUICK_CONFIG])
+
+
+def test_reference_transcription():
+    ref = load_reference(Y.KEY)
+    assert (ref["paper"] == Y.KEY).all() and not ref.duplicated(["artefact", "quantity"]).any()
+    t5 = ref[ref["artefact"] == "table5"].set_index("quantity")["value"]
+    assert [t5[f"d{d}.nr_steps"] for d in range(20, 26)] == ["5", "5", "5", "5", "6", "6"]
+    assert [t5[f"d{d}.broyden_time"] for d in range(20, 26)] == ["156.3", "156.3", "156.3", "156.3", "171.9", "187.5"]
+    # the printed means are the means of the printed rows (notes §3)
+    nr_t = np.mean([float(t5[f"d{d}.nr_time"]) for d in range(20, 26)])
+    assert f"{nr_t:.1f}" == t5["mean.nr_time"]
+    t6 = ref[ref["artefact"] == "table6"].set_index("quantity")["value"]
+    assert t6["R3.nr"] == "0.60" and t6["R5.broyden"] == "0" and t6["composite.broyden"] == "1.76"
+    assert np.mean([float(t6[f"R{r}.nr"]) for r in range(6)]) == pytest.approx(2.23, abs=0.005)
+
+
+@pytest.fixture(scope="module")
+def outputs(tmp_path_factory):
+    out = tmp_path_factory.mktemp("ye_stewart12")
+    cfg = quick_config()
+    for fn in Y.ARTEFACTS.values():
+        for p in fn(cfg, out):
+            assert Path(p).exists()
+    return out
+
+
+def test_table2_and_table5_reproduced(outputs):
+    t2 = pd.read_csv(outputs / "table2.csv").set_index("feature")
+    assert t2.loc["highest_terms", "before"] == 45 and t2.loc["highest_terms", "after"] == 9
+    t5 = pd.read_csv(outputs / "table5.csv")
+    assert t5["nr_steps"].iloc[:6].tolist() == [5, 5, 5, 5, 6, 6]
+    assert t5["broyden_steps"].iloc[:6].tolist() == [10, 11, 11, 11, 11, 11]
+
+
+def test_claims_and_summary(outputs):
+    ref = load_reference(Y.KEY)
+    claims = Y.claims(outputs, ref)
+    table = claims_table(claims).set_index("quantity")
+    for q in ("equations.before", "highest_terms.after", "d20.nr_steps", "d25.nr_steps", "mean.nr_steps",
+              "accuracy_factor", "fk.max_position_error", "composite.initial"):
+        assert table.loc[q, "verdict"] == "reproduced", q
+    assert table.loc["broyden.match_step", "verdict"] == "differs"  # C7: Fig. 8's narrative is refuted
+    assert float(table.loc["accuracy_factor", "ours"]) > 1e3
+    assert {"composite.nr", "composite_ratio", "width.R2.nr", "bump.R0.L"} <= set(table.index)
+    text = Y.summary(outputs, ref)
+    assert "Table 5 steps" in text and "cond(dF/dX)" in text
+
+
+def test_figures_exist_and_match_their_csv(outputs):
+    for png in ("fig01_mechanism.png", "fig02_topology.png", "fig06_prototype.png", "fig08_convergence.png",
+                "fig10_steps_tol1e-6.png", "fig11_steps_tol1e-9.png", "fig12_dmax_structures.png", "extra_basin.png"):
+        assert (outputs / png).stat().st_size > 10_000, png
+    f12 = pd.read_csv(outputs / "fig12_dmax_structures.csv")
+    assert len(f12) == 9 * 6 * 2
+    nominal = f12[(f12["n_mm"] == 20) & (f12["L_mm"] == 20)]
+    assert (nominal["d_max_pct"] > 0).all()
+    f8 = pd.read_csv(outputs / "fig08_convergence.csv")
+    assert f8["nr_composite_mm"].iloc[0] == pytest.approx(32.841346, abs=1e-6)  # 1.3 x mean passive length
+    cond = pd.read_csv(outputs / "extra_conditioning.csv").set_index("R")
+    assert cond.loc[0, "cond_dF_dX"] == pytest.approx(179.37, abs=0.01)  # notes §2.3
+
+
+def test_notebook_runs(tmp_path):
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    nb = nbformat.read(ROOT / "notebooks" / "ye_stewart12.ipynb", as_version=4)
+    nbclient.NotebookClient(nb, timeout=60, kernel_name="python3",
+                            resources={"metadata": {"path": str(tmp_path)}}).execute()
+    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])]
+    assert not any(o.get("output_type") == "error" for o in outputs)
