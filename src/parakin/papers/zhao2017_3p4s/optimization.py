@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 
 from parakin import indices as ix
-from parakin.config import rng, seed_for
+from parakin.config import seed_for
 from parakin.errors import ConfigError
 from parakin.io import write_csv, write_table
 from parakin.mechanisms import P3P4S
