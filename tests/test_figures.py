@@ -32,7 +32,7 @@ CHEAP = [
                                                "fig23", "fig25", "index_convergence", "pareto")],
     *[("li2020_2ups", name, ()) for name in ("fig01", "parasitic", "fk_solutions", "table2", "fig02",
                                              "singularity_workspace")],
-    *[("ye_stewart12", name, ()) for name in ("fig01", "fig02", "fig06", "fig08", "fig10", "fig11")],
+    *[("ye_stewart12", name, ()) for name in ("fig01", "fig02", "fig06", "fig08", "fig09", "fig10", "fig11")],
     *[("li2017_stewart36", name, ()) for name in ("fig01", "fig02", "fig03", "adams")],
 ]
 

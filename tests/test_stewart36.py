@@ -135,3 +135,23 @@ def test_skeleton():
     assert len(sk.segments) == 6
     lengths = [np.linalg.norm(seg[1] - seg[0]) for _, seg in sk.segments]
     assert np.allclose(lengths, m.ik(m.home()))
+
+
+def test_fk_all_near_triple_cluster_keeps_mirror_pairs():
+    """b = 3 input (random sample 325 of the counts artefact) whose degree-16 polynomial has three real
+    t1 roots within 0.008 (~0.2477, 0.2487, 0.2550): complex Newton used to send two of them to the
+    same solution, giving 10 real solutions (5 mirror pairs). The truth is 12 (6 pairs)."""
+    m = Stewart36(b=3.0)
+    q = np.array([3.9211831668661516, 3.3199299404926013, 3.389189195533072,
+                  3.0564559700375993, 3.4826360889603336, 3.6066525832391036])
+    sols, info = m.fk_all(q, return_info=True)
+    real = sols[np.isfinite(sols[:, 0])]
+    assert info["n_real"] == 12 and info["n_above"] == 6
+    assert np.max(np.abs(m.ik(real) - q)) < 1e-9
+    up, down = real[real[:, 5] > 0], real[real[:, 5] < 0]
+    mirror = down * np.array([1, -1, -1, 1, 1, -1])
+    for s in up:  # each above-base solution has its mirror (alpha, -beta, -gamma, X, Y, -Z)
+        assert np.min(np.max(np.abs(mirror - s), axis=-1)) < 1e-8
+    # all distinct
+    d = np.max(np.abs(real[:, None] - real[None]), axis=-1) + np.eye(len(real))
+    assert d.min() > 1e-6

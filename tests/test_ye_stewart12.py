@@ -59,12 +59,18 @@ def test_claims_and_summary(outputs):
     assert table.loc["broyden.match_step", "verdict"] == "differs"  # C7: Fig. 8's narrative is refuted
     assert float(table.loc["accuracy_factor", "ours"]) > 1e3
     assert {"composite.nr", "composite_ratio", "width.R2.nr", "bump.R0.L"} <= set(table.index)
+    # C9, C10, C11, C15 and the rest of C8 are rows (qualitative statements, encodings in the reasons)
+    assert {"tol_sensitive.top3_in_R0R1R3", "tol_sensitive.nr_most_R", "least_initial_dependence_R",
+            "broyden.most_initial_dependence_R", "nr.step_drops", "broyden.step_drops", "broyden.drops_near_dmax",
+            "broyden.trend_spearman", "dmax_vs_n.spearman", "dmax_vs_L.spearman", "odd_even_ratio.nr",
+            "odd_even_ratio.broyden"} <= set(table.index)
+    assert table.loc["broyden.trend_spearman", "verdict"] == "reproduced"  # C10: Broyden's steps rise with d
     text = Y.summary(outputs, ref)
     assert "Table 5 steps" in text and "cond(dF/dX)" in text
 
 
 def test_figures_exist_and_match_their_csv(outputs):
-    for png in ("fig01_mechanism.png", "fig02_topology.png", "fig06_prototype.png", "fig08_convergence.png",
+    for png in ("fig09_drive_modes.png", "fig01_mechanism.png", "fig02_topology.png", "fig06_prototype.png", "fig08_convergence.png",
                 "fig10_steps_tol1e-6.png", "fig11_steps_tol1e-9.png", "fig12_dmax_structures.png", "extra_basin.png"):
         assert (outputs / png).stat().st_size > 10_000, png
     f12 = pd.read_csv(outputs / "fig12_dmax_structures.csv")
@@ -73,6 +79,11 @@ def test_figures_exist_and_match_their_csv(outputs):
     assert (nominal["d_max_pct"] > 0).all()
     f8 = pd.read_csv(outputs / "fig08_convergence.csv")
     assert f8["nr_composite_mm"].iloc[0] == pytest.approx(32.841346, abs=1e-6)  # 1.3 x mean passive length
+    f9 = pd.read_csv(outputs / "fig09_drive_modes.csv")
+    assert len(f9) == 6 * 12 and (f9.groupby("R")["active"].sum() == f9.groupby("R")["active_legs"].first()).all()
+    assert f9.groupby("R")["active"].sum().to_dict() == {r: 6 + r for r in range(6)}
+    home = f9[f9["R"] == 0].set_index("leg")["home_direction"]
+    assert [home[k] for k in range(1, 7)] == ["+y", "-z", "+y", "-x", "-z", "+x"]  # notes §1.2
     cond = pd.read_csv(outputs / "extra_conditioning.csv").set_index("R")
     assert cond.loc[0, "cond_dF_dX"] == pytest.approx(179.37, abs=0.01)  # notes §2.3
 

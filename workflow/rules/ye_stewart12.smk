@@ -13,6 +13,7 @@ YE_STEWART12 = {
     "table4": ["table4.csv", "table4.md", "table4_summary.csv"],
     "table5": ["table5.csv", "table5.md"],
     "fig08": ["fig08_convergence.png", "fig08_convergence.csv"],
+    "fig09": ["fig09_drive_modes.png", "fig09_drive_modes.csv"],
     "fig10": ["fig10_steps_tol1e-6.png", "fig10_steps_tol1e-6.csv"],
     "fig11": ["fig11_steps_tol1e-9.png", "fig11_steps_tol1e-9.csv"],
     "fig12": ["fig12_dmax_structures.png", "fig12_dmax_structures.csv", "table6.csv", "table6.md",

@@ -279,6 +279,7 @@ class Stewart36(Mechanism):
             g = self._biquadratics(c[idx], r[idx], u)
             t = _back_substitute(g, roots)  # (m, 16, 3) complex
             t = _newton_t(g, t, newton_steps)
+            t = _recover_merged(g, t, newton_steps)
             real = np.all(np.abs(t.imag) <= 1e-6 * (1 + np.abs(t)), axis=-1) & np.all(np.isfinite(t), -1)
             theta = 2 * np.arctan(t.real)
             pts = c[idx][:, None, :, :] + r[idx][:, None, :, None] * (
@@ -436,6 +437,65 @@ def _newton_t(g: Array, t: Array, steps: int) -> Array:
             jj = np.where(ok[..., None, None], jac, np.eye(3))
             step = np.linalg.solve(jj, np.where(ok[..., None], f, 0)[..., None])[..., 0]
         t = np.where(ok[..., None], t - step, t)
+    return t
+
+
+def _is_real_t(t: Array) -> Array:
+    return np.all(np.isfinite(t), axis=-1) & np.all(np.abs(t.imag) <= 1e-6 * (1 + np.abs(t)), axis=-1)
+
+
+#: half-width (relative, times 1 + |t1|) and grid size of the 1-D scan that recovers a root lost when two
+#: roots of a near-multiple cluster converge to the same solution (a module constant, not a config key)
+RECOVER_WIDTH, RECOVER_POINTS = 0.05, 4001
+
+
+def _recover_merged(g: Array, t: Array, steps: int) -> Array:
+    """Recover real roots lost in near-multiple clusters. With clustered roots of the degree-16 polynomial
+    (e.g. three t1 roots within 0.008) the companion eigenvalues are off by ~1e-3 and complex Newton can
+    send two of them to the same real solution, dropping a third real one (seen at b = 3: 10 real
+    solutions, an impossible 5 mirror pairs with a near-triple cluster; the truth is 12). For each such
+    duplicate, scan the closure residual E23 along real t1 (both branches of t2 from E12 and of t3 from
+    E13) around it, refine each sign change by Newton and take the first real root not yet present."""
+    t = t.copy()
+    pw = np.arange(3)
+    real = _is_real_t(t)
+    with np.errstate(all="ignore"):
+        d = np.max(np.abs(t[:, :, None] - t[:, None, :]), axis=-1)  # (m, 16, 16)
+    close = (d < 1e-7 * (1 + np.max(np.abs(np.nan_to_num(t)), axis=-1))[:, None, :]) & real[:, :, None] & real[:, None, :]
+    close &= np.tri(t.shape[1], k=-1, dtype=bool)  # pairs (j, earlier)
+    for i in np.flatnonzero(close.any(axis=(-1, -2))):
+        ti = t[i]
+        real = _is_real_t(ti)
+        idx = np.flatnonzero(real)
+        dup = [ja for a, ja in enumerate(idx)
+               if any(np.max(np.abs(ti[ja] - ti[jb])) < 1e-7 * (1 + np.max(np.abs(ti[jb]))) for jb in idx[:a])]
+        for j in dup:
+            c0 = float(ti[j, 0].real)
+            w = RECOVER_WIDTH * (1 + abs(c0))
+            grid = np.linspace(c0 - w, c0 + w, RECOVER_POINTS)
+            tp = grid[:, None].astype(complex) ** pw
+            t2 = _quad_roots(tp @ g[i, 0])
+            t3 = _quad_roots(tp @ g[i, 2])
+            cands = []
+            for a in range(2):
+                for b in range(2):
+                    with np.errstate(all="ignore"):
+                        h = _eval_bq(g[i, 1], t2[:, a], t3[:, b])
+                    ok = (np.abs(h.imag) <= 1e-9 * (1 + np.abs(h.real))) & (np.abs(t2[:, a].imag) < 1e-12) & \
+                        (np.abs(t3[:, b].imag) < 1e-12)
+                    hr = h.real
+                    k = np.flatnonzero(ok[:-1] & ok[1:] & (np.sign(hr[:-1]) != np.sign(hr[1:])))
+                    for kk in k:
+                        f = hr[kk] / (hr[kk] - hr[kk + 1])
+                        cands.append([grid[kk] + f * (grid[kk + 1] - grid[kk]), t2[kk, a], t3[kk, b]])
+            if not cands:
+                continue
+            cand = _newton_t(g[i : i + 1], np.array(cands, dtype=complex)[None], steps)[0]
+            for cnd in cand:
+                if _is_real_t(cnd) and not np.any(np.max(np.abs(ti[_is_real_t(ti)] - cnd), axis=-1) < 1e-7 * (1 + np.max(np.abs(cnd)))):
+                    ti[j] = cnd
+                    break
+        t[i] = ti
     return t
 
 
