@@ -59,8 +59,23 @@ def rot_z(angle: ArrayLike) -> NDArray[np.float64]:
 
 
 def euler_zyx(a: ArrayLike, b: ArrayLike, c: ArrayLike) -> NDArray[np.float64]:
-    """``Rz(a) Ry(b) Rx(c)``: intrinsic z-y'-x'' Euler angles (yaw, pitch, roll)."""
-    return rot_z(a) @ rot_y(b) @ rot_x(c)
+    """``Rz(a) Ry(b) Rx(c)``: intrinsic z-y'-x'' Euler angles (yaw, pitch, roll).
+
+    Written out entry by entry (no batched 3x3 products): it sits on the FK solvers' hot path.
+    """
+    a, b, c = np.broadcast_arrays(*(np.asarray(t, dtype=float) for t in (a, b, c)))
+    ca, sa, cb, sb, cc, sc = np.cos(a), np.sin(a), np.cos(b), np.sin(b), np.cos(c), np.sin(c)
+    r = np.empty(a.shape + (3, 3))
+    r[..., 0, 0] = ca * cb
+    r[..., 0, 1] = ca * sb * sc - sa * cc
+    r[..., 0, 2] = ca * sb * cc + sa * sc
+    r[..., 1, 0] = sa * cb
+    r[..., 1, 1] = sa * sb * sc + ca * cc
+    r[..., 1, 2] = sa * sb * cc - ca * sc
+    r[..., 2, 0] = -sb
+    r[..., 2, 1] = cb * sc
+    r[..., 2, 2] = cb * cc
+    return r
 
 
 def euler_xyz(a: ArrayLike, b: ArrayLike, c: ArrayLike) -> NDArray[np.float64]:

@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from parakin.errors import UnreachableError
-from parakin.geometry import euler_zyx, euler_zyx_from_matrix
+from parakin.geometry import euler_zyx, rot_x, rot_y, rot_z, euler_zyx_from_matrix
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
 __all__ = ["Stewart36", "TABLE3_ROW1"]
@@ -129,14 +129,14 @@ class Stewart36(Mechanism):
     def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
         """Analytic ``d f / d pose`` (..., 6, 6): ``2 v_i . (dT/dq A_p(i))`` and ``2 v_i`` for X, Y, Z."""
         x = as_batch(pose, 6, "pose")
-        rz = euler_zyx(x[..., 0], np.zeros_like(x[..., 0]), np.zeros_like(x[..., 0]))
-        ry = euler_zyx(np.zeros_like(x[..., 0]), x[..., 1], np.zeros_like(x[..., 0]))
-        rx = euler_zyx(np.zeros_like(x[..., 0]), np.zeros_like(x[..., 0]), x[..., 2])
-        r = rz @ ry @ rx
-        d = [_SKEW["z"] @ r, rz @ ry @ _SKEW["y"] @ rx, r @ _SKEW["x"]]
-        v = self.leg_vectors(x)  # (..., 6, 3)
+        rz, ry, rx = rot_z(x[..., 0]), rot_y(x[..., 1]), rot_x(x[..., 2])
+        rzy = rz @ ry
+        r = rzy @ rx
         top = self.top_points[LEG_TOP]  # (6, 3)
-        cols = [2 * np.einsum("...ic,...cj,ij->...i", v, dr, top) for dr in d]
+        v = x[..., None, 3:] + top @ np.swapaxes(r, -1, -2) - self.base_points  # leg vectors (..., 6, 3)
+        # d(T a)/d(angle) = dT a; one column per angle: 2 v_i . (dT a_i)
+        d = (_SKEW["z"] @ r, rzy @ _SKEW["y"] @ rx, r @ _SKEW["x"])
+        cols = [2 * np.sum(v * (top @ np.swapaxes(dr, -1, -2)), axis=-1) for dr in d]
         return np.concatenate([np.stack(cols, axis=-1), 2 * v], axis=-1)
 
     def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike) -> Array:
