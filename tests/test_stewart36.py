@@ -155,3 +155,15 @@ def test_fk_all_near_triple_cluster_keeps_mirror_pairs():
     # all distinct
     d = np.max(np.abs(real[:, None] - real[None]), axis=-1) + np.eye(len(real))
     assert d.min() > 1e-6
+
+
+def test_fk_returns_the_assembly_nearest_the_reference():
+    m = Stewart36()
+    rng = np.random.default_rng(11)
+    poses = m.home() + rng.normal(scale=[0.03, 0.03, 0.03, 0.02, 0.02, 0.02], size=(50, 6))
+    assert np.max(np.abs(m.fk(m.ik(poses)) - poses)) < 1e-9
+    # from a reference at the mirror-free alternative, another assembly of the same legs comes back
+    sols = m.fk_all(m.ik(m.home()))
+    up = sols[np.isfinite(sols[:, 0]) & (np.nan_to_num(sols[:, 5]) > 0)]
+    other = up[np.argmax(np.linalg.norm(up - m.home(), axis=-1))]
+    assert np.allclose(m.fk(m.ik(m.home()), near=other), other, atol=1e-9)

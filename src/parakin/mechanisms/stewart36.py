@@ -329,6 +329,24 @@ class Stewart36(Mechanism):
         t = np.stack([x, y, z], axis=-1)
         return np.concatenate([euler_zyx_from_matrix(t), o], axis=-1)
 
+    def fk(self, joints: ArrayLike, near: ArrayLike | None = None) -> Array:
+        """One forward solution: of the certified real solutions above the base (Z > 0), the one
+        closest to ``near`` (default :meth:`home`; angles compared modulo 2 pi), shape (..., 6).
+        The 3-6 platform has up to 8 such assemblies, so "the" FK needs this choice; a controller
+        passes its last pose. Raises UnreachableError where no real solution lies above the base."""
+        sols = self.fk_all(joints)  # (..., 16, 6), NaN-padded
+        ref = self.home() if near is None else as_batch(near, 6, "near")
+        diff = sols - ref[..., None, :]
+        diff[..., :3] = (diff[..., :3] + np.pi) % (2 * np.pi) - np.pi
+        dist = np.sqrt(np.sum(diff * diff, axis=-1))
+        ok = np.isfinite(dist) & (np.nan_to_num(sols[..., 5]) > 0)
+        none = ~np.any(ok, axis=-1)
+        if np.any(none):
+            raise UnreachableError("leg lengths have no real forward solution above the base"
+                                   f"{describe_first(none, none.shape)}")
+        best = np.argmin(np.where(ok, dist, np.inf), axis=-1)
+        return np.take_along_axis(sols, best[..., None, None], axis=-2)[..., 0, :]
+
     def mirror(self, pose: ArrayLike) -> Array:
         """Reflection about the base plane: ``(alpha, -beta, -gamma, X, Y, -Z)`` (same leg lengths)."""
         x = as_batch(pose, 6, "pose").copy()

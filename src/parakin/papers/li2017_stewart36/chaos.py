@@ -25,7 +25,8 @@ from parakin.report import Claim, printed_value
 from parakin.solvers import solve_fk
 from parakin.solvers.pso import ChaoticLogistic
 
-VARIANTS = ("chaotic", "standard")
+VARIANTS = ("chaotic", "standard", "printed")  # printed: chaotic weight with the printed mu = 0.4
+LABELS = {"chaotic": "chaotic (μ = 4)", "standard": "standard (w 0.9 → 0.4)", "printed": "chaotic, μ = 0.4 as printed"}
 
 
 def logistic_weights(mu: float, z0: float, n: int) -> np.ndarray:
@@ -98,8 +99,9 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
 def schedule(config: dict, variant: str, mu: float | None = None):
     """The inertia schedule of a variant: chaotic omega(t) = Z_t, or LDIW w_start -> w_end."""
     c = cfg(config)["chaos"]
-    if variant == "chaotic":
-        return ChaoticLogistic(z0=c["z0"], mu=c["mu"] if mu is None else mu, combine=lambda z, k, K: z)
+    if variant in ("chaotic", "printed"):
+        mu = (c["mu"] if variant == "chaotic" else c["mu_printed"]) if mu is None else mu
+        return ChaoticLogistic(z0=c["z0"], mu=mu, combine=lambda z, k, K: z)
     return "linear"
 
 
@@ -131,7 +133,7 @@ def fig03(config: dict, outdir: Path) -> list[Path]:
     with PSO + LM polish as a third variant."""
     frames, stats = [], []
     fig, ax = new_figure((6.4, 3.2))
-    for color, variant in zip(("C0", "C1"), VARIANTS):
+    for color, variant in zip(("C0", "C1", "C2"), VARIANTS):
         t0 = time.perf_counter()
         res = run_pso(config, variant)
         wall = time.perf_counter() - t0
@@ -139,13 +141,13 @@ def fig03(config: dict, outdir: Path) -> list[Path]:
         it = np.arange(h.shape[1])
         lo, med, hi = np.percentile(h, [10, 50, 90], axis=0)
         ax.fill_between(it, lo, hi, color=color, alpha=0.2, lw=0)
-        ax.semilogy(it, med, color=color, lw=1.3, label=f"{variant} PSO (median, 10–90 %)")
+        ax.semilogy(it, med, color=color, lw=1.3, label=f"{LABELS[variant]} PSO (median, 10–90 %)")
         frames.append(pd.DataFrame({"variant": variant, "iteration": it, "F_median": med, "F_q10": lo, "F_q90": hi}))
         t1 = time.perf_counter()
         _, fpol = polish(config, res)
         wall_pol = time.perf_counter() - t1
-        ax.plot(np.full(len(fpol), it[-1] * (1.02 if variant == "chaotic" else 1.05)), np.maximum(fpol, 1e-33), "o",
-                mfc="none", color=color, ms=4, label=f"{variant} PSO + LM polish (final F, each run)")
+        ax.plot(np.full(len(fpol), it[-1] * {"chaotic": 1.02, "standard": 1.05, "printed": 1.08}[variant]), np.maximum(fpol, 1e-33), "o",
+                mfc="none", color=color, ms=4, label=f"{LABELS[variant]} + LM polish (each run)")
         for name, f, w in ((f"{variant} PSO", res.fitness, wall), (f"{variant} PSO + LM", fpol, wall_pol)):
             stats.append({"variant": name, "runs": len(f), "best": float(np.min(f)), "worst": float(np.max(f)),
                           "mean": float(np.mean(f)), "median": float(np.median(f)),

@@ -10,11 +10,11 @@ from pathlib import Path
 
 import pandas as pd
 
-from parakin.papers.li2020_2ups import fk, kinematics
+from parakin.papers.li2020_2ups import bench, fk, kinematics
 from parakin.papers.li2020_2ups.common import KEY, TITLE
 from parakin.report import Claim
 
-SECTIONS = [kinematics, fk]
+SECTIONS = [kinematics, fk, bench]
 ARTEFACTS = {name: fn for section in SECTIONS for name, fn in section.ARTEFACTS.items()}
 
 
