@@ -137,7 +137,7 @@ def cmd_bench(args) -> int:
 
 
 #: benchmark name -> (paper key, artefact)
-BENCHES = {"fk-3p4s": ("zhao2017_3p4s", "fk_benchmark")}
+BENCHES = {"fk-3p4s": ("zhao2017_3p4s", "fk_benchmark"), "2ups": ("li2020_2ups", "benchmark")}
 
 
 def _config(args) -> dict:

@@ -12,6 +12,7 @@ LI2020_2UPS = {
     "fig02": ["fig02_fitness.png", "fig02_fitness.csv"],
     "solvers": ["extra_solvers.csv", "extra_solvers.md"],
     "singularity_workspace": ["extra_singularity_workspace.png", "extra_singularity_workspace.csv"],
+    "benchmark": ["extra_benchmark.csv", "extra_benchmark.md"],
 }
 LI2020_2UPS_OUTPUTS = [f"{L2}/{f}" for files in LI2020_2UPS.values() for f in files]
 
