@@ -7,23 +7,13 @@ Configuration: ``config["li2017_stewart36"]``. The FK input (Table 2) is lost an
 
 from __future__ import annotations
 
-from pathlib import Path
-
-import pandas as pd
-
 from parakin.papers.li2017_stewart36 import chaos, solutions
 from parakin.papers.li2017_stewart36.common import KEY, TITLE
-from parakin.report import Claim
+from parakin.papers.sections import combine
 
 SECTIONS = [chaos, solutions]
-ARTEFACTS = {name: fn for section in SECTIONS for name, fn in section.ARTEFACTS.items()}
 
-def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
-    return [c for section in SECTIONS for c in section.claims(figdir, ref)]
-
-
-def summary(figdir: Path, ref: pd.DataFrame) -> str:
-    return "\n\n".join(p for section in SECTIONS if (p := section.summary(figdir, ref).strip()))
-
+#: artefact name -> function(config, outdir) writing that artefact's files; claims(); summary()
+ARTEFACTS, claims, summary = combine(SECTIONS)
 
 __all__ = ["KEY", "TITLE", "ARTEFACTS", "SECTIONS", "claims", "summary"]

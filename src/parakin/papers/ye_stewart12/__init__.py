@@ -8,24 +8,13 @@ Configuration: ``config["ye_stewart12"]``. Reconstruction notes: ``shared/notes/
 
 from __future__ import annotations
 
-from pathlib import Path
-
-import pandas as pd
-
 from parakin.papers.ye_stewart12 import fk, modes, solvers, symbolic
 from parakin.papers.ye_stewart12.common import KEY, TITLE
-from parakin.report import Claim
+from parakin.papers.sections import combine
 
 SECTIONS = [fk, symbolic, solvers, modes]
-ARTEFACTS = {name: fn for section in SECTIONS for name, fn in section.ARTEFACTS.items()}
 
-
-def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
-    return [c for section in SECTIONS for c in section.claims(figdir, ref)]
-
-
-def summary(figdir: Path, ref: pd.DataFrame) -> str:
-    return "\n\n".join(p for section in SECTIONS if (p := section.summary(figdir, ref).strip()))
-
+#: artefact name -> function(config, outdir) writing that artefact's files; claims(); summary()
+ARTEFACTS, claims, summary = combine(SECTIONS)
 
 __all__ = ["KEY", "TITLE", "ARTEFACTS", "SECTIONS", "claims", "summary"]
