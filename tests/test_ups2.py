@@ -112,3 +112,25 @@ def test_skeleton(mech):
     assert len(sk.segments) == 4
     assert np.isclose(np.linalg.norm(sk.points["B1"]), mech.c)
     assert np.isclose(np.linalg.norm(sk.points["B2"] - sk.points["B3"]), np.sqrt(2) * mech.b)
+
+
+def test_both_assembly_branches():
+    """eq (14) has two branches rho = +-sqrt(c^2 - Y^2); fk_all finds the poses of each, and the
+    strokes (measured from the paper's home pose) are the same physical inputs on both."""
+    m = UPS2()
+    mirror = UPS2(branch=-1)
+    assert np.allclose(mirror.home_lengths, m.home_lengths)
+    assert mirror.position(m.home())[2] < 0 < m.position(m.home())[2]  # platform below vs above
+    rng = np.random.default_rng(5)
+    lo, hi = m.pose_bounds()
+    poses = rng.uniform(lo, hi, size=(300, 3)) * np.array([1.0, 1.0, 0.5])
+    for mech in (m, mirror):
+        q = mech.ik(poses)
+        sols = m.fk_all_branches(q)[mech.branch]
+        err = np.nanmin(np.max(np.abs(sols - poses[:, None, :]), axis=-1), axis=-1)
+        assert np.all(err < 1e-9)
+        fin = np.all(np.isfinite(sols), axis=-1)
+        back = mech.ik(np.where(fin[..., None], sols, 0.0))
+        assert np.max(np.abs(np.where(fin[..., None], back - q[:, None, :], 0.0))) < 1e-9
+    with pytest.raises(ValueError, match="branch = 2"):
+        UPS2(branch=2)

@@ -26,6 +26,7 @@ Beyond the paper (notes §7.1): ``l1`` depends on ``Y`` only, so ``Y`` is closed
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from functools import cached_property
 from typing import ClassVar
@@ -54,6 +55,9 @@ class UPS2(Mechanism):
     b: float = 0.100  #: platform leg |B1B2| = |B1B3| (m) -- not in the paper, ASSUMED
     c: float = 0.300  #: SR link length |A0B1| (m) -- not in the paper, ASSUMED
     stroke_limits: tuple[float, float, float] = (0.023, 0.032, 0.032)  #: eq (19), m
+    #: assembly branch of eq (14): +1 the paper's (rho = +sqrt(c^2 - Y^2), platform above the base),
+    #: -1 the mirror assembly (rho < 0); strokes are always measured from the +1 home pose
+    branch: int = 1
 
     name: ClassVar[str] = "2ups"
     pose_names: ClassVar[tuple[str, ...]] = ("beta", "gamma", "Y")
@@ -74,6 +78,8 @@ class UPS2(Mechanism):
         if len(lim) != 3 or not all(np.isfinite(v) and v > 0 for v in lim):
             raise ValueError(f"stroke_limits = {self.stroke_limits!r} must be three positive lengths (m)")
         object.__setattr__(self, "stroke_limits", lim)
+        if self.branch not in (1, -1):
+            raise ValueError(f"branch = {self.branch!r} must be +1 (the paper's, rho > 0) or -1 (rho < 0)")
 
     # ------------------------------------------------------------------ constructors
     @classmethod
@@ -106,7 +112,10 @@ class UPS2(Mechanism):
 
     @cached_property
     def home_lengths(self) -> Array:
-        """Leg lengths (l1, l2, l3) at the initial pose beta = gamma = Y = 0: the stroke reference."""
+        """Leg lengths (l1, l2, l3) at the initial pose beta = gamma = Y = 0 of the paper's branch:
+        the stroke reference (the same physical strokes on both branches)."""
+        if self.branch != 1:
+            return dataclasses.replace(self, branch=1).home_lengths
         return self.lengths(np.zeros(3))
 
     def home(self) -> Array:
@@ -132,7 +141,7 @@ class UPS2(Mechanism):
 
     def _rho(self, y: Array) -> Array:
         # clamped so that residual() stays finite for any Y; ik() rejects |Y| >= c explicitly
-        return np.sqrt(np.maximum(self.c**2 - y**2, 0.0))
+        return self.branch * np.sqrt(np.maximum(self.c**2 - y**2, 0.0))
 
     def points(self, pose: ArrayLike) -> dict[str, Array]:
         """A0..A3 (each (3,)), and B0, B1, B2, B3 (each (..., 3)) at ``pose`` (eqs 2-5, 14)."""
@@ -273,7 +282,8 @@ class UPS2(Mechanism):
         return _SQ3 / (2 * self.a) * (4 * self.c**2 / 9 + 0.75 * self.a**2 - l1**2)
 
     def fk_all(self, joints: ArrayLike, polish: int = 2) -> Array:
-        """Every real FK solution on the paper's branch rho > 0 (eq 14), shape (..., 8, 3).
+        """Every real FK solution on this mechanism's branch of eq (14) (``branch``: +1 the paper's
+        rho > 0, -1 the mirror assembly; :meth:`fk_all_branches` gives both), shape (..., 8, 3).
 
         ``Y`` from l1 in closed form; then, with ``D = (l3^2 - l2^2)/(2a)`` and
         ``E = (l2^2 + l3^2)/2 - rho^2 - 2k^2 - a^2/4 - (Y - h)^2``, ``sin(beta) = D/(rho + k sin(gamma))``
@@ -295,7 +305,7 @@ class UPS2(Mechanism):
         if not np.any(ok):
             return out.reshape(*batch, 8, 3)
         yy = y[ok]
-        rho = np.sqrt(self.c**2 - yy**2)
+        rho = self.branch * np.sqrt(self.c**2 - yy**2)  # the polynomial holds for either sign (notes §7.1)
         d = (sq[ok, 2] - sq[ok, 1]) / (2 * a)
         e = 0.5 * (sq[ok, 1] + sq[ok, 2]) - rho**2 - 2 * k**2 - a**2 / 4 - (yy - h) ** 2
         m = len(yy)
@@ -346,6 +356,11 @@ class UPS2(Mechanism):
         poses = np.take_along_axis(poses, np.argsort(key, axis=-1)[..., None], axis=1)
         out[ok] = poses
         return out.reshape(*batch, 8, 3)
+
+    def fk_all_branches(self, joints: ArrayLike) -> dict[int, Array]:
+        """:meth:`fk_all` on both assembly branches of eq (14): ``{+1: (..., 8, 3), -1: (..., 8, 3)}``.
+        A pose of branch -1 is interpreted by ``UPS2(..., branch=-1)``."""
+        return {b: dataclasses.replace(self, branch=b).fk_all(joints) for b in (1, -1)}
 
     def fk(self, joints: ArrayLike) -> Array:
         """The working-branch FK solution: the real solution with |beta|, |gamma| < 90 deg closest
