@@ -11,6 +11,7 @@ include: "workflow/rules/zhao2017_3p4s.smk"
 include: "workflow/rules/li2020_2ups.smk"
 include: "workflow/rules/ye_stewart12.smk"
 include: "workflow/rules/li2017_stewart36.smk"
+include: "workflow/rules/extra.smk"
 include: "workflow/rules/report.smk"
 
 
@@ -21,4 +22,12 @@ rule all:
         LI2020_2UPS_OUTPUTS,
         YE_STEWART12_OUTPUTS,
         LI2017_STEWART36_OUTPUTS,
+        EXTRA_OUTPUTS,
         REPORT,
+
+
+# README quotes the benchmark summary between markers; after a full run (the committed figures/)
+# copy the regenerated block in, so that README never shows a typed number.
+onsuccess:
+    if FIG == "figures":
+        shell("parakin readme")

@@ -1,4 +1,4 @@
-"""The ``parakin`` command line: ``ik``, ``fk``, ``reproduce`` and ``report``.
+"""The ``parakin`` command line: ``ik``, ``fk``, ``bench``, ``reproduce``, ``report`` and ``readme``.
 
 Bad input (a wrong number of values, an unreachable pose, an unknown solver, a malformed config)
 exits with status 2 and one line on stderr, never a traceback. SI units by default; ``--units
@@ -119,25 +119,60 @@ def _network(mech, path: str | None):
 
 
 def cmd_bench(args) -> int:
+    """Run benchmarks with a config's sizes; no NAME: the solver atlas, every paper's benchmark and
+    the summary ``benchmarks.md`` (what the pipeline's ``extra_benchmarks`` rule writes)."""
+    import pandas as pd
+
+    from parakin import extras
     from parakin.config import DEFAULT_CONFIG, QUICK_CONFIG, load_config
     from parakin.papers import PAPERS
 
-    paper, artefact = BENCHES[args.name]
     config = load_config([DEFAULT_CONFIG, QUICK_CONFIG] if args.quick else [DEFAULT_CONFIG])
-    outdir = Path(args.outdir) if args.outdir else Path(config["figures_dir"]) / paper
-    paths = PAPERS[paper].ARTEFACTS[artefact](config, outdir)
-    csv = next(p for p in paths if p.suffix == ".csv")
+    root = Path(args.outdir) if args.outdir else Path(config["figures_dir"])
+    names = args.name or ["atlas", *BENCHES]
+    tables = []
+    for name in names:
+        if name not in BENCHES and name != "atlas":
+            raise ValueError(f"unknown benchmark {name!r}; known: atlas, {', '.join(BENCHES)}")
+        print(f"parakin bench: {name} ...", file=sys.stderr)
+        if name == "atlas":
+            paths = extras.ARTEFACTS["solver_atlas"](config, root)
+        else:
+            paper, artefact = BENCHES[name]
+            paths = PAPERS[paper].ARTEFACTS[artefact](config, root / paper)
+        csv = next(p for p in paths if p.suffix == ".csv")
+        tables.append((name, csv))
+    if not args.name:
+        summary = extras.ARTEFACTS["benchmarks"](config, root)[0]
+        print(f"parakin bench: wrote {summary}", file=sys.stderr)
     if args.json:
-        import pandas as pd
-
-        print(pd.read_csv(csv).to_json(orient="records"))
+        print(json.dumps({name: json.loads(pd.read_csv(csv).to_json(orient="records")) for name, csv in tables}))
+    elif not args.name:
+        print(summary.read_text())
     else:
-        print(csv.with_suffix(".md").read_text())
+        for _, csv in tables:
+            print(csv.with_suffix(".md").read_text())
     return 0
 
 
-#: benchmark name -> (paper key, artefact)
-BENCHES = {"fk-3p4s": ("zhao2017_3p4s", "fk_benchmark"), "2ups": ("li2020_2ups", "benchmark")}
+#: benchmark name -> (paper key, artefact); "atlas" (every solver x every mechanism) is extras'
+BENCHES = {"fk-3p4s": ("zhao2017_3p4s", "fk_benchmark"), "indices-3p4s": ("zhao2017_3p4s", "index_benchmark"),
+           "2ups": ("li2020_2ups", "benchmark"), "fk-stewart12": ("ye_stewart12", "fk_speed")}
+
+
+def cmd_readme(args) -> int:
+    """Copy the "at a glance" block of ``figures/benchmarks.md`` into README (``--check``: only compare)."""
+    from parakin.config import ROOT
+    from parakin.extras import readme_block, sync_readme
+
+    readme = Path(args.readme) if args.readme else ROOT / "README.md"
+    bench = Path(args.benchmarks) if args.benchmarks else ROOT / "figures" / "benchmarks.md"
+    if args.check:
+        same = readme_block(readme.read_text()) == readme_block(bench.read_text())
+        print(f"{readme}: benchmark block {'matches' if same else 'differs from'} {bench}")
+        return 0 if same else EXIT_NOT_CONVERGED
+    print(sync_readme(readme, bench))
+    return 0
 
 
 def _config(args) -> dict:
@@ -149,17 +184,20 @@ def _config(args) -> dict:
 
 
 def cmd_reproduce(args) -> int:
+    from parakin import extras
     from parakin.papers import PAPERS
 
-    if args.paper not in PAPERS:
-        raise ValueError(f"unknown paper {args.paper!r}; known: {', '.join(PAPERS)}")
-    artefacts = PAPERS[args.paper].ARTEFACTS
+    modules = {**PAPERS, extras.KEY: extras}
+    if args.paper not in modules:
+        raise ValueError(f"unknown paper {args.paper!r}; known: {', '.join(modules)}")
+    artefacts = modules[args.paper].ARTEFACTS
     config = _config(args)
     names = list(artefacts) if args.artefact == "all" else [args.artefact]
     for name in names:
         if name not in artefacts:
             raise ValueError(f"unknown artefact {name!r} of {args.paper}; known: {', '.join(artefacts)}")
-        outdir = Path(args.outdir) if args.outdir else Path(config["figures_dir"]) / args.paper
+        default = Path(config["figures_dir"]) / ("" if args.paper == extras.KEY else args.paper)
+        outdir = Path(args.outdir) if args.outdir else default
         for path in artefacts[name](config, outdir):
             print(path)
     return 0
@@ -201,12 +239,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--network", default=None, help="trained network for --solver hybrid (default: the pipeline's)")
     p.set_defaults(func=cmd_fk)
 
-    p = sub.add_parser("bench", help="run a benchmark (every solver, same inputs, ratios in one run)")
-    p.add_argument("name", choices=sorted(BENCHES), help="benchmark name")
+    p = sub.add_parser("bench", help="run benchmarks (every solver, same inputs, ratios against scipy in one run)")
+    p.add_argument("name", nargs="*", help=f"benchmark(s): atlas, {', '.join(BENCHES)} (default: all, and the summary)")
     p.add_argument("--quick", action="store_true", help="small sizes (config/quick.yaml)")
-    p.add_argument("--outdir", default=None, help="output folder (default: <figures_dir>/<paper>)")
-    p.add_argument("--json", action="store_true", help="print the table as JSON records")
+    p.add_argument("--outdir", default=None, help="figures folder (default: figures_dir of the config)")
+    p.add_argument("--json", action="store_true", help="print the tables as JSON records")
     p.set_defaults(func=cmd_bench)
+
+    p = sub.add_parser("readme", help="copy the benchmark summary block of figures/benchmarks.md into README.md")
+    p.add_argument("--readme", default=None, help="README file (default: the project's)")
+    p.add_argument("--benchmarks", default=None, help="benchmarks.md (default: figures/benchmarks.md)")
+    p.add_argument("--check", action="store_true", help="only compare; exit 1 if they differ")
+    p.set_defaults(func=cmd_readme)
 
     def config_args(p):
         p.add_argument("--config", action="append", default=None, metavar="YAML",
@@ -214,7 +258,7 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--config-json", default=None, help="the whole config as JSON (what Snakemake passes)")
 
     p = sub.add_parser("reproduce", help="compute one artefact (table or figure) of a paper")
-    p.add_argument("paper", help="paper key, e.g. zhao2017_3p4s")
+    p.add_argument("paper", help="paper key, e.g. zhao2017_3p4s, or 'extra' (beyond the papers: solver atlas, benchmarks)")
     p.add_argument("artefact", help="artefact name, e.g. table1, or 'all'")
     p.add_argument("--outdir", default=None, help="output folder (default: <figures_dir>/<paper>)")
     config_args(p)

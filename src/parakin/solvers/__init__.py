@@ -136,6 +136,43 @@ def closed_form(
     )
 
 
+@register("all-solutions")
+def all_solutions(
+    mech: Mechanism, joints: Array, x0: Array, *, tol: float, maxiter: int = 0, **options: Any
+) -> FKResult:
+    """Every real solution from the mechanism's ``fk_all`` (``(N, k, n)``, NaN-padded), then the one
+    nearest ``x0``: what a controller that knows its last pose does with an all-solutions FK.
+
+    Distances are taken per coordinate in units of the ``pose_bounds()`` box width, angle
+    coordinates (unit ``rad``) modulo 2 pi. ``success`` where a solution exists whose residual
+    inf-norm is ``<= tol``; elsewhere ``x = x0`` and ``Status.NO_SOLUTION``. ``options`` go to
+    ``fk_all``; ``maxiter`` is unused (``nit = nfev = njev = 0``).
+    """
+    if not hasattr(mech, "fk_all"):
+        raise ValueError(f"{type(mech).__name__} has no all-solutions fk_all; use one of "
+                         f"{', '.join(sorted(set(METHODS) - {'all-solutions'}))}")
+    start = time.perf_counter()
+    n = len(joints)
+    with np.errstate(all="ignore"):
+        sols = np.asarray(mech.fk_all(joints, **options), dtype=float).reshape(n, -1, mech.n_pose)
+        lo, hi = mech.pose_bounds()
+        d = sols - x0[:, None, :]
+        rad = np.array([u == "rad" for u in mech.pose_units])
+        d[..., rad] = (d[..., rad] + np.pi) % (2 * np.pi) - np.pi
+        dist = np.sqrt(np.sum((d / (np.asarray(hi) - np.asarray(lo))) ** 2, axis=-1))
+    dist = np.where(np.isfinite(dist), dist, np.inf)
+    best = np.argmin(dist, axis=-1)
+    ok = np.isfinite(dist[np.arange(n), best])
+    x = np.where(ok[:, None], sols[np.arange(n), best], x0)
+    with np.errstate(all="ignore"):
+        res = inf_norm(mech.residual(x, joints))
+    status = np.where(ok & (res <= tol), Status.CONVERGED, Status.NO_SOLUTION).astype(np.int64)
+    zeros = np.zeros(n, dtype=np.int64)
+    return FKResult(x=x, success=status >= 0, status=status, nit=zeros, nfev=zeros.copy(), njev=zeros.copy(),
+                    residual=res, wall_time=time.perf_counter() - start, method="all-solutions",
+                    message=summarize(status))
+
+
 def solve_fk(
     mech: Mechanism,
     joints: ArrayLike,

@@ -35,19 +35,26 @@ def scipy_root(
     x = np.array(x0, dtype=float)
     nfev = np.zeros(n, dtype=np.int64)
     njev = np.zeros(n, dtype=np.int64)
+    nonfinite = np.zeros(n, dtype=bool)
     for i in range(n):
         q = joints[i]
-        sol = root(
-            lambda p: mech.residual(p, q), x0[i], jac=lambda p: mech.jacobian_pose(p, q),
-            method=root_method, tol=tol, options={"maxfev": 20 * max(maxiter, 1), **options},
-        )
-        x[i] = sol.x
+        try:
+            sol = root(
+                lambda p: mech.residual(p, q), x0[i], jac=lambda p: mech.jacobian_pose(p, q),
+                method=root_method, tol=tol, options={"maxfev": 20 * max(maxiter, 1), **options},
+            )
+        except ValueError:  # MINPACK stepped to a non-finite pose (the mechanism's residual refused it)
+            nonfinite[i] = True
+            continue
+        nonfinite[i] = not np.all(np.isfinite(sol.x))
+        if not nonfinite[i]:
+            x[i] = sol.x
         nfev[i] = sol.get("nfev", 0)
         njev[i] = sol.get("njev", 0)
     with np.errstate(all="ignore"):
         res = inf_norm(mech.residual(x, joints))
-    ok = np.isfinite(res) & (res <= max(tol, 1e-12))
-    status = np.where(ok, Status.CONVERGED, Status.MAXITER).astype(np.int64)
+    ok = np.isfinite(res) & (res <= max(tol, 1e-12)) & ~nonfinite
+    status = np.where(ok, Status.CONVERGED, np.where(nonfinite, Status.NONFINITE, Status.MAXITER)).astype(np.int64)
     return FKResult(
         x=x, success=ok, status=status, nit=nfev.copy(), nfev=nfev, njev=njev, residual=res,
         wall_time=time.perf_counter() - start, method="scipy-root", message=summarize(status, maxiter),
