@@ -244,20 +244,48 @@ class Stewart12(Mechanism):
         return self.ik(pose) - q
 
     def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
-        """Analytic ``d l / d pose`` (..., 12, 6): ``e_k . dB_j``; ``dR/dlambda`` by complex step
-        (exact to rounding)."""
+        """Analytic ``d l / d pose`` (..., 12, 6): ``e_k . dB_j`` (see :meth:`leg_jacobian`)."""
+        return self.leg_jacobian(pose, range(12))
+
+    def leg_jacobian(self, pose: ArrayLike, legs) -> Array:
+        """Rows ``legs`` (0-based) of ``d l / d pose`` (..., len(legs), 6): ``e_k . dB_j`` with
+        ``e_k`` the unit leg vector; ``dR/dlambda`` analytic for Euler parameters, by complex step
+        (exact to rounding) for the other conventions."""
         x = as_batch(pose, 6, "pose")
         self._check_orientation(x)
-        v = self.leg_vectors(x)
+        legs = list(legs)
+        joint = [self.leg_joint[k] for k in legs]
+        lam = x[..., 3:]
+        r = rotation_matrix(lam, self.convention)
+        p = self.platform_points_local[joint]  # (k, 3)
+        v = x[..., None, :3] + np.einsum("...ij,kj->...ki", r, p) - self.base_points[legs]
         e = v / np.sqrt(np.einsum("...ij,...ij->...i", v, v))[..., None]
-        p = self.platform_points_local[list(self.leg_joint)]  # (12, 3)
         cols = [e[..., :, 0], e[..., :, 1], e[..., :, 2]]
+        dr = self._rotation_derivatives(lam)  # (..., 3, 3, 3): d R / d lambda_i
         for i in range(3):
-            lam = x[..., 3:].astype(complex)
-            lam[..., i] += 1j * _H
-            dr = rotation_matrix(lam, self.convention).imag / _H
-            cols.append(np.einsum("...kc,...cj,kj->...k", e, dr, p))
+            cols.append(np.einsum("...kc,...kc->...k", e, np.einsum("...cj,kj->...kc", dr[..., i, :, :], p)))
         return np.stack(cols, -1)
+
+    def _rotation_derivatives(self, lam: Array) -> Array:
+        """``d R / d lambda_i`` (..., 3 (i), 3, 3)."""
+        if self.convention != "euler_parameters":
+            out = []
+            for i in range(3):
+                lc = lam.astype(complex)
+                lc[..., i] += 1j * _H
+                out.append(rotation_matrix(lc, self.convention).imag / _H)
+            return np.stack(out, -3)
+        # R = (2 l0^2 - 1) I + 2 (lam lam^T + l0 [lam]x), l0 = sqrt(1 - |lam|^2), d l0 / d lam_i = -lam_i / l0:
+        # dR/dlam_i = -4 lam_i I + 2 (e_i lam^T + lam e_i^T) - 2 (lam_i / l0) [lam]x + 2 l0 [e_i]x
+        l0 = np.sqrt(1.0 - np.einsum("...i,...i->...", lam, lam))
+        eye = np.eye(3)
+        sk = _skew(lam)
+        out = []
+        for i in range(3):
+            outer = eye[i][:, None] * lam[..., None, :] + lam[..., :, None] * eye[i][None, :]
+            out.append(-4 * lam[..., i, None, None] * eye + 2 * outer
+                       - 2 * (lam[..., i] / l0)[..., None, None] * sk + 2 * l0[..., None, None] * _skew(eye[i]))
+        return np.stack(out, -3)
 
     def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
         x = as_batch(pose, 6, "pose")
@@ -513,5 +541,5 @@ class ActiveLegs(Mechanism):
 
     def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
         x, bad = self._inside(pose)
-        j = self.mech.jacobian_pose(x)[..., [k - 1 for k in self.active], :]
+        j = self.mech.leg_jacobian(x, [k - 1 for k in self.active])
         return np.where(bad[..., None, None], np.nan, j)

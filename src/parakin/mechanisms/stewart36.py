@@ -127,17 +127,21 @@ class Stewart36(Mechanism):
         return np.sum(f * f, axis=-1)
 
     def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
-        """Analytic ``d f / d pose`` (..., 6, 6): ``2 v_i . (dT/dq A_p(i))`` and ``2 v_i`` for X, Y, Z."""
+        """Analytic ``d f / d pose`` (..., 6, 6): ``2 v_i`` for X, Y, Z and, for the angles,
+        ``2 v_i . (dT/dq a_i) = 2 u_q . (w_i x v_i)`` with ``w_i = T a_i`` and ``u_q`` the joint axis
+        of angle q in the fixed frame (``dT a = u_q x T a`` for the z-y'-x'' chain): ``u_alpha = z``,
+        ``u_beta = Rz(alpha) y``, ``u_gamma = T x``. One cross product, no 3x3 products."""
         x = as_batch(pose, 6, "pose")
-        rz, ry, rx = rot_z(x[..., 0]), rot_y(x[..., 1]), rot_x(x[..., 2])
-        rzy = rz @ ry
-        r = rzy @ rx
-        top = self.top_points[LEG_TOP]  # (6, 3)
-        v = x[..., None, 3:] + top @ np.swapaxes(r, -1, -2) - self.base_points  # leg vectors (..., 6, 3)
-        # d(T a)/d(angle) = dT a; one column per angle: 2 v_i . (dT a_i)
-        d = (_SKEW["z"] @ r, rzy @ _SKEW["y"] @ rx, r @ _SKEW["x"])
-        cols = [2 * np.sum(v * (top @ np.swapaxes(dr, -1, -2)), axis=-1) for dr in d]
-        return np.concatenate([np.stack(cols, axis=-1), 2 * v], axis=-1)
+        r = euler_zyx(x[..., 0], x[..., 1], x[..., 2])
+        w = np.einsum("...ij,kj->...ki", r, self.top_points[LEG_TOP])  # T a_i, (..., 6, 3)
+        v = x[..., None, 3:] + w - self.base_points  # leg vectors
+        c0 = w[..., 1] * v[..., 2] - w[..., 2] * v[..., 1]  # w x v
+        c1 = w[..., 2] * v[..., 0] - w[..., 0] * v[..., 2]
+        c2 = w[..., 0] * v[..., 1] - w[..., 1] * v[..., 0]
+        ca, sa = np.cos(x[..., 0])[..., None], np.sin(x[..., 0])[..., None]
+        tx = r[..., :, 0, None]  # T x, (..., 3, 1)
+        cols = (c2, ca * c1 - sa * c0, tx[..., 0, :] * c0 + tx[..., 1, :] * c1 + tx[..., 2, :] * c2)
+        return 2 * np.concatenate([np.stack(cols, axis=-1), v], axis=-1)
 
     def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """``d f / d L = -2 diag(L)``."""
