@@ -143,17 +143,26 @@ class Mechanism(ABC):
         return -np.linalg.solve(b, a)
 
     def is_reachable(self, pose: ArrayLike) -> NDArray[np.bool_]:
-        """Boolean mask ``(...)``: True where ``ik(pose)`` exists. Default: try the IK per batch."""
+        """Boolean mask ``(...)``: True where ``ik(pose)`` exists. Default: try the IK on the whole
+        batch and, where it raises, on halves of it (``O(k log N)`` calls for ``k`` bad poses)."""
         x = as_batch(pose, self.n_pose, "pose")
-        try:
-            self.ik(x)
-        except UnreachableError:
-            if x.ndim == 1:
-                return np.asarray(False)
-            return np.array([bool(self.is_reachable(p)) for p in x.reshape(-1, self.n_pose)]).reshape(
-                x.shape[:-1]
-            )
-        return np.ones(x.shape[:-1], dtype=bool)
+        flat = x.reshape(-1, self.n_pose)
+        out = np.zeros(len(flat), dtype=bool)
+
+        def visit(idx: NDArray[np.intp]) -> None:
+            try:
+                self.ik(flat[idx])
+            except UnreachableError:
+                if len(idx) > 1:
+                    half = len(idx) // 2
+                    visit(idx[:half])
+                    visit(idx[half:])
+                return
+            out[idx] = True
+
+        if len(flat):
+            visit(np.arange(len(flat)))
+        return out.reshape(x.shape[:-1])
 
     def check_joints(self, joints: ArrayLike) -> None:
         """Raise UnreachableError where ``joints`` cannot be assembled in the working mode.
@@ -180,11 +189,15 @@ class Mechanism(ABC):
 
 
 def _central_difference(f, x: Array, h: float = 1e-7) -> Array:
-    """Jacobian of ``f`` at ``x`` (batched) by central differences, shape ``(..., m, n)``."""
+    """Jacobian of ``f`` at ``x`` (batched) by central differences, shape ``(..., m, n)``.
+
+    The step of coordinate k is ``h * max(1, |x_k|)`` per row, so a row's Jacobian does not
+    depend on the other rows of its batch."""
     n = x.shape[-1]
     cols = []
     for k in range(n):
-        e = np.zeros(n)
-        e[k] = h * max(1.0, float(np.max(np.abs(x[..., k])))) if x.size else h
-        cols.append((f(x + e) - f(x - e)) / (2 * e[k]))
+        step = h * np.maximum(1.0, np.abs(x[..., k]))
+        e = np.zeros_like(x)
+        e[..., k] = step
+        cols.append((f(x + e) - f(x - e)) / (2 * step[..., None]))
     return np.stack(cols, axis=-1)

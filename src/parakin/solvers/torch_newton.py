@@ -1,0 +1,406 @@
+"""Batched Newton forward kinematics in torch: the same code on CPU or CUDA.
+
+:func:`newton_torch` is the numpy solver :func:`parakin.solvers.newton.newton` (pure Newton,
+``x <- x - J(x)^-1 r(x)``, no line search, converged where ``max |r| <= tol``) with every
+iteration on a torch device. It takes and returns numpy (an :class:`FKResult` with the fields,
+status codes and counters of the numpy solvers) so a benchmark can put it beside ``solve_fk``.
+
+The residual is a torch port of ``mech.residual`` (:func:`torch_residual`), read from the
+mechanism's own parameters; the Jacobian comes from ``torch.func`` (exact to rounding: by default
+one vjp of the batched residual vmapped over the output directions, or ``vmap(jacrev)`` /
+``vmap(jacfwd)`` per row), the step from ``torch.linalg.solve_ex``. Ported mechanisms: :class:`P3P4S`, :class:`UPS2`
+(either ``branch``), :class:`Stewart36`, and :class:`ActiveLegs` of a :class:`Stewart12` in the
+default ``"euler_parameters"`` convention. Anything else raises NotImplementedError.
+
+Device behaviour: one device-to-host sync per iteration, two integers (how many rows take an LU
+step and how many a pinv step: the stop test and the sizes of the gather); the rows still running
+are gathered (a stable argsort of their group on the device), stepped and scattered back with
+index tensors, never row by row. A row whose Jacobian is exactly singular (LU
+fails) takes the minimum-norm step ``pinv(J) r`` in the next pass instead (numpy's
+:func:`~parakin.solvers.newton.solve_linear` falls back for the whole batch; the step is the same).
+A row whose iterate or residual becomes non-finite stops with :attr:`Status.NONFINITE` and keeps
+its last finite iterate.
+
+torch is an optional dependency (``pip install parakin[nn]``): without it this module still
+imports, :func:`gpu_available` is False and the solver raises ImportError.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from parakin.errors import ShapeError
+from parakin.mechanisms.base import Mechanism, as_batch
+from parakin.mechanisms.p3p4s import P3P4S
+from parakin.mechanisms.stewart12 import ActiveLegs, Stewart12
+from parakin.mechanisms.stewart36 import LEG_TOP, Stewart36
+from parakin.mechanisms.ups2 import UPS2
+from parakin.solvers.result import FKResult, Status, summarize
+
+try:  # optional dependency
+    import torch
+except ImportError:  # pragma: no cover - exercised only without torch
+    torch = None  # type: ignore[assignment]
+
+if TYPE_CHECKING:  # pragma: no cover
+    from torch import Tensor
+
+__all__ = ["default_device", "gpu_available", "newton_torch", "torch_residual", "PORTED"]
+
+ResidualFn = Callable[["Tensor", "Tensor"], "Tensor"]
+
+_RUNNING = 127  # internal status of a row still iterating (as in parakin.solvers.result)
+
+
+def _need_torch() -> None:
+    if torch is None:
+        raise ImportError("parakin.solvers.torch_newton needs torch (pip install 'parakin[nn]')")
+
+
+def gpu_available() -> bool:
+    """True where torch is installed and sees a CUDA device."""
+    return torch is not None and bool(torch.cuda.is_available())
+
+
+def default_device() -> str:
+    """``"cuda"`` where a GPU is available, else ``"cpu"``."""
+    return "cuda" if gpu_available() else "cpu"
+
+
+# ============================================================================ residual ports
+class _Constants:
+    """Numpy constants of a mechanism, converted once per (device, dtype) on first use."""
+
+    def __init__(self, **arrays: Any) -> None:
+        self._np = {k: np.asarray(v) for k, v in arrays.items()}
+        self._cache: dict[tuple[Any, Any], dict[str, Tensor]] = {}
+
+    def on(self, like: Tensor) -> dict[str, Tensor]:
+        key = (like.device, like.dtype)
+        out = self._cache.get(key)
+        if out is None:
+            out = {
+                k: torch.as_tensor(v, device=like.device,
+                                   dtype=torch.long if v.dtype.kind in "iu" else like.dtype)
+                for k, v in self._np.items()
+            }
+            self._cache[key] = out
+        return out
+
+
+def _p3p4s(mech: P3P4S) -> ResidualFn:
+    """``(|w_i - l_i m_i|^2 - L^2) / 2L`` with ``w_i = p - delta e_i`` (see :meth:`P3P4S.residual`)."""
+    const = _Constants(e=mech.e, m=mech.m)
+    delta, length = float(mech.delta), float(mech.L)
+
+    def residual(pose: Tensor, joints: Tensor) -> Tensor:
+        c = const.on(pose)
+        rod = pose[..., None, :] - delta * c["e"] - joints[..., :, None] * c["m"]
+        return ((rod * rod).sum(-1) - length**2) / (2 * length)
+
+    return residual
+
+
+def _ups2(mech: UPS2) -> ResidualFn:
+    """Strokes of the closed-form leg lengths minus the inputs (see :meth:`UPS2.lengths_closed_form`).
+
+    ``l1^2 = (r c)^2 + h^2 - 2 r h Y`` with ``r = link_ratio`` (= 4c^2/9 + 3a^2/4 - (2/sqrt3) a Y),
+    ``l2,3^2 = Q -/+ a u sin(beta)``, ``u = rho + k sin(gamma)``, ``rho = branch sqrt(c^2 - Y^2)``.
+    """
+    const = _Constants(home=mech.home_lengths)
+    a, c, h, k = float(mech.a), float(mech.c), float(mech.h), float(mech.k)
+    ratio, branch = float(mech.link_ratio), float(mech.branch)
+
+    def residual(pose: Tensor, joints: Tensor) -> Tensor:
+        beta, gamma, y = pose[..., 0], pose[..., 1], pose[..., 2]
+        rho = branch * torch.sqrt(torch.clamp(c * c - y * y, min=0.0))
+        u = rho + k * torch.sin(gamma)
+        q = u * u + (k * k + a * a / 4) + (k * torch.cos(gamma) + y - h) ** 2 - a * k * torch.cos(beta)
+        s = a * u * torch.sin(beta)
+        l1 = (ratio * c) ** 2 + h * h - 2 * ratio * h * y
+        sq = torch.stack([l1, q - s, q + s], dim=-1)
+        return torch.sqrt(torch.clamp(sq, min=0.0)) - const.on(pose)["home"] - joints
+
+    return residual
+
+
+def _euler_zyx(a: Tensor, b: Tensor, c: Tensor) -> Tensor:
+    """``Rz(a) Ry(b) Rx(c)`` (..., 3, 3), entry by entry as :func:`parakin.geometry.euler_zyx`."""
+    ca, sa, cb, sb, cc, sc = torch.cos(a), torch.sin(a), torch.cos(b), torch.sin(b), torch.cos(c), torch.sin(c)
+    rows = [
+        [ca * cb, ca * sb * sc - sa * cc, ca * sb * cc + sa * sc],
+        [sa * cb, sa * sb * sc + ca * cc, sa * sb * cc - ca * sc],
+        [-sb, cb * sc, cb * cc],
+    ]
+    return torch.stack([torch.stack(r, dim=-1) for r in rows], dim=-2)
+
+
+def _stewart36(mech: Stewart36) -> ResidualFn:
+    """``|T A_p(i) + O_A - B_i|^2 - L_i^2`` (see :meth:`Stewart36.residual`)."""
+    const = _Constants(top=mech.top_points[LEG_TOP], base=mech.base_points)
+
+    def residual(pose: Tensor, joints: Tensor) -> Tensor:
+        c = const.on(pose)
+        rot = _euler_zyx(pose[..., 0], pose[..., 1], pose[..., 2])
+        v = pose[..., None, 3:] + torch.einsum("...ij,kj->...ki", rot, c["top"]) - c["base"]
+        return (v * v).sum(-1) - joints * joints
+
+    return residual
+
+
+def _euler_parameters(lam: Tensor) -> Tensor:
+    """:func:`parakin.mechanisms.stewart12.rotation_matrix` for ``"euler_parameters"``:
+    ``R = (2 l0^2 - 1) I + 2 (lam lam^T + l0 [lam]x)``, ``l0 = sqrt(1 - |lam|^2)``."""
+    l0sq = 1.0 - (lam * lam).sum(-1)
+    l0 = torch.sqrt(l0sq)
+    x, y, z = lam[..., 0], lam[..., 1], lam[..., 2]
+    d = 2 * l0sq - 1
+    rows = [
+        [d + 2 * x * x, 2 * (x * y - l0 * z), 2 * (x * z + l0 * y)],
+        [2 * (y * x + l0 * z), d + 2 * y * y, 2 * (y * z - l0 * x)],
+        [2 * (z * x - l0 * y), 2 * (z * y + l0 * x), d + 2 * z * z],
+    ]
+    return torch.stack([torch.stack(r, dim=-1) for r in rows], dim=-2)
+
+
+def _active_legs(mech: ActiveLegs) -> ResidualFn:
+    """``l_k(pose) - l_k`` over the active legs, NaN where ``|lambda| >= 1`` (see
+    :meth:`ActiveLegs.residual`); ``l_k = |M + R p_j(k) - b_k|`` (:meth:`Stewart12.ik`)."""
+    base: Stewart12 = mech.mech
+    if base.convention != "euler_parameters":
+        raise NotImplementedError(
+            f"torch residual of ActiveLegs is ported for the 'euler_parameters' convention only, "
+            f"not {base.convention!r}"
+        )
+    legs = [k - 1 for k in mech.active]
+    joint_of_leg = np.asarray(base.leg_joint)[legs]
+    const = _Constants(p=base.platform_points_local[joint_of_leg], b=base.base_points[legs])
+
+    def residual(pose: Tensor, joints: Tensor) -> Tensor:
+        c = const.on(pose)
+        bad = (pose[..., 3:] * pose[..., 3:]).sum(-1) >= 1.0
+        x = torch.where(bad[..., None], torch.zeros_like(pose), pose)
+        rot = _euler_parameters(x[..., 3:])
+        v = x[..., None, :3] + torch.einsum("...ij,kj->...ki", rot, c["p"]) - c["b"]
+        r = torch.sqrt((v * v).sum(-1)) - joints
+        return torch.where(bad[..., None], torch.full_like(r, float("nan")), r)
+
+    return residual
+
+
+#: mechanism class -> builder of its torch residual (exact type match: a subclass may change
+#: the kinematics, so it is refused rather than silently solved with its parent's equations)
+PORTED: dict[type, Callable[[Any], ResidualFn]] = {
+    P3P4S: _p3p4s,
+    UPS2: _ups2,
+    Stewart36: _stewart36,
+    ActiveLegs: _active_legs,
+}
+
+
+def torch_residual(mech: Mechanism) -> ResidualFn:
+    """A torch port of ``mech.residual``: ``f(pose (..., n), joints (..., m)) -> (..., m)``.
+
+    Works in the dtype and on the device of ``pose`` (float64 matches numpy to rounding), is
+    batched over any leading axes and composes with ``torch.func`` (vmap, jacfwd, jacrev).
+    Raises NotImplementedError for a mechanism type without a port (see :data:`PORTED`).
+    """
+    _need_torch()
+    build = PORTED.get(type(mech))
+    if build is None:
+        known = ", ".join(t.__name__ for t in PORTED)
+        raise NotImplementedError(
+            f"no torch residual for mechanism type {type(mech).__name__}; ported: {known}"
+        )
+    return build(mech)
+
+
+# ============================================================================ the solver
+def newton_torch(
+    mech: Mechanism,
+    joints: ArrayLike,
+    x0: ArrayLike | None,
+    *,
+    tol: float = 1e-10,
+    maxiter: int = 50,
+    device: str | Any | None = None,
+    dtype: Any = None,
+    jacobian: str = "vjp",
+) -> FKResult:
+    """Newton-Raphson forward kinematics on a torch device; numpy in, numpy out.
+
+    ``joints (..., m)`` and ``x0 (..., n)`` (``None``: ``mech.home()``) broadcast to one batch, as
+    in :func:`parakin.solvers.solve_fk`; the result has that batch shape. ``device`` defaults to
+    :func:`default_device`, ``dtype`` to ``torch.float64``. A row converges when the inf-norm of its
+    residual is ``<= tol``; ``maxiter`` bounds the iterations (Newton steps) per row. Needs a
+    square system (``m == n``) and a mechanism type in :data:`PORTED`.
+
+    ``jacobian`` picks how ``torch.func`` differentiates the residual (all exact to rounding):
+    ``"vjp"`` (default) one reverse pass of the whole batch, vmapped over the ``m`` output
+    directions (what ``jacrev`` does per row, done for all rows at once: every ported residual
+    computes each row from that row alone; the fastest on CPU), ``"jacrev"``
+    ``vmap(jacrev(residual))`` and ``"jacfwd"`` ``vmap(jacfwd(residual))`` per row.
+
+    Counters as the numpy solvers: ``nit`` steps per row, ``nfev`` residual evaluations (one at
+    ``x0``, one per finite step), ``njev`` Jacobian evaluations (one per step; a row whose LU
+    failed is evaluated once more for its ``pinv`` step). ``method="newton-torch"``.
+    """
+    _need_torch()
+    start = time.perf_counter()
+    if not tol >= 0:
+        raise ValueError(f"tol = {tol!r} must be >= 0")
+    if int(maxiter) != maxiter or maxiter < 0:
+        raise ValueError(f"maxiter = {maxiter!r} must be a non-negative integer")
+    maxiter = int(maxiter)
+    if jacobian not in _JACOBIANS:
+        raise ValueError(f"jacobian = {jacobian!r} must be one of {', '.join(_JACOBIANS)}")
+    fun = torch_residual(mech)
+    if mech.n_pose != mech.n_joints:
+        raise ShapeError(
+            f"newton_torch needs as many equations as unknowns; {type(mech).__name__} has "
+            f"{mech.n_joints} joints and {mech.n_pose} pose coordinates"
+        )
+    q_np = as_batch(joints, mech.n_joints, "joints")
+    x_np = as_batch(mech.home() if x0 is None else x0, mech.n_pose, "x0")
+    try:
+        batch = np.broadcast_shapes(q_np.shape[:-1], x_np.shape[:-1])
+    except ValueError:
+        raise ShapeError(
+            f"joints batch shape {q_np.shape[:-1]} and x0 batch shape {x_np.shape[:-1]} do not broadcast"
+        ) from None
+    n_rows = int(np.prod(batch, dtype=np.int64))
+    q_np = np.broadcast_to(q_np, (*batch, mech.n_joints)).reshape(n_rows, mech.n_joints).copy()
+    x_np = np.broadcast_to(x_np, (*batch, mech.n_pose)).reshape(n_rows, mech.n_pose).copy()
+
+    dev = torch.device(default_device() if device is None else device)
+    dt = torch.float64 if dtype is None else dtype
+    x, nit, nfev, njev, res, status = _solve(fun, q_np, x_np, dev, dt, tol, maxiter, jacobian)
+
+    status = np.where(status == _RUNNING, Status.MAXITER, status).astype(np.int64)
+    result = FKResult(
+        x=x.astype(float),
+        success=status >= 0,
+        status=status,
+        nit=nit,
+        nfev=nfev,
+        njev=njev,
+        residual=res.astype(float),
+        wall_time=time.perf_counter() - start,
+        method="newton-torch",
+        message=summarize(status, maxiter),
+    )
+    return result.reshape(batch)
+
+
+def _solve(
+    fun: ResidualFn,
+    q_np: np.ndarray,
+    x_np: np.ndarray,
+    dev: Any,
+    dt: Any,
+    tol: float,
+    maxiter: int,
+    jacobian: str,
+) -> tuple[np.ndarray, ...]:
+    """The iteration on flat ``(N, m)`` / ``(N, n)`` arrays; returns numpy arrays."""
+    n_rows = len(q_np)
+    jac = _JACOBIANS[jacobian](fun)
+    with torch.no_grad():
+        q = torch.as_tensor(q_np, device=dev, dtype=dt)
+        x = torch.as_tensor(x_np, device=dev, dtype=dt).clone()
+        r = fun(x, q)
+        res = _inf_norm(r)
+        long = dict(device=dev, dtype=torch.long)
+        nit = torch.zeros(n_rows, **long)
+        nfev = torch.ones(n_rows, **long)  # the residual at x0 (as_batch made x0 finite)
+        njev = torch.zeros(n_rows, **long)
+        status = torch.full((n_rows,), _RUNNING, **long)
+        status = torch.where(res <= tol, Status.CONVERGED, status)
+        status = torch.where(torch.isfinite(res), status, Status.NONFINITE)
+        if maxiter == 0:
+            status = torch.where(status == _RUNNING, Status.MAXITER, status)
+        needs_pinv = torch.zeros(n_rows, device=dev, dtype=torch.bool)
+
+        while True:
+            # group of each row: 0 LU step, 1 pinv step (its LU failed last pass), 2 stopped
+            group = torch.where(status == _RUNNING, needs_pinv.long(), 2)
+            # the one device -> host sync of the pass (two integers): the stop test and the sizes
+            n_lu, n_pinv = torch.stack([(group == 0).sum(), (group == 1).sum()]).tolist()
+            n_active = n_lu + n_pinv
+            if n_active == 0:
+                break
+            if n_lu == n_rows:
+                idx: Any = slice(None)  # every row runs: no gather / scatter
+            else:  # running rows, LU group first, gathered on the device (sizes known: no sync)
+                idx = torch.argsort(group, stable=True)[:n_active]
+            xa, qa, ra = x[idx], q[idx], r[idx]
+
+            jm = jac(xa, qa)  # (k, m, n)
+            njev[idx] += 1
+            dx = torch.zeros_like(xa)
+            stepped = torch.ones(n_active, device=dev, dtype=torch.bool)
+            if n_lu:
+                j_lu, r_lu = jm[:n_lu], ra[:n_lu]
+                sol, info = torch.linalg.solve_ex(j_lu, r_lu.unsqueeze(-1))
+                # LU failed on a finite system: exactly singular, pinv step in the next pass.
+                # A non-finite J or r gives a non-finite step: the row stops as NONFINITE.
+                singular = (info != 0) & torch.isfinite(j_lu).all((-2, -1)) & torch.isfinite(r_lu).all(-1)
+                dx[:n_lu] = torch.where(singular[:, None], 0.0, sol[..., 0])
+                stepped[:n_lu] = ~singular
+            if n_active > n_lu:
+                dx[n_lu:] = (torch.linalg.pinv(jm[n_lu:]) @ ra[n_lu:].unsqueeze(-1))[..., 0]
+            needs_pinv[idx] = ~stepped
+
+            x_new = xa - dx
+            x_fin = torch.isfinite(x_new).all(-1)
+            r_new = fun(torch.where(x_fin[:, None], x_new, xa), qa)  # never evaluate non-finite poses
+            nfev[idx] += (stepped & x_fin).long()
+            nit[idx] += stepped.long()
+            res_new = _inf_norm(r_new)
+            finite = x_fin & torch.isfinite(res_new)
+
+            code = torch.where(res_new <= tol, Status.CONVERGED, _RUNNING)
+            code = torch.where(finite, code, Status.NONFINITE)
+            code = torch.where(stepped, code, _RUNNING)
+            code = torch.where((code == _RUNNING) & (nit[idx] >= maxiter), Status.MAXITER, code)
+            status[idx] = code
+            keep = (stepped & finite)[:, None]
+            x[idx] = torch.where(keep, x_new, xa)
+            r[idx] = torch.where(keep, r_new, ra)
+            res[idx] = torch.where(keep[:, 0], res_new, res[idx])
+
+        out = [t.cpu().numpy() for t in (x, nit, nfev, njev, res, status)]
+    return tuple(np.asarray(o, dtype=np.float64 if o.dtype.kind == "f" else np.int64) for o in out)
+
+
+def _batched_vjp(fun: ResidualFn) -> Callable[[Tensor, Tensor], Tensor]:
+    """``d fun / d pose`` (N, m, n) from one vjp of the batched residual, vmapped over the m
+    output directions: valid because every port computes each row from that row alone."""
+
+    def jac(x: Tensor, q: Tensor) -> Tensor:
+        _, pull = torch.func.vjp(lambda xx: fun(xx, q), x)
+        m = q.shape[-1]
+        basis = torch.eye(m, dtype=x.dtype, device=x.device)[:, None, :].expand(m, *q.shape)
+        return torch.func.vmap(pull)(basis)[0].permute(1, 0, 2)
+
+    return jac
+
+
+#: ways to get the batched Jacobian ``(N, m, n)`` of a torch residual (``jacobian=`` option)
+_JACOBIANS: dict[str, Callable[[ResidualFn], Callable[[Tensor, Tensor], Tensor]]] = {
+    "jacrev": lambda fun: torch.func.vmap(torch.func.jacrev(fun, argnums=0)),
+    "jacfwd": lambda fun: torch.func.vmap(torch.func.jacfwd(fun, argnums=0)),
+    "vjp": _batched_vjp,
+}
+
+
+def _inf_norm(r: Tensor) -> Tensor:
+    """Inf-norm over the last axis, NaN where any entry is NaN (as :func:`parakin.solvers.result.inf_norm`)."""
+    if r.shape[-1] == 0:
+        return torch.zeros(r.shape[:-1], dtype=r.dtype, device=r.device)
+    return r.abs().amax(-1)
