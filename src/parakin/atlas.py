@@ -225,7 +225,9 @@ def run_atlas(
     gpu: Callable[[AtlasCase, Scenario], dict[str, float]] | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> pd.DataFrame:
-    """The atlas: one row per (case, scenario, solver); see the module docstring.
+    """The atlas: one row per (case, scenario, solver); see the module docstring. ``home_cond``
+    and ``median_cond``: condition numbers of ``A = d residual / d pose`` at the home pose (the cold
+    start) and over the scenario's reference poses.
 
     ``rng_for(stream)`` gives the generator of a named stream (e.g. ``parakin.config.rng`` bound to
     a config), so that every case and scenario draws independently and reproducibly. Accuracy on
@@ -236,6 +238,8 @@ def run_atlas(
     """
     rows = []
     for case in cases:
+        home = case.mech.home()
+        home_cond = float(_condition(case.mech, home, case.mech.ik(home)))
         for name in scenarios:
             if progress:
                 progress(f"{case.key}: {name}")
@@ -247,7 +251,7 @@ def run_atlas(
                                     start_spread=start_spread)
                 gpu_rates = gpu(case, big) if gpu else None
             for solver in case.solvers:
-                row = {"mechanism": case.key, **evaluate(case.mech, solver, sc, tol=tol, maxiter=maxiter,
+                row = {"mechanism": case.key, "home_cond": home_cond, **evaluate(case.mech, solver, sc, tol=tol, maxiter=maxiter,
                                                          success_tol=success_tol)}
                 rate = row.pop("_throughput")
                 row["median_latency_us"] = np.nan

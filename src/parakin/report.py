@@ -166,6 +166,11 @@ def build_report(figures_dir: Path, reference_dir: Path = REFERENCE_DIR) -> str:
         sections += [f"## {module.TITLE}", "", module.summary(Path(figures_dir) / key, ref).strip(), ""]
         sections += [markdown_table(claims_table(claims)), ""]
     lines += ["## At a glance", "", markdown_table(pd.DataFrame(summary)) if summary else "(no outputs yet)", ""]
+    from parakin import extras
+
+    beyond = extras.summary(Path(figures_dir))
+    if beyond:
+        sections += [f"## {extras.TITLE}", "", beyond, ""]
     return "\n".join(lines + sections)
 
 

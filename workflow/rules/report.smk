@@ -8,6 +8,7 @@ rule report:
         LI2020_2UPS_OUTPUTS,
         YE_STEWART12_OUTPUTS,
         LI2017_STEWART36_OUTPUTS,
+        f"{FIG}/extra_solver_atlas.csv",
         expand("data/reference/{paper}.csv", paper=["zhao2017_3p4s", "li2020_2ups", "ye_stewart12", "li2017_stewart36"]),
     output:
         REPORT,
