@@ -188,3 +188,15 @@ def test_report_section_is_computed_from_the_atlas_table(tmp_path):
     assert "3p4s 1.23e+04 solves/s" in extras.summary(tmp_path)
     assert extras.summary(tmp_path / "missing") == ""
     assert extras.TITLE in (ROOT / "figures" / "REPORT.md").read_text()
+
+
+def test_recommendation_prefers_the_fastest_of_the_most_reliable():
+    rows = []
+    for solver, success, speed in [("slow exact", 1.0, 10.0), ("fast almost", 0.997, 1000.0), ("fastest bad", 0.9, 1e6)]:
+        for scenario in ("nominal", "cold"):
+            rows.append({"mechanism": "m", "solver": solver, "scenario": scenario,
+                         "success_rate": success if scenario == "nominal" else 1.0 - (solver == "slow exact") * 0.5,
+                         "throughput_per_s": speed})
+    rec = extras.recommend(pd.DataFrame(rows)).set_index("mechanism")
+    assert rec.loc["m", "nominal"].startswith("fast almost")  # within 0.5 points of the best, faster
+    assert rec.loc["m", "cold"].startswith("fastest bad")  # here it is (one of) the most reliable

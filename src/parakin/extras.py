@@ -146,6 +146,25 @@ def atlas_markdown(df: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
+def recommend(df: pd.DataFrame, margin: float = 0.005) -> pd.DataFrame:
+    """Which solver to pick, per mechanism and scenario: among the solvers whose success rate is
+    within ``margin`` of the best, the one with the highest batched throughput (nominal run)."""
+    speed = df[df["scenario"] == "nominal"].set_index(["mechanism", "solver"])["throughput_per_s"]
+    out = []
+    for mech, g in df.groupby("mechanism", sort=False):
+        row = {"mechanism": mech}
+        for s in SCENARIOS:
+            h = g[g["scenario"] == s]
+            if not len(h):
+                continue
+            best = h["success_rate"].max()
+            near = h[h["success_rate"] >= best - margin]
+            pick = max(near.itertuples(), key=lambda r: speed.get((mech, r.solver), 0.0))
+            row[s] = f"{pick.solver} ({_pct(pick.success_rate)})"
+        out.append(row)
+    return pd.DataFrame(out)
+
+
 def solver_atlas(config: dict, outdir: Path) -> list[Path]:
     """Every FK solver x every mechanism x four scenarios (issue: the comparison no paper has)."""
     cfg = config[KEY]["solver_atlas"]
@@ -168,6 +187,9 @@ def solver_atlas(config: dict, outdir: Path) -> list[Path]:
         "The 12-leg cube is solved from the six active legs of its 6-leg drive mode; its linear closed form "
         "needs all twelve. GPU column: batched Newton in torch on CUDA where available."
     )
+    notes += ("\n\n## Which solver to pick\n\nPer mechanism and scenario: among the solvers within half a "
+              "percentage point of the best success rate, the fastest batched one (success rate in brackets).\n\n"
+              + markdown_table(recommend(df)))
     paths = write_table(df, outdir / ATLAS_STEM, title="Solver atlas: every FK solver on every mechanism",
                         notes=notes, markdown=atlas_markdown(df))
     paths.append(atlas_figure(df, outdir / f"{ATLAS_STEM}.png"))
