@@ -145,3 +145,45 @@ def test_bad_input():
         ix.design_arrays(0.05, 0.7, 0.38, 0.12, 0.5)
     with pytest.raises(ValueError, match="shape"):
         ix.design_objectives(np.zeros((2, 3)), W, 3)
+
+
+# ------------------------------------------------------------------------------ any mechanism
+def test_kinematic_indices_agree_with_the_3p4s_indices():
+    from parakin.indices import kinematic_indices, mech_indices
+    from parakin.mechanisms import P3P4S
+    from parakin.workspace import sample_reachable
+
+    m = P3P4S()
+    x = sample_reachable(m, 50, np.random.default_rng(4))
+    gen = kinematic_indices(m, x, k=2.0)
+    own = mech_indices(m, x, k=2.0)
+    np.testing.assert_allclose(gen["speed"], own.speed, rtol=1e-10)
+    np.testing.assert_allclose(gen["stiffness_lambda"], own.stiffness_lambda, rtol=1e-10)
+    np.testing.assert_allclose(gen["stiffness_sqrt"], own.stiffness_sqrt, rtol=1e-10)
+    np.testing.assert_allclose(gen["manipulability"], np.abs(np.linalg.det(m.velocity_jacobian(x))), rtol=1e-10)
+
+
+def test_global_kinematic_indices_match_the_3p4s_global_speed_index():
+    from parakin.indices import Workspace, global_kinematic_indices, global_indices
+    from parakin.mechanisms import P3P4S
+
+    m = P3P4S()
+    ws = Workspace.square(0.585, 0.05)
+    lo, hi = np.array([ws.x[0], ws.y[0], ws.z[0]]), np.array([ws.x[1], ws.y[1], ws.z[1]])
+    gen = global_kinematic_indices(m, lo, hi, 8)
+    own = global_indices(m.delta, m.L, m.phi, ws, 8)
+    assert gen["speed"] == pytest.approx(float(np.ravel(own.sigma3)[0]), rel=1e-10)
+    assert gen["stiffness_lambda"] == pytest.approx(float(np.ravel(own.sigma2_lambda)[0]), rel=1e-10)
+    with pytest.raises(UnreachableError, match="quadrature node"):
+        global_kinematic_indices(m, lo, hi + np.array([0, 0, 0.5]), 4)
+
+
+def test_box_nodes_integrate_polynomials_exactly():
+    from parakin.indices import box_nodes
+
+    x, w = box_nodes([0.0, 1.0, 2.0], [1.0, 3.0, 2.0], 3)  # third axis fixed
+    assert x.shape == (9, 3) and np.all(x[:, 2] == 2.0)
+    assert w.sum() == pytest.approx(1.0)
+    assert w @ (x[:, 0] ** 5 * x[:, 1] ** 3) == pytest.approx((1 / 6) * (3**4 - 1) / 4 / 2, rel=1e-12)
+    with pytest.raises(ValueError, match="lo <= hi"):
+        box_nodes([1.0], [0.0], 3)
