@@ -36,7 +36,7 @@ from parakin.solvers.newton import newton
 from parakin.solvers.quasi_newton import bfgs, broyden
 from parakin.solvers.result import FKResult, Status, inf_norm, summarize
 
-__all__ = ["METHODS", "FKResult", "Status", "register", "solve_fk"]
+__all__ = ["METHODS", "FKResult", "Status", "flatten_problem", "register", "solve_fk"]
 
 Method = Callable[..., FKResult]
 
@@ -173,6 +173,31 @@ def all_solutions(
                     message=summarize(status))
 
 
+def flatten_problem(
+    mech: Mechanism, joints: ArrayLike, x0: ArrayLike | None, tol: float, maxiter: int
+) -> tuple[tuple[int, ...], Array, Array]:
+    """Validate an FK call and flatten it: ``(batch shape, joints (N, m), x0 (N, n))``, owned copies.
+
+    ``x0`` defaults to ``mech.home()``; the batch is the broadcast of both batch shapes. Raises
+    ValueError for a negative ``tol`` or ``maxiter`` and ShapeError for shapes that do not fit.
+    """
+    if not tol >= 0:
+        raise ValueError(f"tol = {tol!r} must be >= 0")
+    if int(maxiter) != maxiter or maxiter < 0:
+        raise ValueError(f"maxiter = {maxiter!r} must be a non-negative integer")
+    q = as_batch(joints, mech.n_joints, "joints")
+    x = as_batch(mech.home() if x0 is None else x0, mech.n_pose, "x0")
+    try:
+        batch = np.broadcast_shapes(q.shape[:-1], x.shape[:-1])
+    except ValueError:
+        raise ShapeError(
+            f"joints batch shape {q.shape[:-1]} and x0 batch shape {x.shape[:-1]} do not broadcast"
+        ) from None
+    flat_q = np.broadcast_to(q, (*batch, q.shape[-1])).reshape(-1, q.shape[-1]).copy()
+    flat_x = np.broadcast_to(x, (*batch, x.shape[-1])).reshape(-1, x.shape[-1]).copy()
+    return batch, flat_q, flat_x
+
+
 def solve_fk(
     mech: Mechanism,
     joints: ArrayLike,
@@ -202,20 +227,7 @@ def solve_fk(
             f"unknown FK method {method!r}; known: {', '.join(sorted(METHODS))}"
         ) from None
     start = time.perf_counter()
-    if not tol >= 0:
-        raise ValueError(f"tol = {tol!r} must be >= 0")
-    if int(maxiter) != maxiter or maxiter < 0:
-        raise ValueError(f"maxiter = {maxiter!r} must be a non-negative integer")
-    q = as_batch(joints, mech.n_joints, "joints")
-    x = as_batch(mech.home() if x0 is None else x0, mech.n_pose, "x0")
-    try:
-        batch = np.broadcast_shapes(q.shape[:-1], x.shape[:-1])
-    except ValueError:
-        raise ShapeError(
-            f"joints batch shape {q.shape[:-1]} and x0 batch shape {x.shape[:-1]} do not broadcast"
-        ) from None
-    flat_q = np.broadcast_to(q, (*batch, q.shape[-1])).reshape(-1, q.shape[-1]).copy()
-    flat_x = np.broadcast_to(x, (*batch, x.shape[-1])).reshape(-1, x.shape[-1]).copy()
+    batch, flat_q, flat_x = flatten_problem(mech, joints, x0, tol, maxiter)
     callback = options.get("callback")
     if callback is not None:
         options["callback"] = lambda k, xk, rk: callback(

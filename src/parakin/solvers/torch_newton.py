@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from parakin.errors import ShapeError
-from parakin.mechanisms.base import Mechanism, as_batch
+from parakin.mechanisms.base import Mechanism
 from parakin.mechanisms.p3p4s import P3P4S
 from parakin.mechanisms.stewart12 import ActiveLegs, Stewart12
 from parakin.mechanisms.stewart36 import LEG_TOP, Stewart36
@@ -252,10 +252,9 @@ def newton_torch(
     """
     _need_torch()
     start = time.perf_counter()
-    if not tol >= 0:
-        raise ValueError(f"tol = {tol!r} must be >= 0")
-    if int(maxiter) != maxiter or maxiter < 0:
-        raise ValueError(f"maxiter = {maxiter!r} must be a non-negative integer")
+    from parakin.solvers import flatten_problem
+
+    batch, q_np, x_np = flatten_problem(mech, joints, x0, tol, maxiter)
     maxiter = int(maxiter)
     if jacobian not in _JACOBIANS:
         raise ValueError(f"jacobian = {jacobian!r} must be one of {', '.join(_JACOBIANS)}")
@@ -265,17 +264,6 @@ def newton_torch(
             f"newton_torch needs as many equations as unknowns; {type(mech).__name__} has "
             f"{mech.n_joints} joints and {mech.n_pose} pose coordinates"
         )
-    q_np = as_batch(joints, mech.n_joints, "joints")
-    x_np = as_batch(mech.home() if x0 is None else x0, mech.n_pose, "x0")
-    try:
-        batch = np.broadcast_shapes(q_np.shape[:-1], x_np.shape[:-1])
-    except ValueError:
-        raise ShapeError(
-            f"joints batch shape {q_np.shape[:-1]} and x0 batch shape {x_np.shape[:-1]} do not broadcast"
-        ) from None
-    n_rows = int(np.prod(batch, dtype=np.int64))
-    q_np = np.broadcast_to(q_np, (*batch, mech.n_joints)).reshape(n_rows, mech.n_joints).copy()
-    x_np = np.broadcast_to(x_np, (*batch, mech.n_pose)).reshape(n_rows, mech.n_pose).copy()
 
     dev = torch.device(default_device() if device is None else device)
     dt = torch.float64 if dtype is None else dtype
