@@ -309,7 +309,6 @@ def summary(figdir: Path) -> str:
     if not path.exists():
         return ""
     df = pd.read_csv(path)
-    rate = df.set_index(["mechanism", "scenario", "solver"])["success_rate"]
     mechs = list(dict.fromkeys(df["mechanism"]))
 
     def pct(v: float) -> str:

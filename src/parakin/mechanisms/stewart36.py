@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from parakin.errors import UnreachableError
-from parakin.geometry import euler_zyx, rot_x, rot_y, rot_z, euler_zyx_from_matrix
+from parakin.geometry import euler_zyx, euler_zyx_from_matrix
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
 __all__ = ["Stewart36", "TABLE3_ROW1"]
@@ -40,11 +40,6 @@ _SQ3 = float(np.sqrt(3.0))
 LEG_TOP = np.array([0, 0, 1, 1, 2, 2])
 #: Table 3 row 1 (deg, deg, deg, -, -, -): the FK input is reconstructed as its IK (notes G1, ASSUMED)
 TABLE3_ROW1 = (79.675, 47.468, 10.064, -0.282, 0.130, 1.571)
-_SKEW = {
-    "x": np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]),
-    "y": np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [-1.0, 0.0, 0.0]]),
-    "z": np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]),
-}
 
 
 @dataclass(frozen=True)
