@@ -26,14 +26,15 @@ def _lm_init(tau: float) -> Callable[[Evaluator, NDArray[np.intp], State], State
         jac = ev.jacobian(s["x"], rows)
         a, g = _gram(jac, s["r"])
         mu = tau * np.max(np.diagonal(a, axis1=-2, axis2=-1), axis=-1)
-        return {"J": jac, "A": a, "g": g, "mu": np.maximum(mu, np.finfo(float).tiny), "nu": np.full(len(rows), 2.0)}
+        # J itself is not kept: a step needs only J^T J and J^T r (less state to copy per iteration)
+        return {"A": a, "g": g, "mu": np.maximum(mu, np.finfo(float).tiny), "nu": np.full(len(rows), 2.0)}
 
     return init
 
 
 def _lm_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
     """One trial step ``(J^T J + mu I) h = -J^T r``; accept it iff the gain ratio is positive."""
-    x, r, jac, a, g, mu, nu = s["x"], s["r"], s["J"], s["A"], s["g"], s["mu"], s["nu"]
+    x, r, a, g, mu, nu = s["x"], s["r"], s["A"], s["g"], s["mu"], s["nu"]
     h = solve_linear(a + mu[:, None, None] * np.eye(a.shape[-1]), -g)
     x_try = x + h
     r_try = ev.residual(x_try, rows)
@@ -45,14 +46,13 @@ def _lm_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, St
     if ok.any():  # J^T J and J^T r are kept in the state: computed once per accepted step
         # in place: ``iterate`` hands each step its own copy of the rows' state (``_take``)
         x[ok], r[ok] = x_try[ok], r_try[ok]
-        jac[ok] = ev.jacobian(x[ok], rows[ok])
-        a[ok], g[ok] = _gram(jac[ok], r[ok])
+        a[ok], g[ok] = _gram(ev.jacobian(x[ok], rows[ok]), r[ok])
     # Nielsen (1999): shrink mu smoothly on success, grow it geometrically on failure
     mu = np.where(
         ok, mu * np.maximum(1.0 / 3.0, 1.0 - (2.0 * np.where(ok, rho, 0.0) - 1.0) ** 3), mu * nu
     )
     nu = np.where(ok, 2.0, 2.0 * nu)
-    return {"x": x, "r": r, "J": jac, "A": a, "g": g, "mu": mu, "nu": nu}, StepInfo(
+    return {"x": x, "r": r, "A": a, "g": g, "mu": mu, "nu": nu}, StepInfo(
         step=inf_norm(h), grad=inf_norm(g)
     )
 
