@@ -35,7 +35,10 @@ def _lm_init(tau: float) -> Callable[[Evaluator, NDArray[np.intp], State], State
 def _lm_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
     """One trial step ``(J^T J + mu I) h = -J^T r``; accept it iff the gain ratio is positive."""
     x, r, a, g, mu, nu = s["x"], s["r"], s["A"], s["g"], s["mu"], s["nu"]
-    h = solve_linear(a + mu[:, None, None] * np.eye(a.shape[-1]), -g)
+    damped = a.copy()
+    diag = np.arange(a.shape[-1])
+    damped[:, diag, diag] += mu[:, None]
+    h = solve_linear(damped, -g)
     x_try = x + h
     r_try = ev.residual(x_try, rows)
     predicted = 0.5 * np.einsum("...i,...i->...", h, mu[:, None] * h - g)
@@ -43,8 +46,11 @@ def _lm_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, St
         0.5 * np.einsum("...i,...i->...", r, r) - 0.5 * np.einsum("...i,...i->...", r_try, r_try)
     ) / predicted
     ok = rho > 0  # NaN (zero or non-finite step) -> rejected
-    if ok.any():  # J^T J and J^T r are kept in the state: computed once per accepted step
-        # in place: ``iterate`` hands each step its own copy of the rows' state (``_take``)
+    # J^T J and J^T r are kept in the state: computed once per accepted step
+    if ok.all():  # the usual case near a solution: no row bookkeeping
+        x, r = x_try, r_try
+        a, g = _gram(ev.jacobian(x, rows), r)
+    elif ok.any():  # in place: ``iterate`` hands each step its own copy of the rows' state (``_take``)
         x[ok], r[ok] = x_try[ok], r_try[ok]
         a[ok], g[ok] = _gram(ev.jacobian(x[ok], rows[ok]), r[ok])
     # Nielsen (1999): shrink mu smoothly on success, grow it geometrically on failure
