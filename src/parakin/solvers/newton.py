@@ -23,8 +23,14 @@ def solve_linear(a: Array, b: Array) -> Array:
     """
     vector = b.ndim == a.ndim - 1
     rhs = b[..., None] if vector else b
-    out = np.full(rhs.shape, np.nan)
     ok = np.all(np.isfinite(a), axis=(-2, -1)) & np.all(np.isfinite(rhs), axis=(-2, -1))
+    if ok.all():  # the usual case: one LU over the whole batch, no masking
+        try:
+            out = np.linalg.solve(a, rhs)
+            return out[..., 0] if vector else out
+        except np.linalg.LinAlgError:
+            pass
+    out = np.full(rhs.shape, np.nan)
     if ok.any():
         try:
             out[ok] = np.linalg.solve(a[ok], rhs[ok])

@@ -182,7 +182,9 @@ class Evaluator:
         ok = np.all(np.isfinite(x), axis=-1)
         if ok.all() and ok.size:
             counter[rows] += 1
-            return np.asarray(f(x, self.joints[rows]), dtype=float)
+            # every row running (rows = 0..N-1): the joints as they are, no gather
+            q = self.joints if len(rows) == len(self.joints) else self.joints[rows]
+            return np.asarray(f(x, q), dtype=float)
         out = np.full((len(rows), *tail), np.nan)
         if ok.any():
             counter[rows[ok]] += 1
@@ -261,8 +263,12 @@ def iterate(
                 code[info.stalled] = Status.STALLED
             code[new_res <= tol] = Status.CONVERGED
             code[~finite] = Status.NONFINITE  # keeps its last finite iterate: not written back
-            _put(state, rows[finite], _take(new, finite))
-            res[rows[finite]] = new_res[finite]
+            if finite.all():  # the usual case: write the whole step back, no masking
+                _put(state, rows, new)
+                res[rows] = new_res
+            else:
+                _put(state, rows[finite], _take(new, finite))
+                res[rows[finite]] = new_res[finite]
             status[rows] = code
             if callback is not None:
                 callback(k, state["x"].copy(), res.copy())
