@@ -138,10 +138,7 @@ def make_scenario(
 
 def pose_error(mech: Mechanism, x: Array, reference: Array) -> Array:
     """``max_k |x_k - reference_k|`` per row, angle coordinates (unit ``rad``) compared modulo 2 pi."""
-    d = np.asarray(x, dtype=float) - reference
-    rad = np.array([u == "rad" for u in mech.pose_units])
-    d[..., rad] = (d[..., rad] + np.pi) % (2 * np.pi) - np.pi
-    return np.max(np.abs(d), axis=-1)
+    return np.max(np.abs(mech.pose_difference(x, reference)), axis=-1)
 
 
 def _solve(mech: Mechanism, solver: AtlasSolver, joints: Array, start: Array, tol: float, maxiter: int):

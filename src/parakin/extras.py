@@ -327,22 +327,18 @@ def summary(figdir: Path) -> str:
         return ""
     df = pd.read_csv(path)
     mechs = list(dict.fromkeys(df["mechanism"]))
-
-    def pct(v: float) -> str:
-        return _pct(float(v))
-
     local = df[df["method"].isin(["newton", "broyden", "bfgs", "lm", "scipy-root"])]
     parts = []
     lines = []
     for m in mechs:
         g = local[local["mechanism"] == m]
         by = {s: g[g["scenario"] == s]["success_rate"] for s in SCENARIOS}
-        lines.append(f"{m}: " + ", ".join(f"{s} {pct(by[s].min())}–{pct(by[s].max())}" for s in SCENARIOS if len(by[s])))
+        lines.append(f"{m}: " + ", ".join(f"{s} {_pct(by[s].min())}–{_pct(by[s].max())}" for s in SCENARIOS if len(by[s])))
     parts.append("Local solvers (Newton, Broyden, BFGS, LM, scipy root), success rate range per scenario — "
                  + "; ".join(lines) + ".")
     wrong = df.loc[df["wrong_assembly_rate"].idxmax()]
     parts.append(f"A converged solve is not always the right one: the largest wrong-assembly rate is "
-                 f"{pct(wrong['wrong_assembly_rate'])} ({wrong['mechanism']}, {wrong['solver']}, {wrong['scenario']}); "
+                 f"{_pct(wrong['wrong_assembly_rate'])} ({wrong['mechanism']}, {wrong['solver']}, {wrong['scenario']}); "
                  "near a forward singularity two assemblies lie closer together than the start error, so a "
                  "perturbed start often leads to the other one (the all-solutions FK with the nearest-start rule "
                  "fails the same way).")
@@ -354,14 +350,14 @@ def summary(figdir: Path) -> str:
                      f"solved leg set (cond(A) = {home[worst]:.2g} at home). Methods that keep the start's Jacobian "
                      "(Broyden's secant update, MINPACK's hybr) cannot leave it; those that recompute or damp it "
                      "(Newton with its pseudo-inverse fallback, BFGS, LM) mostly recover: "
-                     f"{', '.join(f'{k} {pct(v)}' for k, v in cold.items())}.")
+                     f"{', '.join(f'{k} {_pct(v)}' for k, v in cold.items())}.")
     pso = df[df["method"] == "pso"]
     if len(pso):
         nom = pso[pso["scenario"] == "nominal"]
         lat = df[df["scenario"] == "nominal"].set_index(["mechanism", "method"])["median_latency_us"]
         cost = nom["median_latency_us"].to_numpy() / lat.xs("newton", level="method").reindex(nom["mechanism"]).to_numpy()
         parts.append("PSO (swarm and iterations as configured, Li 2020's stop F ≤ 1e-6 mm): "
-                     + ", ".join(f"{r.mechanism} {r.solver.split('(')[1].rstrip(')')} {pct(r.success_rate)}"
+                     + ", ".join(f"{r.mechanism} {r.solver.split('(')[1].rstrip(')')} {_pct(r.success_rate)}"
                                  for r in nom.itertuples())
                      + " on the nominal inputs — a global search that finds the 3-DOF poses most of the time and "
                        f"the 6-DOF ones not at all within the budget, at {np.nanmin(cost):.0f}–{np.nanmax(cost):.0f}× "

@@ -142,6 +142,14 @@ class Mechanism(ABC):
             )
         return -np.linalg.solve(b, a)
 
+    def pose_difference(self, pose: ArrayLike, reference: ArrayLike) -> Array:
+        """``pose - reference`` (broadcast), angle coordinates (unit ``rad``) wrapped into
+        ``[-pi, pi)``: how far apart two poses are, whatever turn an angle was counted in."""
+        d = np.asarray(pose, dtype=float) - np.asarray(reference, dtype=float)
+        rad = np.array([u == "rad" for u in self.pose_units])
+        d[..., rad] = (d[..., rad] + np.pi) % (2 * np.pi) - np.pi
+        return d
+
     def is_reachable(self, pose: ArrayLike) -> NDArray[np.bool_]:
         """Boolean mask ``(...)``: True where ``ik(pose)`` exists. Default: try the IK on the whole
         batch and, where it raises, on halves of it (``O(k log N)`` calls for ``k`` bad poses)."""

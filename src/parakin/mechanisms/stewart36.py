@@ -335,8 +335,7 @@ class Stewart36(Mechanism):
         passes its last pose. Raises UnreachableError where no real solution lies above the base."""
         sols = self.fk_all(joints)  # (..., 16, 6), NaN-padded
         ref = self.home() if near is None else as_batch(near, 6, "near")
-        diff = sols - ref[..., None, :]
-        diff[..., :3] = (diff[..., :3] + np.pi) % (2 * np.pi) - np.pi
+        diff = self.pose_difference(sols, ref[..., None, :])
         dist = np.sqrt(np.sum(diff * diff, axis=-1))
         ok = np.isfinite(dist) & (np.nan_to_num(sols[..., 5]) > 0)
         none = ~np.any(ok, axis=-1)

@@ -156,9 +156,7 @@ def all_solutions(
     with np.errstate(all="ignore"):
         sols = np.asarray(mech.fk_all(joints, **options), dtype=float).reshape(n, -1, mech.n_pose)
         lo, hi = mech.pose_bounds()
-        d = sols - x0[:, None, :]
-        rad = np.array([u == "rad" for u in mech.pose_units])
-        d[..., rad] = (d[..., rad] + np.pi) % (2 * np.pi) - np.pi
+        d = mech.pose_difference(sols, x0[:, None, :])
         dist = np.sqrt(np.sum((d / (np.asarray(hi) - np.asarray(lo))) ** 2, axis=-1))
     dist = np.where(np.isfinite(dist), dist, np.inf)
     best = np.argmin(dist, axis=-1)
