@@ -14,7 +14,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from parakin import dynamics as dyn
+from parakin.mechanisms import p3p4s_dynamics as dyn
 from parakin.errors import ConfigError, ShapeError, SingularityError, UnreachableError
 from parakin.mechanisms import P3P4S
 from parakin.report import load_reference, printed_value
@@ -186,7 +186,7 @@ def test_any_state_matches_a_parabola_through_it(x, y, z, va):
 # ---------------------------------------------------------------------------------------- dynamics
 def test_static_load_at_the_centre():
     f = dyn.inverse_dynamics(MECH, PARAMS, [0.0, 0.0, 0.57], np.zeros(3), np.zeros(3))
-    assert f == pytest.approx([40.6308] * 3, abs=1e-4)  # notes §3.4: 40.63 N per motor
+    assert f == pytest.approx([40.6308] * 3, abs=1e-4)  # docs/zhao2017_3p4s.md#s3.4: 40.63 N per motor
 
 
 @pytest.mark.parametrize("pose", [[0.0, 0.0, 0.57], [0.02, -0.01, 0.57], [-0.04, 0.03, 0.55]])
@@ -232,7 +232,7 @@ def test_power_balance_other_geometry_and_masses():
 
 def test_gravity_moment_term_of_eq21():
     """The spurious eq 21 term: 20.68 N per actuator at the centre (it lowers the static motor
-    force from 40.63 to 19.95 N); 17.3 / 24.3 / 20.7 N at (0.02, -0.01, 0.57) (notes §4.4)."""
+    force from 40.63 to 19.95 N); 17.3 / 24.3 / 20.7 N at (0.02, -0.01, 0.57) (docs/zhao2017_3p4s.md#s4.4)."""
     zero = np.zeros(3)
     terms = dyn.force_terms(MECH, PARAMS, [0.0, 0.0, 0.57], zero, zero, gravity_moment=True)
     assert terms["gravity_moment"] == pytest.approx([-20.681] * 3, abs=1e-3)
@@ -252,7 +252,7 @@ def test_rod_inertia_factor_of_eq23():
 
 
 def test_paper_example_forces():
-    """Fig. 9's numbers (notes §3.4): min/max per drive over 0..0.1 s."""
+    """Fig. 9's numbers (docs/zhao2017_3p4s.md#s3.4): min/max per drive over 0..0.1 s."""
     motion = dyn.SineMotion()
     f = dyn.inverse_dynamics(MECH, PARAMS, *motion.state(np.linspace(0, 0.1, 2001)))
     assert f.min(0) == pytest.approx([-237.6, -60.8, -340.2], abs=0.1)

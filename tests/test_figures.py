@@ -1,24 +1,31 @@
-"""Figure regression: the committed figures are what the code makes now.
+"""Figure regression: the committed record is what the code makes now, on this machine.
 
-Each cheap artefact is regenerated with the full config into a temporary folder; every figure
-is compared with the committed PNG by image (matplotlib's RMS compare, tolerance below) and
-by the numbers it plots (the CSV beside it). A changed figure fails here; regenerate with
-``snakemake --cores 2`` and commit the result when the change is intended.
+Each cheap artefact is regenerated with the full config into a temporary folder and checked
+against the committed record (figures/) by the reproduction check (:mod:`parakin.check`), within
+the tolerance the artefact declares beside its code: numbers by their declared tolerance, never
+bit for bit across BLAS kernels or thread counts. Figures are also compared by image (matplotlib's
+RMS compare) unless the artefact declares them a chaotic trajectory. A changed figure fails here;
+rerun the pipeline and update the record (``parakin record``) when the change is intended.
+
+``.ci/run`` runs this module under two OpenBLAS kernel families and with 1 and 2 threads.
 """
 
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 import pytest
 from matplotlib.testing.compare import compare_images
 
+from parakin.check import check_artefact
 from parakin.config import DEFAULT_CONFIG, load_config
-from parakin.io import is_timing_column
-from parakin.papers import PAPERS
+from parakin.pipeline import artefacts
 
 ROOT = Path(__file__).resolve().parents[1]
+RECORD = ROOT / "figures"
 IMAGE_TOL = 2.0  # RMS over 0-255 grey levels: font hinting may differ between machines, a moved line does not
+ARTEFACTS = artefacts()
+
+pytestmark = pytest.mark.reproduction
 
 #: (paper, artefact, prerequisite artefacts) regenerated here; expensive artefacts (training,
 #: optimisation) are checked by their own reproduction tests on the quick config instead
@@ -40,27 +47,18 @@ CHEAP = [
 @pytest.mark.parametrize("paper, artefact, needs", CHEAP, ids=[f"{p}-{a}" for p, a, _ in CHEAP])
 def test_committed_figure_is_current(tmp_path, paper, artefact, needs):
     config = load_config(DEFAULT_CONFIG)
-    artefacts = PAPERS[paper].ARTEFACTS
     for name in needs:
-        artefacts[name](config, tmp_path)
-    produced = artefacts[artefact](config, tmp_path)
+        ARTEFACTS[f"{paper}:{name}"].make(config, tmp_path / paper)
+    item = ARTEFACTS[f"{paper}:{artefact}"]
+    produced = item.make(config, tmp_path / paper)
+    assert sorted(p.name for p in produced) == sorted(item.outputs), "the artefact writes what it declares"
+    checks = check_artefact(item, tmp_path, RECORD)
+    bad = [c for c in checks if c.status in ("differs", "missing")]
+    assert not bad, "; ".join(f"{c.file}: {c.status} {c.column} {c.detail}" for c in bad)
     for path in produced:
-        committed = ROOT / "figures" / paper / path.name
-        assert committed.exists(), f"{committed} is not committed: run snakemake and commit figures/"
-        if path.suffix == ".png":
-            result = compare_images(str(committed), str(path), tol=IMAGE_TOL)
+        if path.suffix == ".png" and path.name not in item.tolerance.files:
+            result = compare_images(str(RECORD / paper / path.name), str(path), tol=IMAGE_TOL)
             assert result is None, result
-        elif path.suffix == ".csv":
-            new, old = pd.read_csv(path), pd.read_csv(committed)
-            assert list(new.columns) == list(old.columns)
-            for col in new.columns:
-                if is_timing_column(col):
-                    continue  # wall-clock measurements differ run to run
-                if pd.api.types.is_numeric_dtype(new[col]):
-                    # atol: some columns are differences at rounding level (~1e-10 between machines)
-                    assert np.allclose(new[col], old[col], rtol=1e-9, atol=1e-8, equal_nan=True), col
-                else:
-                    assert (new[col].astype(str) == old[col].astype(str)).all(), col
 
 
 #: figures of expensive artefacts, redrawn from the committed numbers they plot:

@@ -4,8 +4,8 @@ delta-only dependence, the batched mass matrix against the dynamics module, quad
 import numpy as np
 import pytest
 
-from parakin import dynamics as dyn
-from parakin import indices as ix
+from parakin.mechanisms import p3p4s_dynamics as dyn
+from parakin.mechanisms import p3p4s_indices as ix
 from parakin.errors import UnreachableError
 from parakin.mechanisms import P3P4S
 
@@ -149,7 +149,8 @@ def test_bad_input():
 
 # ------------------------------------------------------------------------------ any mechanism
 def test_kinematic_indices_agree_with_the_3p4s_indices():
-    from parakin.indices import kinematic_indices, mech_indices
+    from parakin.indices import kinematic_indices
+    from parakin.mechanisms.p3p4s_indices import mech_indices
     from parakin.mechanisms import P3P4S
     from parakin.workspace import sample_reachable
 
@@ -164,7 +165,8 @@ def test_kinematic_indices_agree_with_the_3p4s_indices():
 
 
 def test_global_kinematic_indices_match_the_3p4s_global_speed_index():
-    from parakin.indices import Workspace, global_kinematic_indices, global_indices
+    from parakin.indices import global_kinematic_indices
+    from parakin.mechanisms.p3p4s_indices import Workspace, global_indices
     from parakin.mechanisms import P3P4S
 
     m = P3P4S()

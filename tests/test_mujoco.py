@@ -9,8 +9,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from parakin import dynamics as dyn
-from parakin import mujoco_check as mc
+from parakin.mechanisms import p3p4s_dynamics as dyn
+from parakin.mechanisms import p3p4s_mujoco as mc
 from parakin.errors import ShapeError
 from parakin.mechanisms import P3P4S
 

@@ -103,10 +103,14 @@ def test_same_seed_same_weights_different_seed_different(p3p4s_data, small):
     assert not np.array_equal(net_a.W1, net_c.W1)
 
 
-def test_thread_count_does_not_change_the_weights(p3p4s_data, small):
+def test_thread_count_changes_the_weights_by_rounding_only(p3p4s_data, small):
+    """Another thread count may sum a BLAS product in another order (never assumed bit for bit);
+    after a few epochs the weights still agree to rounding, and one thread count is repeatable."""
     q, p = p3p4s_data
     net_2, _, _ = train_lm(q[:400], p[:400], seed=3, max_epochs=8, num_threads=2)
-    assert np.array_equal(net_2.flat_weights(), small[0].flat_weights())
+    np.testing.assert_allclose(net_2.flat_weights(), small[0].flat_weights(), rtol=1e-6, atol=1e-9)
+    again, _, _ = train_lm(q[:400], p[:400], seed=3, max_epochs=8, num_threads=2)
+    assert np.array_equal(again.flat_weights(), net_2.flat_weights())
 
 
 def test_torch_global_state_is_restored(p3p4s_data):

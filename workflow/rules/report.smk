@@ -1,18 +1,38 @@
-# The claim-by-claim report: published numbers (data/reference) beside our pipeline outputs.
+# The claim-by-claim report (published numbers from data/reference beside our outputs) and the
+# reproduction check of this run against the committed record (figures/).
 REPORT = f"{FIG}/REPORT.md"
+CHECK = [f"{RESULTS}/reproduction_check.md", f"{RESULTS}/reproduction_check.csv"] if RECORD else []
 
 
 rule report:
     input:
-        ZHAO2017_3P4S_OUTPUTS,
-        LI2020_2UPS_OUTPUTS,
-        YE_STEWART12_OUTPUTS,
-        LI2017_STEWART36_OUTPUTS,
-        f"{FIG}/extra_solver_atlas.csv",
-        expand("data/reference/{paper}.csv", paper=["zhao2017_3p4s", "li2020_2ups", "ye_stewart12", "li2017_stewart36"]),
+        ALL_OUTPUTS,
+        expand("{ref}/{paper}.csv", ref=REFERENCE, paper=sorted({a.study for a in ARTEFACTS.values() if reference(a)})),
     output:
         REPORT,
+    log:
+        f"{LOGS}/report.log",
     params:
-        cfg=CONFIG_JSON,
+        figures=shlex.quote(FIG),
     shell:
-        "parakin report --figures {FIG} --out {output} --config-json {params.cfg}"
+        "parakin report --figures {params.figures} --out {output:q} 2>&1 | tee {log:q}"
+
+
+if RECORD:
+
+    rule reproduction_check:
+        input:
+            ALL_OUTPUTS,
+            REPORT,
+        output:
+            CHECK,
+        log:
+            f"{LOGS}/reproduction_check.log",
+        params:
+            results=shlex.quote(FIG),
+            record=shlex.quote(RECORD),
+            out=shlex.quote(f"{RESULTS}/reproduction_check"),
+            studies=" ".join(config["studies"]),
+        shell:
+            "parakin check --results {params.results} --record {params.record} --out {params.out} "
+            "--studies {params.studies} 2>&1 | tee {log:q}"

@@ -1,6 +1,6 @@
 """A paper's reproduction is a list of section modules; this joins them into one.
 
-Each section module has ``ARTEFACTS`` (name -> function(config, outdir) -> list of paths),
+Each section module declares its artefacts with ``@artefact`` (:mod:`parakin.registry`) and has
 ``claims(figdir, ref) -> list[Claim]`` and ``summary(figdir, ref) -> str``.
 """
 
@@ -12,17 +12,14 @@ from types import ModuleType
 
 import pandas as pd
 
-from parakin.report import Claim
+from parakin.claims import Claim
+from parakin.registry import REGISTRY
 
 
 def combine(sections: Sequence[ModuleType]) -> tuple[dict[str, Callable], Callable, Callable]:
     """``(ARTEFACTS, claims, summary)`` of a paper made of ``sections`` (in the paper's order)."""
-    artefacts: dict[str, Callable] = {}
-    for section in sections:
-        clash = set(artefacts) & set(section.ARTEFACTS)
-        if clash:
-            raise ValueError(f"artefact name(s) {sorted(clash)} defined twice (in {section.__name__})")
-        artefacts.update(section.ARTEFACTS)
+    names = {s.__name__ for s in sections}
+    artefacts: dict[str, Callable] = {a.name: a.make for a in REGISTRY.values() if a.module in names}
 
     def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
         """Claims of the paper that the pipeline outputs in ``figdir`` cover so far."""

@@ -2,7 +2,7 @@
 experiments. Mechanism: :class:`parakin.mechanisms.stewart36.Stewart36`; PSO: :mod:`parakin.solvers.pso`.
 One module per section; each has ``ARTEFACTS``, ``claims(figdir, ref)`` and ``summary(figdir, ref)``.
 Configuration: ``config["li2017_stewart36"]``. The FK input (Table 2) is lost and reconstructed as
-``L = IK(Table 3 row 1, b)`` (notes G1, ASSUMED).
+``L = IK(Table 3 row 1, b)`` (docs/li2017_stewart36.md#g1, ASSUMED).
 """
 
 from __future__ import annotations

@@ -1,23 +1,31 @@
 """Constants and helpers shared by the sections of the Li 2017 (3-6 Stewart) reproduction.
 
 The FK input of the paper (Table 2: b and the six leg lengths) is LOST in the extraction; it is
-**reconstructed** everywhere as ``L = IK(Table 3 row 1, b)`` with ``b`` from the config (notes G1,
+**reconstructed** everywhere as ``L = IK(Table 3 row 1, b)`` with ``b`` from the config (docs/li2017_stewart36.md#g1,
 ASSUMED), so Table 3 row 1 is an exact solution by construction.
 """
 
 from __future__ import annotations
 
+from functools import partial
+
+from parakin import registry
+
 import numpy as np
 import pandas as pd
 
 from parakin.mechanisms.stewart36 import Stewart36, pose_from_paper
-from parakin.report import load_reference
+from parakin.claims import load_reference
 
 KEY = "li2017_stewart36"
+
+#: ``@artefact(name, outputs=..., ...)`` declares one of this paper's tables or figures
+#: (:func:`parakin.registry.artefact` with the paper key filled in)
+artefact = partial(registry.artefact, KEY)
 TITLE = "Li, Quan & Wu 2017 — 3-6 Stewart platform, chaotic-inertia-weight PSO (Comp. Appl. Softw. 34(12))"
 POSE_COLS = ("alpha", "beta", "gamma", "X", "Y", "Z")
 #: note printed beside every use of the reconstructed input
-INPUT_NOTE = "FK input reconstructed as L = IK(Table 3 row 1, b) (Table 2 lost; notes G1, ASSUMED)"
+INPUT_NOTE = "FK input reconstructed as L = IK(Table 3 row 1, b) (Table 2 lost; docs/li2017_stewart36.md#g1, ASSUMED)"
 
 
 def cfg(config: dict) -> dict:
@@ -25,7 +33,7 @@ def cfg(config: dict) -> dict:
 
 
 def mech(config: dict, b: float | None = None) -> Stewart36:
-    """The mechanism with the configured base side ``b`` (Table 2 lost: ASSUMED, notes G1)."""
+    """The mechanism with the configured base side ``b`` (Table 2 lost: ASSUMED, docs/li2017_stewart36.md#g1)."""
     return Stewart36(b=float(cfg(config)["b"] if b is None else b))
 
 

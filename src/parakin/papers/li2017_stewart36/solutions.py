@@ -1,7 +1,7 @@
 """Li 2017 §3 Table 3 and the "all forward solutions" claim, against a certified all-solutions FK
 (degree-16 polynomial, :meth:`parakin.mechanisms.stewart36.Stewart36.fk_all`); Fig. 1 redrawn; the
 real-solution counts over random inputs and over the b sweep (our addition); and a surrogate of the
-Adams study of §4 (Figs 5-11; the drive mapping is unknown, notes §5).
+Adams study of §4 (Figs 5-11; the drive mapping is unknown, docs/li2017_stewart36.md#s5).
 """
 
 from __future__ import annotations
@@ -17,8 +17,15 @@ from parakin.io import write_csv, write_table
 from parakin.mechanisms.stewart36 import pose_from_paper, pose_to_paper
 from parakin.papers.li2017_stewart36.common import INPUT_NOTE, KEY, POSE_COLS, cfg, fk_input, mech, table3
 from parakin.plot import draw_mechanism, new_figure, save_figure, skeleton_table
-from parakin.report import Claim, load_reference, printed_value
+from parakin.claims import Claim, load_reference, printed_value
 from parakin.solvers import solve_fk
+from parakin.registry import ROUNDING
+from parakin.papers.li2017_stewart36.common import artefact
+
+#: Table 3's residuals at the printed poses are closed-form; the certified solution set comes from
+#: polynomial roots polished to round-off
+ROOTS = ROUNDING.but("roots of a degree-16 polynomial polished by Newton: poses to rounding, residuals at "
+                     "round-off within 1e-9")
 
 RANGES = ("X", "Y", "Z", "angle1", "angle2", "angle3")
 
@@ -31,6 +38,7 @@ def adams_ranges(ref: pd.DataFrame | None = None) -> dict[str, tuple[float, floa
             for q in RANGES}
 
 
+@artefact("table3", outputs=["table3.csv", "table3.md"], config=[KEY], tolerance=ROOTS)
 def table3_artefact(config: dict, outdir: Path) -> list[Path]:
     """Table 3 decoded, each row's fitness and leg error under the reconstructed input (for every b of
     the sweep), and whether it lies inside the §4 ranges."""
@@ -53,6 +61,8 @@ def table3_artefact(config: dict, outdir: Path) -> list[Path]:
                              f"Row 1 is exact by construction; a real solution would have F ~ 1e-30. Default b = {b0}.")
 
 
+@artefact("extra_solutions", outputs=["extra_solutions.csv", "extra_solutions.md", "extra_solution_counts_b.csv",
+                                     "extra_solution_counts_b.md"], config=[KEY], tolerance=ROOTS)
 def solutions_artefact(config: dict, outdir: Path) -> list[Path]:
     """Our table of all real forward solutions of the reconstructed input, for every b of the sweep."""
     rows, counts = [], []
@@ -82,6 +92,9 @@ def solutions_artefact(config: dict, outdir: Path) -> list[Path]:
                                 "the polynomial has degree 16, so at most 16 complex and 8 above-base solutions."))
 
 
+@artefact("extra_solution_counts", outputs=["extra_solution_counts.csv", "extra_solution_counts.md",
+                                           "extra_solution_counts.png", "extra_solution_counts_richest.csv"],
+          config=[KEY], tolerance=ROOTS)
 def counts_artefact(config: dict, outdir: Path) -> list[Path]:
     """Histogram of the number of real FK solutions over random inputs (random pose near Table 3 row 1,
     IK, legs scaled by U[1 - s, 1 + s]), per b of the sweep."""
@@ -131,6 +144,8 @@ def counts_artefact(config: dict, outdir: Path) -> list[Path]:
          write_csv(pd.concat(frames), outdir / "extra_solution_counts_richest.csv")]
 
 
+@artefact("fig01", outputs=["fig01_structure.png", "fig01_structure.csv", "extra_solutions.png"], config=[KEY],
+          tolerance=ROOTS)
 def fig01(config: dict, outdir: Path) -> list[Path]:
     """Fig. 1 redrawn from our model at Table 3 row 1, plus every above-base solution of the
     reconstructed input (Fig. 4's role: the model the paper simulated)."""
@@ -152,8 +167,12 @@ def fig01(config: dict, outdir: Path) -> list[Path]:
     return paths
 
 
+@artefact("adams", outputs=["fig05_cm_velocity.png", "fig05_cm_velocity.csv", "fig06_cm_position.png",
+                           "fig06_cm_position.csv", "fig09_euler_angles.png", "fig09_euler_angles.csv",
+                           "extra_adams_trajectory.csv", "extra_adams_surrogate.csv", "extra_adams_surrogate.md"],
+          config=[KEY], tolerance=ROUNDING)
 def adams_artefact(config: dict, outdir: Path) -> list[Path]:
-    """Surrogate of the Adams study (Figs 5-11; drive mapping unknown, notes §5): a pose trajectory whose
+    """Surrogate of the Adams study (Figs 5-11; drive mapping unknown, docs/li2017_stewart36.md#s5): a pose trajectory whose
     coordinates oscillate inside the stated ranges (periods 10, 6.67, 20 s from eq. 10: X and alpha
     with 10 s, Y and beta 6.67 s, Z and gamma 20 s), IK -> leg lengths -> FK by warm-started Newton ->
     recovered CM position, velocity (central differences) and Euler angles."""
@@ -201,13 +220,11 @@ def adams_artefact(config: dict, outdir: Path) -> list[Path]:
     summ = pd.DataFrame([{"quantity": c, "stated_min": rngs[c][0], "stated_max": rngs[c][1], "ours_min": df[c].min(),
                           "ours_max": df[c].max()} for c in POSE_COLS] + [{"quantity": "max_roundtrip_error", "ours_max": err}])
     return paths + write_table(summ, outdir / "extra_adams_surrogate", floatfmt=".6g",
-                               title="Surrogate of the Adams study (drive mapping unknown; notes §5)",
+                               title="Surrogate of the Adams study (drive mapping unknown; docs/li2017_stewart36.md#s5)",
                                notes="A pose trajectory inside the stated ranges by construction, recovered by "
                                      "warm-started Newton FK from its leg lengths; the check is the round trip.")
 
 
-ARTEFACTS = {"table3": table3_artefact, "extra_solutions": solutions_artefact, "extra_solution_counts": counts_artefact,
-             "fig01": fig01, "adams": adams_artefact}
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
@@ -244,7 +261,7 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                              variant=f"F (eq. 4) of the printed row under L = IK(row 1), best b of the sweep (b = {b})",
                              reason=f"not a solution of the reconstructed input: a leg is off by {leg:.3g} (printing to 3 "
                                     "decimals moves a leg by ~1e-3 at most); no b of the sweep nor any layout/Euler reading "
-                                    f"tried makes the 19 rows solutions of one input (notes §4.2){note}"))
+                                    f"tried makes the 19 rows solutions of one input (docs/li2017_stewart36.md#s4.2){note}"))
         outside = int((~t["inside_sec4_ranges"].astype(bool)).sum())
         out.append(Claim(KEY, "sec4", "table3_rows_outside_ranges", printed_value(ref, "sec4", "table3_rows_outside_ranges"),
                          float(outside), "1", variant="Table 3 against the stated §4 ranges",
@@ -272,7 +289,7 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 out.append(Claim(KEY, "sec4", f"{q}_{end}", printed_value(ref, "sec4", f"{q}_{end}"),
                                  float(s.loc[cols[q], f"ours_{end}"]), "deg" if q.startswith("angle") else "1", tol=1e-9,
                                  variant="Adams surrogate, FK-recovered trajectory",
-                                 reason=f"inside the range by construction (the drive mapping of eq. 10 is unknown, notes §5); "
+                                 reason=f"inside the range by construction (the drive mapping of eq. 10 is unknown, docs/li2017_stewart36.md#s5); "
                                         f"what is checked is the FK round trip, error {err:.2g}"))
     path = figdir / "extra_adams_trajectory.csv"
     if path.exists():

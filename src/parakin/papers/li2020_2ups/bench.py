@@ -27,6 +27,9 @@ from parakin.papers.li2020_2ups.common import KEY, mech, table2_inputs
 from parakin.papers.li2020_2ups.fk import pso_options, seeds
 from parakin.solvers import solve_fk
 from parakin.solvers.pso import _BLOCK, inertia_schedule
+from parakin.registry import TIMING
+from parakin.papers.li2020_2ups.common import artefact
+
 
 N_SINGLE = 200  #: FK inputs solved one per call (latency)
 N_BATCH = 20_000  #: FK inputs in one batched call (throughput, accuracy)
@@ -179,6 +182,7 @@ def fk_rows(config: dict) -> pd.DataFrame:
     return pd.concat([df, extra], ignore_index=True)
 
 
+@artefact("benchmark", outputs=["extra_benchmark.csv", "extra_benchmark.md"], config=[KEY], tolerance=TIMING)
 def benchmark(config: dict, outdir: Path) -> list[Path]:
     """extra_benchmark.{csv,md}: PSO (vectorised vs loop) and the FK solvers, one table."""
     p = pd.DataFrame(pso_rows(config))
@@ -195,7 +199,6 @@ def benchmark(config: dict, outdir: Path) -> list[Path]:
                              "machine-dependent.")
 
 
-ARTEFACTS = {"benchmark": benchmark}
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list:

@@ -2,19 +2,27 @@
 
 from __future__ import annotations
 
+from functools import partial
+
+from parakin import registry
+
 import numpy as np
 import pandas as pd
 
 from parakin.mechanisms.ups2 import UPS2
-from parakin.report import load_reference
+from parakin.claims import load_reference
 
 KEY = "li2020_2ups"
+
+#: ``@artefact(name, outputs=..., ...)`` declares one of this paper's tables or figures
+#: (:func:`parakin.registry.artefact` with the paper key filled in)
+artefact = partial(registry.artefact, KEY)
 TITLE = "Li et al. 2020 — 2-UPS/(S+SPR)R parallel mechanism (Packaging Engineering 41(7))"
 CASES = (1, 2, 3, 4, 5)
 
 
 def mech(config: dict) -> UPS2:
-    """The mechanism with the configured geometry (the paper gives none: notes G1, ASSUMED)."""
+    """The mechanism with the configured geometry (the paper gives none: docs/li2020_2ups.md#g1, ASSUMED)."""
     g = config[KEY]["geometry_mm"]
     return UPS2(a=g["a"] * 1e-3, b=g["b"] * 1e-3, c=g["c"] * 1e-3)
 

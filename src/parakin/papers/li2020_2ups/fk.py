@@ -1,7 +1,7 @@
 """Li 2020 §3: forward kinematics by PSO (eqs 18-20, Table 1), Table 2 recomputed, Fig. 2, the proof
 that Table 2 contradicts the paper's own IK, and a solver comparison (our addition).
 
-PSO variants (notes G8-G10, ASSUMED): ``as_printed`` = Table 1 literally (constant w = 0.9,
+PSO variants (docs/li2020_2ups.md#g8, #g9, #g10, ASSUMED): ``as_printed`` = Table 1 literally (constant w = 0.9,
 c1 = c2 = 2, no velocity clamp); ``improved`` = inertia 0.9 -> 0.4 linearly (Shi-Eberhart), no clamp;
 ``improved_clamped`` = the same with a velocity clamp of ``vclamp`` x box range.
 """
@@ -19,8 +19,29 @@ from parakin.config import seed_for
 from parakin.io import write_csv, write_table
 from parakin.papers.li2020_2ups.common import CASES, KEY, mech, table2_inputs, table2_outputs, to_paper
 from parakin.plot import new_figure, save_figure
-from parakin.report import Claim, load_reference, printed_value
+from parakin.claims import Claim, load_reference, printed_value
 from parakin.solvers import solve_fk
+from parakin.registry import ROUNDING, Tolerance
+from parakin.papers.li2020_2ups.common import artefact
+
+#: PSO is a seeded but chaotic search: the pose it settles on in one run moves with the rounding of
+#: one product. Stable are the exact and printed poses (closed form / transcribed) and the medians
+#: over all runs of a variant that converges; spreads, extremes and counts of runs are not compared
+PSO_TABLE = Tolerance("statistical", 0.0, 0.0,
+                      "PSO runs: exact (closed-form) and printed columns to rounding, run medians within "
+                      "0.05 (deg, mm); spreads, extremes, iteration counts and run counts not compared",
+                      columns={c: (1e-9, 1e-12) for c in ("beta_exact", "gamma_exact", "Y_exact", "beta_paper",
+                                                          "gamma_paper", "Y_paper", "l1_of_paper_pose",
+                                                          "l2_of_paper_pose", "l3_of_paper_pose", "runs")}
+                      | {c: (0.0, 0.05) for c in ("beta_median", "gamma_median", "Y_median")},
+                      files=("table2_consistency.csv", "table2_consistency.md"))
+PSO_TRAJECTORY = Tolerance("statistical", 0.0, 0.0, "PSO fitness per iteration: one chaotic trajectory per run",
+                           files=("fig02_fitness.csv", "fig02_fitness.png"))
+SOLVER_COUNTS = Tolerance("statistical", 0.0, 0.0,
+                          "solver counts: local solvers and the closed form exactly (deterministic from the "
+                          "seeded inputs), the PSO row within 2 of 20 runs; iteration medians within one",
+                          columns={"poses": (0.0, 0.0), "success": (0.0, 2.0), "correct": (0.0, 2.0),
+                                   "nit_median": (0.0, 1.0)})
 
 VARIANTS = {
     "as_printed": {"inertia": "constant", "vclamp": None},
@@ -52,6 +73,7 @@ def run_pso(config: dict, variant: str, joints: np.ndarray, seed_list: np.ndarra
     return res.reshape((nq, ns))
 
 
+@artefact("table1", outputs=["table1.csv", "table1.md"], config=[KEY], tolerance=ROUNDING)
 def table1(config: dict, outdir: Path) -> list[Path]:
     """Table 1 as used: the paper's values beside ours, with what we had to assume."""
     p = config[KEY]["pso"]
@@ -74,6 +96,8 @@ def table1(config: dict, outdir: Path) -> list[Path]:
     return write_table(df, outdir / "table1", title="Table 1 — PSO parameters as used")
 
 
+@artefact("table2", outputs=["table2.csv", "table2.md", "table2_consistency.csv", "table2_consistency.md"],
+          config=[KEY], tolerance=PSO_TABLE)
 def table2(config: dict, outdir: Path) -> list[Path]:
     """Table 2 recomputed: PSO (each variant, N seeds) on the paper's inputs, medians and spreads,
     beside the exact FK (all-solutions polynomial) and the paper's printed outputs."""
@@ -118,7 +142,7 @@ def table2(config: dict, outdir: Path) -> list[Path]:
 
 
 def consistency_checks(ref: pd.DataFrame | None = None) -> dict[str, float]:
-    """The four geometry-independent contradictions of Table 2 with the paper's own IK (notes §4.3).
+    """The four geometry-independent contradictions of Table 2 with the paper's own IK (docs/li2020_2ups.md#s4.3).
 
     * ``same_l1_Y_spread_mm``: cases 1, 2 share l_i1 = 0, and Y depends on l1 only, yet Y differs;
     * ``order_violations``: pairs (i, j) with l_i1(i) < l_i1(j) but Y(i) <= Y(j) (Y must decrease in l1);
@@ -164,6 +188,7 @@ def consistency(config: dict, outdir: Path) -> list[Path]:
     return write_table(df, outdir / "table2_consistency", title="Table 2 against the paper's own IK (any a, b, c)")
 
 
+@artefact("fig02", outputs=["fig02_fitness.png", "fig02_fitness.csv"], config=[KEY], tolerance=PSO_TRAJECTORY)
 def fig02(config: dict, outdir: Path) -> list[Path]:
     """Fig. 2: best fitness F (mm) per iteration for the five cases, one seed, as printed vs improved."""
     m = mech(config)
@@ -192,6 +217,7 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
     return [save_figure(fig, outdir / "fig02_fitness.png"), write_csv(pd.concat(frames), outdir / "fig02_fitness.csv")]
 
 
+@artefact("solvers", outputs=["extra_solvers.csv", "extra_solvers.md"], config=[KEY], tolerance=SOLVER_COUNTS)
 def solver_comparison(config: dict, outdir: Path) -> list[Path]:
     """Extra: every FK method on random poses of the Table 1 box (strokes by IK): success, iterations,
     evaluations and time, batched; PSO (improved_clamped) on a subset."""
@@ -221,7 +247,6 @@ def solver_comparison(config: dict, outdir: Path) -> list[Path]:
                        notes="correct: max |x - true| < 1e-6 (rad, m); PSO success = F below the paper's threshold.")
 
 
-ARTEFACTS = {"table1": table1, "table2": table2, "fig02": fig02, "solvers": solver_comparison}
 
 REASON_T2 = ("paper inconsistent: Table 2 contradicts its own IK for any a, b, c (table2_consistency: equal l_i1 "
              "with different Y, Y not monotone in l_i1, cases 1+3 need a <= ~14.6 mm, 4 of 5 signs of beta wrong); "

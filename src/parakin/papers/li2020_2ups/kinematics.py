@@ -14,12 +14,15 @@ from parakin.io import write_csv, write_table
 from parakin.papers.li2020_2ups.common import KEY, mech
 from parakin.papers.li2020_2ups.symbolic import derivation, loop_closure_model
 from parakin.plot import draw_mechanism, new_figure, save_figure, skeleton_table
-from parakin.report import Claim, printed_value
+from parakin.claims import Claim, printed_value
+from parakin.registry import DESCRIPTIVE, EXACT, ROUNDING
+from parakin.papers.li2020_2ups.common import artefact
 
 #: pose drawn in Fig. 1 (deg, deg, mm): tilted so that both rotations are visible
 FIG1_POSE = (15.0, 20.0, 30.0)
 
 
+@artefact("fig01", outputs=["fig01_mechanism.png", "fig01_mechanism.csv"], config=[KEY], tolerance=DESCRIPTIVE)
 def fig01(config: dict, outdir: Path) -> list[Path]:
     """Fig. 1 redrawn from our model at FIG1_POSE, with the plotted coordinates as CSV."""
     m = mech(config)
@@ -31,6 +34,8 @@ def fig01(config: dict, outdir: Path) -> list[Path]:
     return [png, write_csv(skeleton_table(sk, frame_length=0.06), outdir / "fig01_mechanism.csv")]
 
 
+@artefact("concomitant", outputs=["extra_concomitant.csv", "extra_concomitant.md"], config=[KEY],
+          tolerance=ROUNDING)
 def concomitant(config: dict, outdir: Path) -> list[Path]:
     """Symbolic derivation (sympy) that alpha = 0 and eq. (14) follow from (6), (12); the vector IK
     against the scalar closed forms; a numeric check with an independent loop-closure model."""
@@ -84,6 +89,7 @@ def _dof(config: dict) -> int:
     return int(min(dofs))
 
 
+@artefact("parasitic", outputs=["extra_parasitic.png", "extra_parasitic.csv"], config=[KEY], tolerance=ROUNDING)
 def parasitic(config: dict, outdir: Path) -> list[Path]:
     """Extra: the parasitic translations X = rho sin(beta) and dZ = c - rho cos(beta) over the
     Table 1 box (beta, Y); gamma does not enter."""
@@ -113,6 +119,8 @@ def parasitic(config: dict, outdir: Path) -> list[Path]:
     return [save_figure(fig, outdir / "extra_parasitic.png"), write_csv(df, outdir / "extra_parasitic.csv")]
 
 
+@artefact("fk_solutions", outputs=["extra_fk_solutions.png", "extra_fk_solutions.csv"], config=[KEY],
+          tolerance=EXACT)
 def solution_count(config: dict, outdir: Path) -> list[Path]:
     """Extra: number of real FK solutions (rho > 0 branch, all of beta, gamma) of the strokes of each
     pose of a (beta, gamma) grid, at three Y across Table 1's range; and how many lie in the box."""
@@ -144,6 +152,8 @@ def solution_count(config: dict, outdir: Path) -> list[Path]:
     return [save_figure(fig, outdir / "extra_fk_solutions.png"), write_csv(df, outdir / "extra_fk_solutions.csv")]
 
 
+@artefact("singularity_workspace", outputs=["extra_singularity_workspace.png",
+                                          "extra_singularity_workspace.csv"], config=[KEY], tolerance=EXACT)
 def singularity_workspace(config: dict, outdir: Path) -> list[Path]:
     """Extra: det of the velocity Jacobian J (qdot = J posedot) over (beta, gamma) at three Y of
     Table 1's box, with the region where eq (19)'s stroke limits hold; cond(J) beside it.
@@ -185,8 +195,6 @@ def singularity_workspace(config: dict, outdir: Path) -> list[Path]:
             write_csv(df, outdir / "extra_singularity_workspace.csv")]
 
 
-ARTEFACTS = {"fig01": fig01, "concomitant": concomitant, "parasitic": parasitic, "fk_solutions": solution_count,
-             "singularity_workspace": singularity_workspace}
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
@@ -206,13 +214,13 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     return out
 
 
-#: how the "as printed" equation claims (notes §6 items 2, 4, 5) are encoded as numbers
+#: how the "as printed" equation claims (docs/li2020_2ups.md#s6, claims C2, C4, C5) are encoded as numbers
 TRUE = "1"  #: a symbolic identity checked by sympy: 1 = holds, 0 = fails
 ZERO = "0"  #: a numeric residual that the printed equation implies to be 0
 
 
 def _equation_claims(df: pd.DataFrame) -> list[Claim]:
-    """Claims 2, 4, 5 of the notes: eqs (1), (5), (7), (14), (9)-(11), (15)-(17) as printed, read from
+    """Claims C2, C4, C5 of docs/li2020_2ups.md#s6: eqs (1), (5), (7), (14), (9)-(11), (15)-(17) as printed, read from
     extra_concomitant.csv (sympy identities encoded 1 = holds, numeric residuals encoded as 0)."""
     enc = "encoding: printed 1 = the paper's equation; ours 1 = sympy proves the identity, 0 = it fails"
     v = df["value"]

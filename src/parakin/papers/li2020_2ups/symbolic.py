@@ -76,7 +76,7 @@ def derivation() -> dict[str, object]:
 
 def loop_closure_model(n: int, rng: np.random.Generator, c: float = 0.3, a: float = 0.15,
                        max_tilt: float = np.deg2rad(45.0), max_roll: float = np.deg2rad(90.0)) -> dict[str, np.ndarray]:
-    """An independent joint-level model of the (S+SPR)R unit (notes G5), sampled ``n`` times.
+    """An independent joint-level model of the (S+SPR)R unit (docs/li2020_2ups.md#g5), sampled ``n`` times.
 
     The SR link points along a random unit vector ``n_l`` (tilt up to ``max_tilt`` from z, any
     azimuth); the R axis at B1 is perpendicular both to the link and to the SPR leg A1B0

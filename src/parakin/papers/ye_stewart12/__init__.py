@@ -3,7 +3,7 @@ compatibility equations, N-R vs Broyden, drive modes with redundancy 0..5. Mecha
 :class:`parakin.mechanisms.stewart12.Stewart12` (and its :class:`DriveMode`); solvers: the generic
 ``gauss-newton`` / ``broyden-ls`` (= ``newton`` / ``broyden`` on square systems) and ``lm``.
 One module per section; each has ``ARTEFACTS``, ``claims(figdir, ref)`` and ``summary(figdir, ref)``.
-Configuration: ``config["ye_stewart12"]``. Reconstruction notes: ``shared/notes/002_stewart12.md``.
+Configuration: ``config["ye_stewart12"]``. The paper in our own words: ``docs/ye_stewart12.md``.
 """
 
 from __future__ import annotations

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+from functools import partial
+
+from parakin import registry
+
 import time
 
 import numpy as np
@@ -14,6 +18,10 @@ from parakin.solvers import solve_fk
 METHODS_USED = {"nr": "gauss-newton", "broyden": "broyden-ls"}
 
 KEY = "ye_stewart12"
+
+#: ``@artefact(name, outputs=..., ...)`` declares one of this paper's tables or figures
+#: (:func:`parakin.registry.artefact` with the paper key filled in)
+artefact = partial(registry.artefact, KEY)
 TITLE = ("Ye, You, Shen, Wu, Ru — Stewart-derived 12-leg cube mechanism: closed-form FK, "
          "compatibility equations, N-R vs Broyden, drive modes")
 
@@ -35,7 +43,7 @@ def test_pose(config: dict) -> np.ndarray:
 
 
 def passive_sets(config: dict) -> dict[int, tuple[int, ...]]:
-    """Passive legs per redundancy R (config ``passive_sets``; default the notes' nested sets)."""
+    """Passive legs per redundancy R (config ``passive_sets``; default the nested sets of docs/ye_stewart12.md#s5.5)."""
     sets = config[KEY].get("passive_sets") or {}
     return {r: tuple(sets.get(r, sets.get(str(r), NESTED_PASSIVE[r]))) for r in range(6)}
 

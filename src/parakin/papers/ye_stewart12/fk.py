@@ -13,7 +13,10 @@ from parakin.config import rng
 from parakin.io import write_csv, write_table
 from parakin.papers.ye_stewart12.common import KEY, mech, passive_sets, test_pose
 from parakin.plot import draw_mechanism, save_figure, skeleton_table
-from parakin.report import Claim
+from parakin.claims import Claim
+from parakin.registry import DESCRIPTIVE, EXACT, TIMING
+from parakin.papers.ye_stewart12.common import artefact
+
 
 EQS = ("f (21)", "g (22)", "v (23)", "u (24)", "w (25)", "h (26)")
 
@@ -23,6 +26,7 @@ def _states(config: dict) -> dict[str, np.ndarray]:
     return {"initial": m.home(), "arbitrary (§3.3 test pose)": test_pose(config)}
 
 
+@artefact("table1", outputs=["table1.csv", "table1.md", "table1_random.csv"], config=[KEY], tolerance=EXACT)
 def table1(config: dict, outdir: Path) -> list[Path]:
     """Table 1 (lost): FK check — pose and joint centres from the 12 IK lengths vs the exact ones,
     at the initial state and at the §3.3 test pose (the paper's arbitrary state is unknown)."""
@@ -46,7 +50,7 @@ def table1(config: dict, outdir: Path) -> list[Path]:
     lo, hi = m.pose_bounds()
     poses = g.uniform(lo, hi, (int(config[KEY]["fk_poses"]), 6))
     err = np.abs(m.fk(m.ik(poses)) - poses)
-    notes = (f"Closed-form linear FK (notes §1.5) from the 12 IK lengths; lambda = {m.convention}. "
+    notes = (f"Closed-form linear FK (docs/ye_stewart12.md#s1.5) from the 12 IK lengths; lambda = {m.convention}. "
              f"Over {len(poses)} random poses of the box |x|,|y|,|z| <= 3 mm, |lambda_i| <= 0.15: max error "
              f"{err[:, :3].max() * 1e3:.3g} mm in position, {err[:, 3:].max():.3g} in lambda.")
     paths = write_table(df, outdir / "table1", title="Table 1: FK computed vs exact", notes=notes, floatfmt=".9g")
@@ -55,6 +59,7 @@ def table1(config: dict, outdir: Path) -> list[Path]:
     return paths + [write_csv(summ, outdir / "table1_random.csv")]
 
 
+@artefact("table3", outputs=["table3.csv", "table3.md"], config=[KEY], tolerance=EXACT)
 def table3(config: dict, outdir: Path) -> list[Path]:
     """Table 3 (lost): |F| of (21)-(26) at consistent lengths, initial and test state, composite =
     mean of the six (eq. 27 read as delta = |F(X*)|, X* the exact lengths)."""
@@ -78,12 +83,14 @@ def _draw(config: dict, outdir: Path, stem: str, pose: np.ndarray, passive: tupl
                                                                      outdir / f"{stem}.csv")]
 
 
+@artefact("fig01", outputs=["fig01_mechanism.png", "fig01_mechanism.csv"], config=[KEY], tolerance=DESCRIPTIVE)
 def fig01(config: dict, outdir: Path) -> list[Path]:
     """Fig. 1: the mechanism at the §3.3 test pose, mode R=0 (passive legs dashed)."""
     return _draw(config, outdir, "fig01_mechanism", test_pose(config), passive_sets(config)[0],
                  "12-leg cube mechanism, §3.3 test pose (R = 0; passive legs thin black)", labels=False)
 
 
+@artefact("fig02", outputs=["fig02_topology.png", "fig02_topology.csv"], config=[KEY], tolerance=DESCRIPTIVE)
 def fig02(config: dict, outdir: Path) -> list[Path]:
     """Fig. 2: topology at home — static cube 2(n+L), moving cube 2n, b_k and B_i labelled."""
     c = config[KEY]
@@ -91,6 +98,7 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
                  f"Topology at home: n = {c['n_mm']:g} mm, L = {c['L_mm']:g} mm", labels=True)
 
 
+@artefact("fig06", outputs=["fig06_prototype.png", "fig06_prototype.csv"], config=[KEY], tolerance=DESCRIPTIVE)
 def fig06(config: dict, outdir: Path) -> list[Path]:
     """Fig. 6 (the paper's Mathematica prototype): our model at a larger tilt for visibility."""
     pose = np.array([2e-3, -1.5e-3, 1e-3, 0.12, -0.08, 0.15])
@@ -98,6 +106,7 @@ def fig06(config: dict, outdir: Path) -> list[Path]:
                  "Virtual prototype, R = 3 (passive legs thin black)", labels=False)
 
 
+@artefact("fk_speed", outputs=["extra_fk_speed.csv", "extra_fk_speed.md"], config=[KEY], tolerance=TIMING)
 def fk_speed(config: dict, outdir: Path) -> list[Path]:
     """Extra: batched closed-form FK throughput (poses/s), unchecked and with the assembly check."""
     m = mech(config)
@@ -119,8 +128,6 @@ def fk_speed(config: dict, outdir: Path) -> list[Path]:
                        floatfmt=".4g")
 
 
-ARTEFACTS = {"table1": table1, "table3": table3, "fig01": fig01, "fig02": fig02, "fig06": fig06,
-             "fk_speed": fk_speed}
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:

@@ -2,7 +2,7 @@
 maximum admissible deviation over the 36 structures (Fig. 12), the perturbation-adaptation index
 (Table 6); beyond the paper: cond(dF/dX) per mode and the pose-space LM as a third method.
 
-Readings (ASSUMED, notes §5): passive sets from config (default nested), X0 = (1 + d) X* on the
+Readings (ASSUMED, docs/ye_stewart12.md#s5): passive sets from config (default nested), X0 = (1 + d) X* on the
 configured d grid, success = the iterate at the stopping step (|dX|_2 < tol) within 1e-4 mm of X*,
 d_max = the last d before the first failure, pose = §3.3's test pose for every structure;
 eq. (33) lost: P = (max - min) / mean of d_max over the structures (``p_definition`` switches to
@@ -23,10 +23,23 @@ from parakin.papers.ye_stewart12.common import (
     KEY, METHODS_USED, MODE_NAMES, mech, passive_caption, passive_sets, run_mode, state_at, steps, test_pose,
 )
 from parakin.plot import new_figure, save_figure
-from parakin.report import Claim, printed_value
+from parakin.claims import Claim, printed_value
 from parakin.solvers import solve_fk
+from parakin.registry import DESCRIPTIVE, ITERATIVE, Tolerance
+from parakin.papers.ye_stewart12.common import artefact
 
-ACCURATE_MM = 1e-4  #: "converges to the given pose" (notes §5.10, ASSUMED)
+#: step counts of N-R/Broyden over a deviation scan: a step landing at the threshold may take one
+#: more iteration; d_max (the largest deviation that still converges) moves by one grid step then
+SCAN = ITERATIVE.but("deviation scans: step counts within one, d_max within one grid step (the grid is "
+                     "config ye_stewart12.d_grid_pct)",
+                     columns={"steps": (0.0, 1.0), "d_max_pct": (0.0, 5.0), "nr_width_pct": (0.0, 5.0),
+                              "broyden_width_pct": (0.0, 5.0), "median_iterations": (0.0, 1.0),
+                              "p_converge": (0.0, 0.05), "lm_pose_iterations_max": (0.0, 1.0),
+                              "nr_d_max_pct": (0.0, 5.0), "broyden_d_max_pct": (0.0, 5.0),
+                              "lm_pose_d_max_pct": (0.0, 5.0)},
+                     skip=("nr_P", "nr_P_alt", "broyden_P", "broyden_P_alt"))
+
+ACCURATE_MM = 1e-4  #: "converges to the given pose" (docs/ye_stewart12.md#s5.10, ASSUMED)
 
 
 def d_grid(config: dict) -> np.ndarray:
@@ -90,12 +103,14 @@ def _fig_steps(df: pd.DataFrame, tol: float, outdir: Path, stem: str, caption: s
     return [save_figure(fig, outdir / f"{stem}.png"), write_csv(out, outdir / f"{stem}.csv")]
 
 
+@artefact("fig10", outputs=["fig10_steps_tol1e-6.png", "fig10_steps_tol1e-6.csv"], config=[KEY], tolerance=SCAN)
 def fig10(config: dict, outdir: Path) -> list[Path]:
     """Fig. 10: steps vs d up to d_max, 6 modes x 2 methods, tol 1e-6 mm (nominal structure)."""
     df = _scan_nominal(config)
     return _fig_steps(df, 1e-6, outdir, "fig10_steps_tol1e-6", passive_caption(config))
 
 
+@artefact("fig11", outputs=["fig11_steps_tol1e-9.png", "fig11_steps_tol1e-9.csv"], config=[KEY], tolerance=SCAN)
 def fig11(config: dict, outdir: Path) -> list[Path]:
     """Fig. 11: the same at tol 1e-9 mm."""
     df = _scan_nominal(config)
@@ -133,6 +148,8 @@ def scan_structures(config: dict) -> tuple[pd.DataFrame, float]:
     return pd.DataFrame([r for ch in chunks for r in ch]), time.perf_counter() - t0
 
 
+@artefact("fig12", outputs=["fig12_dmax_structures.png", "fig12_dmax_structures.csv", "table6.csv", "table6.md",
+                           "extra_scan_speed.csv", "extra_scan_speed.md"], config=[KEY], tolerance=SCAN)
 def fig12(config: dict, outdir: Path) -> list[Path]:
     """Fig. 12: d_max over the (n, L) grid per mode and method; Table 6 from the same scan; timing
     of the batched scan against a per-case loop on a sample of cases."""
@@ -201,6 +218,8 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
     return paths
 
 
+@artefact("conditioning", outputs=["extra_conditioning.csv", "extra_conditioning.md"], config=[KEY],
+          tolerance=SCAN)
 def conditioning(config: dict, outdir: Path) -> list[Path]:
     """Extra: cond(dF/dX) and the smallest singular value per mode at the test pose, beside d_max,
     plus the pose-space LM (active legs, linear-FK start) as a third method."""
@@ -236,6 +255,7 @@ def conditioning(config: dict, outdir: Path) -> list[Path]:
                               "linear FK of (active, (1+d) X*); d_max on the same grid and rule."))
 
 
+@artefact("basin", outputs=["extra_basin.png", "extra_basin.csv"], config=[KEY], tolerance=SCAN)
 def basin(config: dict, outdir: Path) -> list[Path]:
     """Extra: convergence probability vs the size of RANDOM per-leg deviations (instead of the paper's
     common scale factor): X0_k = (1 + d u_k) X*_k, u uniform on the unit sphere of R^(6-R) times
@@ -282,9 +302,10 @@ def basin(config: dict, outdir: Path) -> list[Path]:
     return [save_figure(fig, outdir / "extra_basin.png"), write_csv(df, outdir / "extra_basin.csv")]
 
 
+@artefact("fig09", outputs=["fig09_drive_modes.png", "fig09_drive_modes.csv"], config=[KEY], tolerance=DESCRIPTIVE)
 def fig09(config: dict, outdir: Path) -> list[Path]:
     """Fig. 9 (lost): the drive modes -- which legs are active and which passive for R = 0..5, from
-    config ``passive_sets`` (default the notes' nested sets, ASSUMED), with each leg's joint and its
+    config ``passive_sets`` (default the nested sets of docs/ye_stewart12.md#s5.5, ASSUMED), with each leg's joint and its
     direction at home."""
     m, sets = mech(config), passive_sets(config)
     pj = m.platform_points_local
@@ -293,7 +314,7 @@ def fig09(config: dict, outdir: Path) -> list[Path]:
     for r in range(5, -1, -1):
         for k in range(12):
             j = k // 2
-            u = b[k] - pj[j]  # from the joint B_j towards the base point b_k (notes §1.2)
+            u = b[k] - pj[j]  # from the joint B_j towards the base point b_k (docs/ye_stewart12.md#s1.2)
             u = u / np.linalg.norm(u)
             axis = "xyz"[int(np.argmax(np.abs(u)))]
             rows.append({"R": r, "mode": MODE_NAMES[r], "active_legs": 12 - len(sets[r]), "leg": k + 1,
@@ -321,13 +342,11 @@ def fig09(config: dict, outdir: Path) -> list[Path]:
     ax.set_yticklabels([f"{MODE_NAMES[r]}: R={r}, N={12 - len(sets[r])}" for r in range(5, -1, -1)], fontsize=7)
     ax.set_xlabel("leg k (joint, direction at home)", fontsize=7)
     ax.set_title("Drive modes (Fig. 9 of the paper is lost): A = active (driven), P = passive. ASSUMED: "
-                 + ("the notes' nested sets" if all(tuple(sets[r]) == NESTED_PASSIVE[r] for r in range(6))
+                 + ("the nested sets of docs/ye_stewart12.md#s5.5" if all(tuple(sets[r]) == NESTED_PASSIVE[r] for r in range(6))
                     else "configured sets") + ";\n" + passive_caption(config), fontsize=6.5)
     return [save_figure(fig, outdir / "fig09_drive_modes.png"), write_csv(df, outdir / "fig09_drive_modes.csv")]
 
 
-ARTEFACTS = {"fig09": fig09, "fig10": fig10, "fig11": fig11, "fig12": fig12, "conditioning": conditioning,
-             "basin": basin}
 
 
 def _step_stats(figdir: Path) -> tuple[pd.DataFrame, float] | None:

@@ -2,7 +2,7 @@
 compatibility equations (21)-(26) after the simplification, counted symbolically with sympy.
 
 The equations are written, as in the paper, in the coordinates of M = (x0, y0, z0) and
-B_i = (x_i, y_i, z_i), i = 1..3, plus the leg lengths l1, l3, l5. Through the linear FK (notes §1.5)
+B_i = (x_i, y_i, z_i), i = 1..3, plus the leg lengths l1, l3, l5. Through the linear FK (docs/ye_stewart12.md#s1.5)
 M has degree 2 and B_i degree 4 in the leg lengths, so a term's degree in l is the weighted degree
 with weights 2 (M), 4 (B) and 1 (l). The "number of highest-degree terms" counts the terms of that
 weighted degree (products of two B-coordinates), in this B-coordinate form.
@@ -18,7 +18,9 @@ import sympy as sp
 
 from parakin.io import write_table
 from parakin.papers.ye_stewart12.common import KEY
-from parakin.report import Claim, printed_value
+from parakin.claims import Claim, printed_value
+from parakin.registry import EXACT
+from parakin.papers.ye_stewart12.common import artefact
 
 
 @lru_cache(maxsize=1)
@@ -69,6 +71,7 @@ def features() -> dict[str, dict[str, int]]:
     return res
 
 
+@artefact("table2", outputs=["table2.csv", "table2.md"], config=[KEY], tolerance=EXACT)
 def table2(config: dict, outdir: Path) -> list[Path]:
     """Table 2: number of equations, highest degree in l, number of highest-degree terms."""
     f = features()
@@ -83,7 +86,6 @@ def table2(config: dict, outdir: Path) -> list[Path]:
                               "of degree 2 in the leg lengths, through our linear FK)."))
 
 
-ARTEFACTS = {"table2": table2}
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:

@@ -1,15 +1,15 @@
 """Zhao 2017 §1.2-2.4: drive velocities and accelerations (Figs 5-8) and driving forces (Figs 9-10).
 
 The paper computed its curves in Matlab and compared them with ADAMS ("exactly equal", no
-numbers). We compute them from :mod:`parakin.dynamics` and check them against two independent
+numbers). We compute them from :mod:`parakin.mechanisms.p3p4s_dynamics` and check them against two independent
 computations: finite differences of the IK along the trajectory (Figs 7-8) and a MuJoCo model of
-the mechanism generated from the same parameters (:mod:`parakin.mujoco_check`; Figs 7, 8, 10).
+the mechanism generated from the same parameters (:mod:`parakin.mechanisms.p3p4s_mujoco`; Figs 7, 8, 10).
 The three slips of the printed dynamics (eq 13's H without 1/l, eq 21's spurious gravity-moment
 term, eq 23 without the factor 2 of eq 20) are quantified by the same checks and by an energy
 balance (``extra_dynamics_slips``, ``extra_dynamics_printed``, ``extra_power_balance``).
 
 Motion (§1.4, §2.4): ``x = y = 0.001 sin(40 pi t)``, ``z = z0``. §2.4 gives ``z0 = 0.57 m``;
-§1.4 gives no height, and we use the same (notes G13). Time span, sampling and the finite-difference
+§1.4 gives no height, and we use the same (docs/zhao2017_3p4s.md#g13). Time span, sampling and the finite-difference
 step are choices of ours: ``config["zhao2017_3p4s"]["dynamics"]``.
 """
 
@@ -21,13 +21,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from parakin import dynamics as dyn
+from parakin.mechanisms import p3p4s_dynamics as dyn
 from parakin.errors import ConfigError
 from parakin.io import write_csv, write_table
 from parakin.mechanisms import P3P4S
-from parakin.report import Claim
+from parakin.claims import Claim
 
 from parakin.papers.zhao2017_3p4s.common import KEY
+from parakin.registry import ROUNDING
+from parakin.papers.zhao2017_3p4s.common import artefact
 
 #: tolerances stated in the figures and tested (relative to the peak of the analytic curve)
 TOL_FD = 1e-6  #: analytic eqs 8, 13 vs 4th-order finite differences of the IK
@@ -111,7 +113,7 @@ def _trajectory(key: tuple) -> dict:
 
 @lru_cache(maxsize=4)
 def _mujoco(key: tuple, rods: str):
-    from parakin import mujoco_check
+    from parakin.mechanisms import p3p4s_mujoco as mujoco_check
 
     tr = _trajectory(key)
     model = mujoco_check.build(tr["mech"], tr["params"], rods, reference_pose=tr["p"][0])
@@ -121,7 +123,7 @@ def _mujoco(key: tuple, rods: str):
 @lru_cache(maxsize=16)
 def _tracking(key: tuple, label: str, rods: str = "equivalent"):
     """Open-loop MuJoCo simulation driven by the forces of variant ``label`` (over ``t_end``)."""
-    from parakin import mujoco_check
+    from parakin.mechanisms import p3p4s_mujoco as mujoco_check
 
     tr = _trajectory(key)
     mech, params, motion = tr["mech"], tr["params"], tr["motion"]
@@ -244,6 +246,7 @@ def _marker_every(t: np.ndarray, motion: dyn.SineMotion) -> int:
 
 
 # ---------------------------------------------------------------------------------------- Figs 5-8
+@artefact("fig05", outputs=["fig05_drive_velocities.png", "fig05_drive_velocities.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
 def fig05(config: dict, outdir: Path) -> list[Path]:
     """Fig. 5: drive velocities ``qdot_i(t)`` by eq (8)."""
     tr = _trajectory(_key(config))
@@ -257,6 +260,7 @@ def fig05(config: dict, outdir: Path) -> list[Path]:
     return paths
 
 
+@artefact("fig06", outputs=["fig06_drive_accelerations.png", "fig06_drive_accelerations.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
 def fig06(config: dict, outdir: Path) -> list[Path]:
     """Fig. 6: drive accelerations ``qddot_i(t)`` by eq (13) with the corrected H."""
     tr = _trajectory(_key(config))
@@ -271,6 +275,7 @@ def fig06(config: dict, outdir: Path) -> list[Path]:
     return paths
 
 
+@artefact("fig07", outputs=["fig07_velocity_check.png", "fig07_velocity_check.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
 def fig07(config: dict, outdir: Path) -> list[Path]:
     """Fig. 7 (the paper: ADAMS): eq (8) against IK finite differences and MuJoCo."""
     key = _key(config)
@@ -295,6 +300,7 @@ def fig07(config: dict, outdir: Path) -> list[Path]:
     return paths
 
 
+@artefact("fig08", outputs=["fig08_acceleration_check.png", "fig08_acceleration_check.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
 def fig08(config: dict, outdir: Path) -> list[Path]:
     """Fig. 8 (the paper: ADAMS): eq (13) against IK finite differences and MuJoCo; the printed
     H (no 1/l) is shown against the same finite differences."""
@@ -324,6 +330,7 @@ def fig08(config: dict, outdir: Path) -> list[Path]:
 
 
 # ---------------------------------------------------------------------------------------- Figs 9-10
+@artefact("fig09", outputs=["fig09_driving_forces.png", "fig09_driving_forces.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
 def fig09(config: dict, outdir: Path) -> list[Path]:
     """Fig. 9: motor forces along +m_i by the corrected Newton-Euler / virtual-power model."""
     key = _key(config)
@@ -346,6 +353,7 @@ def fig09(config: dict, outdir: Path) -> list[Path]:
     return paths
 
 
+@artefact("fig10", outputs=["fig10_mujoco_forces.png", "fig10_mujoco_forces.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
 def fig10(config: dict, outdir: Path) -> list[Path]:
     """Fig. 10 (the paper: ADAMS): our forces against MuJoCo (equivalent-rod and 6-rod models)."""
     key = _key(config)
@@ -378,6 +386,7 @@ def fig10(config: dict, outdir: Path) -> list[Path]:
 
 
 # ---------------------------------------------------------------------------------------- extras
+@artefact("power_balance", outputs=["extra_power_balance.png", "extra_power_balance.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
 def power_balance(config: dict, outdir: Path) -> list[Path]:
     """extra_power_balance: ``sum f_i qdot_i`` vs ``dE/dt`` (E from positions and velocities of
     every body, independent of the Newton-Euler code), for ours and each printed variant."""
@@ -424,6 +433,8 @@ def _slug(label: str) -> str:
             "corrected (ours)": "ours"}[label]
 
 
+@artefact("dynamics_slips", outputs=["extra_dynamics_slips.csv", "extra_dynamics_slips.md"],
+          config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
 def dynamics_slips(config: dict, outdir: Path) -> list[Path]:
     """extra_dynamics_slips: each slip of the printed dynamics against four checks.
 
@@ -479,7 +490,7 @@ def dynamics_slips(config: dict, outdir: Path) -> list[Path]:
         f"dynamics (RK4, dt {TRACK_DT:g} s, stiff loops) is driven open loop by the variant's forces "
         f"(tolerance {TOL_TRACKING:g}). max_force_change_N: how much the variant changes Fig. 9. "
         "static_centre_*: motor force at rest at the centre (equal for the three drives). Forces are the motor's "
-        "force on its slider along +m_i. Sign of eq 23 (notes G11): with tau^I = +J^T m a (eq 16) and "
+        "force on its slider along +m_i. Sign of eq 23 (docs/zhao2017_3p4s.md#g11): with tau^I = +J^T m a (eq 16) and "
         "g = -9.81 e_z, tau^A = -(tau^I + tau^G) would flip the inertial part against the gravity part and fail "
         "the power balance; it equals -f exactly if g is read as +9.81 e_z, a convention, so it is not counted "
         "as a slip. The eq 21 term depends on the origin chosen for r_di (here {O}, eq 10), a sign that it is "
@@ -494,6 +505,7 @@ def dynamics_slips(config: dict, outdir: Path) -> list[Path]:
                                               "static_centre_change_N": ".4g"})
 
 
+@artefact("dynamics_printed", outputs=["extra_dynamics_printed.png", "extra_dynamics_printed.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
 def dynamics_printed(config: dict, outdir: Path) -> list[Path]:
     """extra_dynamics_printed: Fig. 9 as the printed equations give it, and each slip's share."""
     from parakin.plot import save_figure, use_style
@@ -536,6 +548,7 @@ def dynamics_printed(config: dict, outdir: Path) -> list[Path]:
     return paths
 
 
+@artefact("mujoco_tracking", outputs=["extra_mujoco_tracking.png", "extra_mujoco_tracking.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
 def mujoco_tracking(config: dict, outdir: Path) -> list[Path]:
     """extra_mujoco_tracking: MuJoCo's forward dynamics driven open loop by each variant's forces;
     how far the platform strays from the motion law (ours: both MuJoCo models)."""
@@ -611,7 +624,7 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                   why + label)
         claim("fig08", "max |qddot(eq 13) - simulation|",
               _max_rel(df, "diff{i}_printed_h_m_s2", "qddot{i}_eq13_m_s2"), "eq 13 as printed (H without 1/l)",
-              TOL_FD, "the printed H lacks 1/l (notes G8); vs IK finite differences and MuJoCo")
+              TOL_FD, "the printed H lacks 1/l (docs/zhao2017_3p4s.md#g8); vs IK finite differences and MuJoCo")
     if (figdir / "fig10_mujoco_forces.csv").exists():
         df = pd.read_csv(figdir / "fig10_mujoco_forces.csv")
         for model, what in (("equivalent", "one equivalent rod"), ("parallelogram", "two side rods")):
@@ -688,16 +701,3 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     return "\n\n".join(parts)
 
 
-#: artefact name -> function(config, outdir) writing that artefact's files
-ARTEFACTS = {
-    "fig05": fig05,
-    "fig06": fig06,
-    "fig07": fig07,
-    "fig08": fig08,
-    "fig09": fig09,
-    "fig10": fig10,
-    "power_balance": power_balance,
-    "dynamics_slips": dynamics_slips,
-    "dynamics_printed": dynamics_printed,
-    "mujoco_tracking": mujoco_tracking,
-}

@@ -11,11 +11,13 @@ from scipy.optimize import least_squares, minimize
 
 from parakin.io import write_csv, write_table
 from parakin.mechanisms import P3P4S
-from parakin.report import Claim, load_reference, printed_value
+from parakin.claims import Claim, load_reference, printed_value
 
 from parakin.papers.zhao2017_3p4s.common import KEY
+from parakin.registry import DESCRIPTIVE, EXACT, ROUNDING
+from parakin.papers.zhao2017_3p4s.common import artefact
 
-ROUNDING = 0.005  # Table 1 prints strokes to 0.01 m
+HALF_DIGIT = 0.005  # Table 1 prints strokes to 0.01 m: half a unit of the last digit
 
 
 # ---------------------------------------------------------------------------------------- Table 1
@@ -54,7 +56,7 @@ class GeometryFit:
 
     @property
     def n_within_rounding(self) -> int:
-        return int(np.sum(np.abs(self.errors) <= ROUNDING * (1 + 1e-9)))
+        return int(np.sum(np.abs(self.errors) <= HALF_DIGIT * (1 + 1e-9)))
 
     def row(self) -> dict:
         m = self.mech
@@ -118,6 +120,8 @@ def minimax_geometry(poses: np.ndarray, printed: np.ndarray, start: P3P4S) -> P3
     return P3P4S.from_delta(float(res.x[0]), start.L, float(res.x[1]))
 
 
+@artefact("table1", outputs=["table1.csv", "table1.md", "extra_table1_fit.csv", "extra_table1_fit.md"],
+          config=["zhao2017_3p4s.table1"], tolerance=ROUNDING)
 def table1(config: dict, outdir: Path) -> list[Path]:
     """Table 1 recomputed by our IK (eq 5) for three geometries, beside the printed strokes.
 
@@ -183,6 +187,8 @@ def table1(config: dict, outdir: Path) -> list[Path]:
     return paths
 
 
+@artefact("table1_region", outputs=["extra_table1_region.png", "extra_table1_region.csv"],
+          needs=["zhao2017_3p4s:table1"], config=["zhao2017_3p4s.table1"], tolerance=EXACT)
 def table1_region(config: dict, outdir: Path) -> list[Path]:
     """extra_table1_region: max stroke error over (delta, phi) at L fixed, with the 5 mm contour."""
     from parakin.plot import new_figure, save_figure, use_style
@@ -203,7 +209,7 @@ def table1_region(config: dict, outdir: Path) -> list[Path]:
         mm = np.where(np.isfinite(err), err * 1e3, np.nan)
         levels = [0, 2.5, 5, 7.5, 10, 15, 20, 30, 40]
         cs = ax.contourf(dd, pp, np.clip(mm, 0, levels[-1]), levels=levels, cmap="viridis_r")
-        ax.contour(dd, pp, mm, levels=[ROUNDING * 1e3], colors="k", linewidths=1.0)
+        ax.contour(dd, pp, mm, levels=[HALF_DIGIT * 1e3], colors="k", linewidths=1.0)
         fig.colorbar(cs, ax=ax, label="max stroke error over Table 1 (mm)")
         markers = {"stated": ("o", "tab:red"), "best fit": ("*", "w"), "minimax": ("D", "tab:cyan"),
                    "optimised": ("s", "tab:orange")}
@@ -232,12 +238,14 @@ def _mechanism_figure(outdir: Path, slug: str, labels: bool, title: str) -> list
     return paths
 
 
+@artefact("fig01", outputs=["fig01_mechanism.png", "fig01_mechanism.csv"], tolerance=DESCRIPTIVE)
 def fig01(config: dict, outdir: Path) -> list[Path]:
     """Fig. 1: the 3-P(4S) mechanism (the paper shows a CAD model; we draw our kinematic model)."""
     return _mechanism_figure(outdir, "fig01_mechanism", labels=False,
                              title="3-P(4S) at (0, 0, 0.592) m, stated geometry")
 
 
+@artefact("fig02", outputs=["fig02_sketch.png", "fig02_sketch.csv"], tolerance=DESCRIPTIVE)
 def fig02(config: dict, outdir: Path) -> list[Path]:
     """Fig. 2: sketch with the frames {O}, {P}, {u_i} and the points u_i, c_i, d_i of §1.1."""
     return _mechanism_figure(outdir, "fig02_sketch", labels=True,
@@ -261,7 +269,7 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
         for _, r in tab.iterrows():
             q = f"case{r['case']}.{r['joint']}"
             out.append(Claim(KEY, "table1", q, r["paper"], r["stated"], "m", "stated geometry",
-                             reason="" if abs(r["stated_diff"]) <= ROUNDING else
+                             reason="" if abs(r["stated_diff"]) <= HALF_DIGIT else
                              "stated parameters do not give Table 1; see best-fit rows"))
             out.append(Claim(KEY, "table1", q, r["paper"], r["fit"], "m", fit_label,
                              reason="geometry fitted to these 15 numbers (2 parameters)"))
@@ -289,5 +297,3 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     return "\n\n".join(parts)
 
 
-#: artefact name -> function(config, outdir) writing that artefact's files
-ARTEFACTS = {"table1": table1, "table1_region": table1_region, "fig01": fig01, "fig02": fig02}

@@ -1,20 +1,20 @@
 """Zhao 2017 §3: performance indices, their atlases, and the multi-objective optimisation
 (Figs 11-12, 14-26, Table 3).
 
-Indices and global means come from :mod:`parakin.indices` (eqs 24-37), the GA and NSGA-II from
+Indices and global means come from :mod:`parakin.mechanisms.p3p4s_indices` (eqs 24-37), the GA and NSGA-II from
 :mod:`parakin.optimize`. What the paper leaves out is configuration
 (``config["zhao2017_3p4s"]["indices"]`` and ``["optimization"]``), each choice with the paper's
 section it stands in for:
 
-* the workspace ``W`` (§3.1-3.3: "the workspace W", never defined; notes G15): a square
+* the workspace ``W`` (§3.1-3.3: "the workspace W", never defined; docs/zhao2017_3p4s.md#g15): a square
   ``|x|, |y| <= half_width`` at height ``z0`` (``z_half_height > 0`` makes it a box), the same
   absolute region for every design;
-* the actuator stiffness ``k`` of eq (30) (not given; notes G16) and whether sigma* is
+* the actuator stiffness ``k`` of eq (30) (not given; docs/zhao2017_3p4s.md#g16) and whether sigma* is
   ``lambda_min`` (what the paper's numbers fit) or ``sqrt(lambda_min)`` (eq 33 as printed; G17);
-* the design bounds (§3.4 gives none; notes G19) and a conditioning limit ``max_speed`` on
+* the design bounds (§3.4 gives none; docs/zhao2017_3p4s.md#g19) and a conditioning limit ``max_speed`` on
   ``cond(J)`` over ``W`` that defines a feasible design ("end poses satisfying the workspace
   requirement", §3.4);
-* eq (38)'s stiffness term is flipped so that stiffness is maximised (notes G18).
+* eq (38)'s stiffness term is flipped so that stiffness is maximised (docs/zhao2017_3p4s.md#g18).
 """
 
 from __future__ import annotations
@@ -26,15 +26,37 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from parakin import indices as ix
+from parakin.mechanisms import p3p4s_indices as ix
 from parakin.config import seed_for
 from parakin.errors import ConfigError
 from parakin.io import write_csv, write_table
 from parakin.mechanisms import P3P4S
 from parakin.optimize import GAOptions, ga, normalised_sum, nsga2
-from parakin.report import Claim, load_reference, printed_value
+from parakin.claims import Claim, load_reference, printed_value
 
 from parakin.papers.zhao2017_3p4s.common import KEY
+from parakin.registry import EXACT, ROUNDING, TIMING, Tolerance
+from parakin.papers.zhao2017_3p4s.common import artefact
+
+#: a genetic algorithm is a chaotic search: one rounding difference sends a seed's population
+#: elsewhere. Stable across machines (and across the record's three seeds) are the design corner
+#: it reaches (r_a, r_b and phi at their bounds) and the indices there (the record's seeds spread
+#: 3.6 % in sigma1); L, d and the near-zero composite objective f are flat directions, not compared
+GA = Tolerance("statistical", 0.0, 0.0,
+               "genetic algorithm: the bound-hitting design variables within 2 % of the box and the "
+               "indices within 5 % (the record's seeds spread 3.6 %); flat directions (L, d, f) and the "
+               "per-generation trajectories not compared",
+               columns={"r_a_m": (0.0, 0.003), "r_b_m": (0.0, 0.005), "phi_deg": (0.0, 0.5),
+                        "sigma1": (0.05, 0.0), "sigma2": (0.05, 0.0), "sigma3": (0.05, 0.0)},
+               files=("fig14_ga_convergence.csv", "fig14_ga_convergence.png", "extra_pareto.csv"))
+#: inside the paper's box the optimum is a corner, which every seed reaches to ~1e-5
+GA_CORNER = GA.but("genetic algorithm in the paper's box: the optimum is a corner of the box; every seed "
+                   "reaches it to ~1e-5 (design within 1e-4, indices within 0.1 %)",
+                   columns={"r_a_m": (0.0, 1e-4), "r_b_m": (0.0, 1e-4), "L_m": (0.0, 1e-4), "d_m": (0.0, 1e-4),
+                            "phi_deg": (0.0, 1e-2), "delta_m": (0.0, 1e-4), "sigma1": (1e-3, 0.0),
+                            "sigma2": (1e-3, 0.0), "sigma3": (1e-3, 0.0), "dist_to_paper_after": (0.0, 1e-3)})
+#: the config sections every index and optimisation artefact reads (their caches key on both)
+INDEX_CONFIG = [f"{KEY}.indices", f"{KEY}.optimization"]
 
 TOL_REL = 0.05  #: "reproduced" for a global index: within 5 % of the printed value (W is not defined)
 NAMES = {"sigma1": "dynamic", "sigma2": "stiffness", "sigma3": "speed"}
@@ -168,6 +190,8 @@ def _sphere_figure(pts, path, title, labels, axes=None, semi=None):
     return save_figure(fig, path)
 
 
+@artefact("fig11", outputs=["fig11_velocity_sphere.png", "fig11_velocity_sphere.csv"], config=INDEX_CONFIG,
+          tolerance=EXACT)
 def fig11(config: dict, outdir: Path) -> list[Path]:
     """Fig. 11: the unit sphere of drive velocities ``qdot^T qdot = 1`` (eq 35) at the home pose."""
     m = P3P4S.zhao2017()
@@ -183,10 +207,12 @@ def fig11(config: dict, outdir: Path) -> list[Path]:
     return paths
 
 
+@artefact("fig12", outputs=["fig12_velocity_ellipsoid.png", "fig12_velocity_ellipsoid.csv",
+                           "fig12_velocity_ellipsoid_axes.csv"], config=INDEX_CONFIG, tolerance=EXACT)
 def fig12(config: dict, outdir: Path) -> list[Path]:
     """Fig. 12: the output velocity ellipsoid ``v = J^-1 qdot`` of the unit sphere (eq 35); its
     semi-axes are ``1/sigma_i(J)`` along the right singular vectors (the paper says
-    ``sqrt(eig(J^T J))``, the reciprocal; notes G21)."""
+    ``sqrt(eig(J^T J))``, the reciprocal; docs/zhao2017_3p4s.md#g21)."""
     m = P3P4S.zhao2017()
     pose = m.home()
     J, _, vel, s, Vt = _ellipsoid_data(m, pose)
@@ -275,14 +301,22 @@ def _atlas(config: dict, outdir: Path, number: int) -> list[Path]:
     return paths
 
 
-def _make_atlas(number):
-    def artefact(config: dict, outdir: Path) -> list[Path]:
+def _make_atlas(number: int, stem: str):
+    def make(config: dict, outdir: Path) -> list[Path]:
         return _atlas(config, outdir, number)
-    artefact.__name__ = f"fig{number:02d}"
-    artefact.__doc__ = f"Figs {number}-{number + 1}: atlas (surface) and contour of one index over W (§3, eqs 28/33/36)."
-    return artefact
+    make.__name__ = make.__qualname__ = f"fig{number:02d}"
+    make.__doc__ = f"Figs {number}-{number + 1}: atlas (surface) and contour of one index over W (§3, eqs 28/33/36)."
+    outputs = [f"fig{number:02d}_{stem}_atlas.png", f"fig{number:02d}_{stem}_atlas.csv",
+               f"fig{number + 1:02d}_{stem}_contour.png", f"fig{number + 1:02d}_{stem}_contour.csv"]
+    return artefact(f"fig{number:02d}", outputs=outputs, config=INDEX_CONFIG, tolerance=EXACT)(make)
 
 
+#: Figs 15-26, one artefact per (atlas, contour) pair
+ATLAS_ARTEFACTS = [_make_atlas(a[0], f"{a[1]}_{a[2]}") for a in ATLASES]
+
+
+@artefact("global_indices", outputs=["extra_global_indices.csv", "extra_global_indices.md"], config=INDEX_CONFIG,
+          tolerance=ROUNDING)
 def global_table(config: dict, outdir: Path) -> list[Path]:
     """extra_global_indices: sigma1, sigma2 (both forms), sigma3 of the before/after designs over W,
     and each local index's range over the atlas grid (what Figs 15-26 show), beside the paper's."""
@@ -303,12 +337,14 @@ def global_table(config: dict, outdir: Path) -> list[Path]:
     notes = (f"W: {W.describe()}; {c['quadrature']} quadrature, {c['nodes']} nodes per axis; ranges over a "
              f"{c['atlas_grid']}x{c['atlas_grid']} grid with the edges. k = {c['k']:g} N/m. sigma2_lambda = mean "
              "lambda_min(J^T k J) (what the paper's numbers fit), sigma2_sqrt = mean sqrt(lambda_min) (eq 33 as "
-             "printed). Masses of §2.4 for both designs (notes G20).")
+             "printed). Masses of §2.4 for both designs (docs/zhao2017_3p4s.md#g20).")
     return write_table(df, outdir / "extra_global_indices", title="Global indices (eqs 29, 34, 37) of Table 3's designs",
                        notes=notes, floatfmt=".5g")
 
 
 # ---------------------------------------------------------------------------------------- convergence etc.
+@artefact("index_convergence", outputs=["extra_index_convergence.csv", "extra_index_convergence.md",
+                                      "extra_index_convergence.png"], config=INDEX_CONFIG, tolerance=ROUNDING)
 def index_convergence(config: dict, outdir: Path) -> list[Path]:
     """extra_index_convergence: global indices as the grid doubles, Gauss-Legendre vs midpoint."""
     from parakin.plot import new_figure, save_figure, use_style
@@ -348,7 +384,7 @@ def index_convergence(config: dict, outdir: Path) -> list[Path]:
 
 #: workspace readings compared in extra_index_sensitivity: (label, z0, half_width, z_half_height)
 W_VARIANTS = [
-    ("plane z=0.585, |x|,|y|<=0.05 (notes G15)", 0.585, 0.05, 0.0),
+    ("plane z=0.585, |x|,|y|<=0.05 (docs/zhao2017_3p4s.md#g15)", 0.585, 0.05, 0.0),
     ("plane z=0.575, |x|,|y|<=0.08", 0.575, 0.08, 0.0),
     ("plane z=0.592 (home), |x|,|y|<=0.05", 0.592, 0.05, 0.0),
     ("plane z=0.57 (§2.4 height), |x|,|y|<=0.05", 0.57, 0.05, 0.0),
@@ -356,6 +392,8 @@ W_VARIANTS = [
 ]
 
 
+@artefact("index_sensitivity", outputs=["extra_index_sensitivity.csv", "extra_index_sensitivity.md"],
+          config=INDEX_CONFIG, tolerance=ROUNDING)
 def index_sensitivity(config: dict, outdir: Path) -> list[Path]:
     """extra_index_sensitivity: how the global values and verdicts move under other readings of W
     and of the stiffness index (k, lambda vs sqrt)."""
@@ -391,6 +429,8 @@ def index_sensitivity(config: dict, outdir: Path) -> list[Path]:
                        floatfmt=".4g")
 
 
+@artefact("index_benchmark", outputs=["extra_index_benchmark.csv", "extra_index_benchmark.md"],
+          config=INDEX_CONFIG, tolerance=TIMING)
 def index_benchmark(config: dict, outdir: Path) -> list[Path]:
     """extra_index_benchmark: all three indices batched over a grid vs a per-pose Python loop."""
     c = index_settings(config)
@@ -411,8 +451,8 @@ def index_benchmark(config: dict, outdir: Path) -> list[Path]:
                         "loop_poses_timed": nloop, "ratio": t_loop / t_batch,
                         "max_rel_diff": float(np.max(np.abs(batch / loop - 1)))}])
     return write_table(df, outdir / "extra_index_benchmark", title="Indices: batched vs per-pose loop",
-                       notes="Batched: parakin.indices.local_indices (closed-form M, one SVD call). Loop: one pose at "
-                             "a time through P3P4S.velocity_jacobian and M from parakin.dynamics.force_terms; its "
+                       notes="Batched: parakin.mechanisms.p3p4s_indices.local_indices (closed-form M, one SVD call). Loop: one pose at "
+                             "a time through P3P4S.velocity_jacobian and M from parakin.mechanisms.p3p4s_dynamics.force_terms; its "
                              "time is measured on loop_poses_timed poses and scaled to all poses.", floatfmt=".4g")
 
 
@@ -464,6 +504,7 @@ def _optimise(key: str) -> dict:
     return {"extremes": extremes, "vmin": vmin, "vmax": vmax, "runs": runs, "combined": combined, "obj": obj}
 
 
+@artefact("fig14", outputs=["fig14_ga_convergence.png", "fig14_ga_convergence.csv"], config=INDEX_CONFIG, tolerance=GA)
 def fig14(config: dict, outdir: Path) -> list[Path]:
     """Fig. 14: best combined objective f (eq 40) per generation, one curve per seed."""
     from parakin.plot import new_figure, save_figure, use_style
@@ -493,6 +534,8 @@ def fig14(config: dict, outdir: Path) -> list[Path]:
     return paths
 
 
+@artefact("ga_paper_box", outputs=["extra_ga_paper_box.csv", "extra_ga_paper_box.md"], config=INDEX_CONFIG,
+          tolerance=GA_CORNER)
 def ga_paper_box(config: dict, outdir: Path) -> list[Path]:
     """extra_ga_paper_box: the same GA on the smallest box that holds both of the paper's designs
     (Table 3 before and after; L and d fixed). Where does the optimum land inside it?"""
@@ -517,6 +560,7 @@ def ga_paper_box(config: dict, outdir: Path) -> list[Path]:
                        title="GA inside the box spanned by the paper's two designs", notes=notes, floatfmt=".5g")
 
 
+@artefact("table3", outputs=["table3.csv", "table3.md"], config=INDEX_CONFIG, tolerance=GA)
 def table3(config: dict, outdir: Path) -> list[Path]:
     """Table 3: design before/after (the paper's), and ours from the GA (one row per seed), with
     Delta, the global indices and f."""
@@ -539,13 +583,15 @@ def table3(config: dict, outdir: Path) -> list[Path]:
              f"phi {b['phi_deg']} deg; feasible: every node of W reachable with cond(J) <= {o['max_speed']:g}. "
              f"Indices by {o['ga_nodes']} Gauss nodes per axis (as in the GA). Normalisation (eq 38) from the "
              f"single-objective GA runs: min {np.round(res['vmin'], 5).tolist()}, max "
-             f"{np.round(res['vmax'], 5).tolist()} (sigma1, sigma2, sigma3); stiffness term flipped (notes G18). "
+             f"{np.round(res['vmax'], 5).tolist()} (sigma1, sigma2, sigma3); stiffness term flipped (docs/zhao2017_3p4s.md#g18). "
              "The indices depend on (r_a, r_b, d) only through delta = r_b - sqrt(r_a^2 - d^2/4): any design with "
              "the same (delta, L, phi) is equally optimal, so compare delta, L, phi across seeds.")
     return write_table(df, outdir / "table3", title="Table 3: design before and after optimisation", notes=notes,
                        floatfmt=".5g")
 
 
+@artefact("pareto", outputs=["extra_pareto.png", "extra_pareto.csv", "extra_pareto_marks.csv"], config=INDEX_CONFIG,
+          tolerance=GA)
 def pareto(config: dict, outdir: Path) -> list[Path]:
     """extra_pareto: NSGA-II front of (sigma1, -sigma2, sigma3) over (r_a, r_b, L, d, phi) with the
     paper's designs and our weighted-sum optimum marked."""
@@ -598,14 +644,14 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     if gpath.exists():
         g = pd.read_csv(gpath).set_index("design")
         why_after = ("after design not reproduced: with the §2.4 masses our (sigma1, sigma3) pairs are tied; no "
-                     "workspace gives the paper's after pair (extra_index_sensitivity, notes §4.6)")
+                     "workspace gives the paper's after pair (extra_index_sensitivity, docs/zhao2017_3p4s.md#s4.6)")
         for which, fig_s1, fig_s2, fig_s3 in (("before", "fig15", "fig19", "fig23"), ("after", "fig17", "fig21", "fig25")):
             r = g.loc[which]
             for art, q, col, unit in ((fig_s1, f"sigma1.{which}", "sigma1", "kg"),
                                       (fig_s2, f"sigma2.{which}", "sigma2_lambda", "N/m"),
                                       (fig_s3, f"sigma3.{which}", "sigma3", "1")):
                 pv = printed_value(ref, art, q)
-                reason = "W not defined in the paper (notes G15); tolerance 5 %"
+                reason = "W not defined in the paper (docs/zhao2017_3p4s.md#g15); tolerance 5 %"
                 if which == "after":
                     reason = why_after
                 elif col == "sigma2_lambda":
@@ -616,14 +662,14 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
             pv = printed_value(ref, fig_s2, f"sigma2.{which}")
             out.append(Claim(KEY, fig_s2, f"sigma2.{which}", pv, float(r["sigma2_sqrt"]), "sqrt(N/m)",
                              "sqrt(lambda_min), eq 33 as printed", tol=TOL_REL * float(pv),
-                             reason="eq 33's square root does not fit the printed ranges (notes G17)"))
+                             reason="eq 33's square root does not fit the printed ranges (docs/zhao2017_3p4s.md#g17)"))
             for art, prefix, col in ((fig_s1, "sigma.range", "dynamic"), (fig_s2, "sigma_star.range", "stiffness_lambda"),
                                      (fig_s3, "sigma_hat.range", "speed")):
                 for end in ("min", "max"):
                     pv = printed_value(ref, art, f"{prefix}.{which}.{end}")
                     out.append(Claim(KEY, art, f"{prefix}.{which}.{end}", pv, float(r[f"{col}_{end}"]), "1",
                                      "colour-bar range over the W plane",
-                                     reason="colour-bar limits read off a figure; W not defined (G15)"
+                                     reason="colour-bar limits read off a figure; W not defined (docs/zhao2017_3p4s.md#g15)"
                                      + ("; " + why_after if which == "after" else "")))
         for q, col, inv in (("gain.dynamic", "sigma1", False), ("gain.stiffness", "sigma2_lambda", True),
                             ("gain.speed", "sigma3", False)):
@@ -644,7 +690,7 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                                 ("phi", "phi_deg", 1)):
             out.append(Claim(KEY, "table3", f"after.{var}", printed_value(ref, "table3", f"after.{var}"),
                              float(best[col]) * scale, "deg" if var == "phi" else "m", "GA, best seed",
-                             reason="bounds not given (G19); (r_a, r_b, d) enter only through delta, so only "
+                             reason="bounds not given (docs/zhao2017_3p4s.md#g19); (r_a, r_b, d) enter only through delta, so only "
                                     "delta, L, phi are identifiable"))
     return out
 
@@ -730,17 +776,3 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     return "\n\n".join(parts)
 
 
-#: artefact name -> function(config, outdir) writing that artefact's files
-ARTEFACTS = {
-    "fig11": fig11,
-    "fig12": fig12,
-    **{f"fig{a[0]:02d}": _make_atlas(a[0]) for a in ATLASES},
-    "global_indices": global_table,
-    "index_convergence": index_convergence,
-    "index_sensitivity": index_sensitivity,
-    "index_benchmark": index_benchmark,
-    "fig14": fig14,
-    "table3": table3,
-    "pareto": pareto,
-    "ga_paper_box": ga_paper_box,
-}

@@ -12,7 +12,7 @@ of length ``l = L``; ``nm_i = n_i . m_i``; ``P_i = I - m_i n_i^T / nm_i`` (so ``
 * eq (9)  ``omega_i = J_omega_i v``, ``J_omega_i = (1/l) [hat(n_i) + (m_i x n_i) n_i^T / nm_i]``;
 * eq (11) ``v_di = J_v_i v``, ``J_v_i = (1/2) (I + m_i n_i^T / nm_i)``;
 * eq (13) ``qddot_i = J_i a + v^T H_i v`` with ``H_i = P_i^T P_i / (l nm_i)``. The paper prints
-  ``H_i = P_i^T P_i / nm_i`` (no ``1/l``; dimensionally wrong, notes G8). Both are available
+  ``H_i = P_i^T P_i / nm_i`` (no ``1/l``; dimensionally wrong, docs/zhao2017_3p4s.md#g8). Both are available
   (``h_form="corrected" | "paper"``);
 * eq (14) ``a_di = J_v_i a + (1/2) m_i (v^T H_i v)``;
 * eq (15) ``alpha_i = J_omega_i a + (1/l) (m_i x n_i) (v^T H_i v)``.
@@ -73,7 +73,7 @@ __all__ = [
 
 HForm = Literal["corrected", "paper"]
 
-#: The three slips of the printed dynamics (notes G8-G10), all at once: eq 13's H without 1/l,
+#: The three slips of the printed dynamics (docs/zhao2017_3p4s.md#g8, #g9, #g10), all at once: eq 13's H without 1/l,
 #: eq 21's rod gravity-moment term, eq 23 without eq 20's factor 2 on the rod inertia.
 PAPER_PRINTED: dict = {"h_form": "paper", "gravity_moment": True, "rod_inertia_factor": 1.0}
 
@@ -88,8 +88,8 @@ class InertialParams:
     ``I_rod`` is the inertia of ONE parallelogram side rod about its centroid in its body frame
     with z along the rod (the paper's ``I_dio``); it must be axisymmetric (``I_xx == I_yy``), the
     only case in which the rod's spin about its axis is irrelevant (the paper's definition line of
-    ``0R_i`` is empty, notes G12). ``rods_per_limb`` is eq (20)'s factor 2. ``g`` is gravity
-    (not stated in the paper; notes G14).
+    ``0R_i`` is empty, docs/zhao2017_3p4s.md#g12). ``rods_per_limb`` is eq (20)'s factor 2. ``g`` is gravity
+    (not stated in the paper; docs/zhao2017_3p4s.md#g14).
     """
 
     m_platform: float = 4.16  #: moving platform mass m (kg)
@@ -150,7 +150,7 @@ class SineMotion:
     """The paper's motion law (§1.4, §2.4): ``x = y = A sin(omega t)``, ``z = z0``.
 
     Defaults: ``A = 0.001 m``, ``omega = 40 pi rad/s`` (20 Hz), ``z0 = 0.57 m`` (§2.4's
-    "initial height"; §1.4 gives no z, notes G13). Derivatives are exact.
+    "initial height"; §1.4 gives no z, docs/zhao2017_3p4s.md#g13). Derivatives are exact.
     """
 
     amplitude: float = 1e-3  #: A (m)
@@ -291,7 +291,7 @@ def acceleration_hessians(
 
     ``"corrected"``: ``H_i = P_i^T P_i / (l n_i^T m_i)`` (from ``n . n = 1``: ``n . ddot(n) =
     -|dot(n)|^2`` and ``P_i v = l dot(n_i)``), units 1/m. ``"paper"``: the printed
-    ``P_i^T P_i / (n_i^T m_i)``, which lacks the ``1/l`` (notes G8).
+    ``P_i^T P_i / (n_i^T m_i)``, which lacks the ``1/l`` (docs/zhao2017_3p4s.md#g8).
     """
     _check(mech)
     _validate_h_form(h_form)
@@ -421,13 +421,13 @@ def force_terms(
       ``-J^-T (m + k sum_i J_v_i^T m_d) g - m_e (m_i . g)``;
     * ``gravity_moment`` (only with ``gravity_moment=True``): minus eq (21)'s extra term
       ``k J^-T sum_i J_omega_i^T (r_di x m_d g)``, spurious since gravity already acts at the rod
-      centroid through ``J_v``, and dependent on the choice of origin of ``r_di`` (notes G9).
+      centroid through ``J_v``, and dependent on the choice of origin of ``r_di`` (docs/zhao2017_3p4s.md#g9).
 
     ``k`` is ``params.rods_per_limb`` for gravity always and for the rod inertia unless
-    ``rod_inertia_factor`` overrides it (``1`` = eq 23 as printed, notes G10). ``h_form="paper"``
-    uses eq 13's printed H in eqs 13-15 and so in the slider and rod inertia (notes G8).
+    ``rod_inertia_factor`` overrides it (``1`` = eq 23 as printed, docs/zhao2017_3p4s.md#g10). ``h_form="paper"``
+    uses eq 13's printed H in eqs 13-15 and so in the slider and rod inertia (docs/zhao2017_3p4s.md#g8).
     Sign: this is the force the motor exerts on its slider; the paper's ``tau^A`` of eq 23 is
-    written with the opposite sign convention (notes G11).
+    written with the opposite sign convention (docs/zhao2017_3p4s.md#g11).
     """
     _check(mech)
     if not isinstance(params, InertialParams):
@@ -477,7 +477,7 @@ def inverse_dynamics(
 ) -> Array:
     """Motor forces ``f`` (..., 3) in N along ``+m_i`` for the given platform motion (eqs 16-23).
 
-    Defaults implement the correct physics (notes §1.7); the keyword options reproduce the
+    Defaults implement the correct physics (docs/zhao2017_3p4s.md#s1.7); the keyword options reproduce the
     paper's printed slips one by one (see :func:`force_terms`, :data:`PAPER_PRINTED`).
     """
     terms = force_terms(mech, params, pose, velocity, acceleration, h_form=h_form,
@@ -602,7 +602,7 @@ def power_balance(
     step: float | None = None,
     **variant,
 ) -> PowerBalance:
-    """The energy check of notes §1.7: actuator power of :func:`inverse_dynamics` (with the
+    """The energy check of docs/zhao2017_3p4s.md#s1.7: actuator power of :func:`inverse_dynamics` (with the
     options ``variant``) against ``dE/dt`` of :func:`energy` by :func:`time_derivative`.
 
     ``step`` defaults to ``0.02 / motion.omega`` (truncation ~ 5e-13, rounding ~ 1e-11 relative).

@@ -1,7 +1,7 @@
 """An independent inverse-dynamics check of the 3-P(4S) in MuJoCo (stands in for the paper's ADAMS).
 
 The MJCF is generated from a :class:`~parakin.mechanisms.P3P4S` and
-:class:`~parakin.dynamics.InertialParams` (no hand-written model):
+:class:`~parakin.mechanisms.p3p4s_dynamics.InertialParams` (no hand-written model):
 
 * three sliders on inclined prismatic joints along ``m_i`` (joint value = stroke ``q_i``);
 * on each slider, rods hanging from ball joints, their tops tied to the platform by site-based
@@ -13,7 +13,7 @@ The MJCF is generated from a :class:`~parakin.mechanisms.P3P4S` and
   ``m_d``, ``I_dio``, and the platform on a free joint (the parallelograms keep it from turning);
 * gravity ``params.g``; a motor (gear 1) on each slider joint.
 
-Actuator forces follow the recipe of the ecosystem notes (MuJoCo does not infer actuator forces
+Actuator forces follow the recipe of docs/zhao2017_3p4s.md#mujoco (MuJoCo does not infer actuator forces
 of a closed loop; ``mj_inverse`` with the loops on lets the soft constraints absorb the load):
 
 1. ``qpos`` from the IK (sliders, ball quaternions turning each rod onto ``n_i``);
@@ -35,7 +35,7 @@ from typing import Any, Callable, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from parakin.dynamics import InertialParams
+from parakin.mechanisms.p3p4s_dynamics import InertialParams
 from parakin.errors import ShapeError
 from parakin.mechanisms.base import Array, as_batch
 from parakin.mechanisms.p3p4s import P3P4S

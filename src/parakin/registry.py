@@ -1,0 +1,283 @@
+"""The artefact registry: every table and figure, declared beside the function that makes it.
+
+An *artefact* is one computation of a study (a paper, or a study beyond the papers): the function
+``make(config, outdir) -> list[Path]``, the files it writes, the artefacts it needs, the config
+sections it reads and the tolerance within which a rerun on another machine must agree with the
+committed record. It is declared with :func:`artefact` on the function itself::
+
+    @artefact("zhao2017_3p4s", "table1", outputs=["table1.csv", "table1.md"],
+              config=["zhao2017_3p4s.table1"], tolerance=ROUNDING)
+    def table1(config, outdir): ...
+
+Snakemake's rules (``workflow/rules/artefacts.smk``), ``rule all``, the reproduction check,
+``parakin which`` and the tests all take their lists from here. This module imports no study:
+:func:`load` imports the study modules named in the config's ``studies`` list, whose decorators
+fill :data:`REGISTRY`.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import inspect
+import sys
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+__all__ = ["Tolerance", "Artefact", "artefact", "REGISTRY", "load", "find", "which", "prune_config",
+           "EXACT", "ROUNDING", "ITERATIVE", "DESCRIPTIVE", "TIMING"]
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """How closely a rerun must agree with the committed record, and why.
+
+    Numeric table cells agree when ``|ours - record| <= atol + rtol * |record|``; columns named in
+    ``columns`` get their own ``(rtol, atol)`` (for ``kind="statistical"`` only they are compared:
+    a chaotic computation lists what is stable); columns in ``skip`` are not compared (a chaotic
+    trajectory, a round-off residual), each reason stated in ``reason``. Timing columns
+    (:func:`parakin.io.is_timing_column`) are never compared and never decide anything.
+    ``files`` names output files that are not compared at all (e.g. one seed's trajectory of a
+    genetic algorithm), and ``rows`` keeps, for every CSV, only the rows where the given column
+    has one of the given values (e.g. the final generation).
+    """
+
+    kind: str
+    rtol: float
+    atol: float
+    reason: str
+    columns: dict[str, tuple[float, float]] = field(default_factory=dict)
+    skip: tuple[str, ...] = ()
+    files: tuple[str, ...] = ()
+    rows: tuple[str, tuple] | None = None
+
+    def __post_init__(self):
+        if self.kind not in KINDS:
+            raise ValueError(f"tolerance kind {self.kind!r} must be one of {KINDS}")
+        if not (self.rtol >= 0 and self.atol >= 0):
+            raise ValueError(f"tolerance rtol = {self.rtol}, atol = {self.atol} must be >= 0")
+        if not self.reason.strip():
+            raise ValueError("a tolerance needs its reason")
+
+    def limits(self, column: str) -> tuple[float, float]:
+        """``(rtol, atol)`` of one column."""
+        return self.columns.get(column, (self.rtol, self.atol))
+
+    def but(self, reason: str | None = None, **changes) -> Tolerance:
+        """A copy with some fields changed (and a reason that says why)."""
+        from dataclasses import replace
+
+        return replace(self, reason=reason or self.reason, **changes)
+
+
+#: exact: closed forms and symbolic results; only floating-point summation order may differ
+#: statistical: stochastic or chaotic computations (GA, PSO, network training): only what is
+#:   stable across BLAS kernels and thread counts is compared, with a margin
+#: descriptive: drawings and set-up echoes (nothing computed that could drift beyond rounding)
+KINDS = ("exact", "rounding", "iterative", "statistical", "descriptive", "timing")
+
+#: closed forms, linear algebra of fixed size, symbolic counts: BLAS kernels change the
+#: summation order, so agreement to ~1e3 ulp of the largest value, never bit for bit
+EXACT = Tolerance("exact", 1e-9, 1e-12, "closed form: only the floating-point summation order differs")
+#: iterative solves converged to 1e-10 or better, quadratures, fits converged to 1e-14
+ROUNDING = Tolerance("rounding", 1e-6, 1e-9,
+                     "iterative solve or fit converged far below this; a BLAS kernel moves the last "
+                     "iterate by rounding only")
+#: iteration counts and success rates of iterative solvers: a step that lands within rounding of
+#: the stopping threshold may take one more iteration on another machine
+ITERATIVE = Tolerance("iterative", 1e-6, 1e-9,
+                      "converged solves; counts of iterations may move by one where a step lands at "
+                      "the threshold")
+DESCRIPTIVE = Tolerance("descriptive", 1e-9, 1e-12, "geometry echo or drawing: closed-form coordinates")
+#: speed tables: nothing in them is compared (timings and their ratios depend on the machine)
+TIMING = Tolerance("timing", 0.0, 0.0, "a speed table: timings and their ratios depend on the machine")
+
+
+@dataclass(frozen=True)
+class Artefact:
+    """One table or figure (or intermediate product) and everything the pipeline needs to know."""
+
+    study: str
+    name: str
+    make: Callable
+    outputs: tuple[str, ...]
+    generated: tuple[str, ...] = ()
+    needs: tuple[str, ...] = ()
+    config: tuple[str, ...] = ()
+    tolerance: Tolerance = ROUNDING
+    folder: str | None = None
+    reference: bool = True
+
+    @property
+    def key(self) -> str:
+        return f"{self.study}:{self.name}"
+
+    @property
+    def rule(self) -> str:
+        return f"{self.study}_{self.name}"
+
+    @property
+    def module(self) -> str:
+        return self.make.__module__
+
+    @property
+    def study_folder(self) -> str:
+        """Folder of the study's outputs under the figures folder ('' = the folder itself)."""
+        return self.study if self.folder is None else self.folder
+
+    def output_paths(self, figures: str | Path, generated: str | Path) -> list[str]:
+        base = Path(figures) / self.study_folder
+        return [str(base / f) for f in self.outputs] + [str(Path(generated) / self.study / f) for f in self.generated]
+
+    @property
+    def location(self) -> str:
+        """``file:line`` of the function that makes the artefact."""
+        fn = inspect.unwrap(self.make)
+        return f"{inspect.getsourcefile(fn)}:{inspect.getsourcelines(fn)[1]}"
+
+    def sources(self) -> list[str]:
+        """The parakin source files this artefact runs: its module and everything it imports."""
+        return sorted(str(p) for p in _closure(self.module))
+
+
+#: "study:name" -> Artefact, in declaration order (filled by the study modules' decorators)
+REGISTRY: dict[str, Artefact] = {}
+
+
+def artefact(study: str, name: str, *, outputs: Sequence[str], generated: Sequence[str] = (),
+             needs: Sequence[str] = (), config: Sequence[str] = (), tolerance: Tolerance = ROUNDING,
+             folder: str | None = None, reference: bool = True) -> Callable:
+    """Declare the decorated ``make(config, outdir) -> list[Path]`` as one artefact.
+
+    ``outputs`` are file names in the study's figures folder, ``generated`` in its generated-data
+    folder; ``needs`` are ``"study:name"`` keys of upstream artefacts (their outputs become this
+    artefact's inputs); ``config`` the dotted config sections it reads (with ``seed`` always);
+    ``reference``: whether it reads ``data/reference/<study>.csv``.
+    """
+    def register(make: Callable) -> Callable:
+        item = Artefact(study, name, make, tuple(outputs), tuple(generated), tuple(needs), tuple(config),
+                        tolerance, folder, reference)
+        old = REGISTRY.get(item.key)
+        if old is not None and (old.module, old.make.__qualname__) != (item.module, make.__qualname__):
+            raise ValueError(f"artefact {item.key} declared twice: {old.location} and {item.location}")
+        REGISTRY[item.key] = item
+        make.artefact = item
+        return make
+    return register
+
+
+def load(studies: Iterable[str], *, complete: bool = True) -> dict[str, Artefact]:
+    """Import the study modules (dotted names) and return the registry restricted to them, in order;
+    ``complete``: every artefact they need must be among them (what the pipeline requires)."""
+    modules = [importlib.import_module(m) for m in studies]
+    names = {m.__name__ for m in modules}
+    picked = {k: a for k, a in REGISTRY.items() if any(a.module == n or a.module.startswith(n + ".") for n in names)}
+    unknown = [a.needs for a in picked.values() for n in a.needs if n not in picked]
+    if complete and unknown:
+        raise ValueError(f"artefacts need undeclared upstream artefact(s) {sorted(set(sum(map(list, unknown), [])))}")
+    return picked
+
+
+def find(artefacts: dict[str, Artefact], study: str, name: str) -> Artefact:
+    """The artefact ``study:name``, or a one-line error listing the known ones."""
+    key = f"{study}:{name}"
+    if key not in artefacts:
+        known = sorted(a.name for a in artefacts.values() if a.study == study)
+        if not known:
+            raise ValueError(f"unknown study {study!r}; known: {', '.join(sorted({a.study for a in artefacts.values()}))}")
+        raise ValueError(f"unknown artefact {name!r} of {study}; known: {', '.join(known)}")
+    return artefacts[key]
+
+
+def which(artefacts: dict[str, Artefact], path: str | Path, figures: str = "figures",
+          generated: str = "data/generated") -> Artefact | None:
+    """The artefact that writes ``path`` (a path under the figures or generated folder), or None."""
+    target = Path(path).as_posix().lstrip("./")
+    for a in artefacts.values():
+        for out in a.output_paths(figures, generated):
+            if Path(out).as_posix() == target or target.endswith("/" + Path(out).as_posix()):
+                return a
+    name = Path(path).name
+    parent = Path(path).parent.name
+    for a in artefacts.values():  # the record or another results folder: match on study folder/name
+        for out in a.outputs:
+            if out == name and (a.study_folder == parent or (a.study_folder == "" and parent not in _STUDY_DIRS(artefacts))):
+                return a
+    return None
+
+
+def _STUDY_DIRS(artefacts: dict[str, Artefact]) -> set[str]:
+    return {a.study_folder for a in artefacts.values() if a.study_folder}
+
+
+def prune_config(config: dict, item: Artefact) -> dict:
+    """Only what ``item`` reads: the seed, the folders and its declared sections (same nesting)."""
+    out = {k: config[k] for k in ("seed", "figures_dir", "generated_dir") if k in config}
+    for dotted in item.config:
+        src, dst = config, out
+        parts = dotted.split(".")
+        for part in parts[:-1]:
+            if part not in src:
+                raise KeyError(f"config has no section {dotted!r} (declared by {item.key})")
+            src = src[part]
+            dst = dst.setdefault(part, {})
+        if parts[-1] not in src:
+            raise KeyError(f"config has no section {dotted!r} (declared by {item.key})")
+        dst[parts[-1]] = src[parts[-1]]
+    return out
+
+
+# ---------------------------------------------------------------------------------- source closure
+_PACKAGE_ROOT = Path(__file__).resolve().parent
+
+
+def _module_file(name: str) -> Path | None:
+    spec = importlib.util.find_spec(name) if name not in sys.modules else getattr(sys.modules[name], "__spec__", None)
+    origin = getattr(spec, "origin", None)
+    return Path(origin).resolve() if origin and origin.endswith(".py") else None
+
+
+@lru_cache(maxsize=None)
+def _imports(path: Path, package: str) -> tuple[str, ...]:
+    """Absolute names of the modules ``path`` imports (relative imports resolved)."""
+    tree = ast.parse(path.read_text())
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found += [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join([*parts, base] if base else parts)
+            found.append(base)
+            found += [f"{base}.{a.name}" for a in node.names]
+    return tuple(found)
+
+
+@lru_cache(maxsize=None)
+def _closure(module: str) -> frozenset[Path]:
+    """Files of ``module`` and of every module of the same top-level package it imports, transitively."""
+    top = module.split(".")[0]
+    seen: dict[str, Path] = {}
+    todo = [module]
+    while todo:
+        name = todo.pop()
+        if name in seen or not (name == top or name.startswith(top + ".")):
+            continue
+        try:
+            path = _module_file(name)
+        except (ImportError, ValueError):
+            path = None
+        if path is None:
+            seen[name] = None
+            continue
+        seen[name] = path
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        todo += [n for n in _imports(path, package) if n not in seen]
+        # importing a.b.c runs a/__init__ and a/b/__init__ first
+        parts = name.split(".")
+        todo += [".".join(parts[:i]) for i in range(1, len(parts))]
+    return frozenset(p for p in seen.values() if p is not None)

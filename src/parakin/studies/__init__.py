@@ -1,0 +1,1 @@
+"""Studies beyond the papers, registered like a paper (:mod:`parakin.registry`)."""

@@ -1,0 +1,240 @@
+"""Beyond the papers: every forward solution of the general 6-6 Gough-Stewart platform.
+
+Three ``data(config) -> DataFrame`` / ``draw(frame, path)`` pairs, for the artefact registry
+(:mod:`parakin.registry`) to declare:
+
+* :func:`assemblies_data` / :func:`assemblies_draw`: the 40 real assemblies of Dietmaier's platform
+  (certified, checked by the IK), one small 3-D drawing each;
+* :func:`real_counts_data` / :func:`real_counts_draw`: over random platforms and poses, how many of
+  the 40 complex solutions were found (certified), how many are real (histogram);
+* :func:`timing_data` / :func:`timing_draw`: all 40 solutions per input, single call and batched,
+  against a batched Newton from 40 random starts (the project's fastest local solver).
+
+``config`` keys (all optional): ``seed`` (int), ``n_platforms`` (random geometries, one pose each),
+``n_poses`` (random poses on Dietmaier's platform), ``n_timing`` (inputs of the batched timing).
+Timing columns end in ``_s`` / ``_per_s`` and never decide anything.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from parakin.mechanisms.stewart66 import DIETMAIER_LENGTHS, Stewart66
+
+__all__ = ["assemblies_data", "assemblies_draw", "real_counts_data", "real_counts_draw", "timing_data",
+           "timing_draw", "random_platform", "random_pose"]
+
+DEFAULTS: dict[str, Any] = {"seed": 66, "n_platforms": 50, "n_poses": 200, "n_timing": 200}
+
+
+def _cfg(config: dict | None) -> dict[str, Any]:
+    return {**DEFAULTS, **(config or {})}
+
+
+def random_platform(rng: np.random.Generator) -> Stewart66:
+    """A random general 6-6 platform: base and platform anchors standard normal in 3-D."""
+    return Stewart66(base=rng.normal(size=(6, 3)), platform=rng.normal(size=(6, 3)))
+
+
+def random_pose(rng: np.random.Generator, n: int, mech: Stewart66) -> np.ndarray:
+    """``n`` random poses: uniformly random orientation (ZYX angles of a random unit quaternion),
+    origin normal around :meth:`Stewart66.home` with standard deviation ``size``."""
+    from parakin.geometry import euler_zyx_from_matrix
+    from parakin.mechanisms.stewart66_homotopy import quat_rotation
+
+    q = rng.normal(size=(n, 4))
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    ang = euler_zyx_from_matrix(quat_rotation(q))
+    o = mech.home()[3:] + rng.normal(size=(n, 3)) * mech.size
+    return np.concatenate([ang, o], -1)
+
+
+# ------------------------------------------------------------------------------------ assemblies
+def assemblies_data(config: dict | None = None) -> pd.DataFrame:
+    """Dietmaier's 40 real assemblies: one row each (solution index, pose, alpha, IK error)."""
+    m = Stewart66()
+    r = m.fk_all(DIETMAIER_LENGTHS, return_info=True)
+    rows = []
+    k = 0
+    for j in range(r.poses.shape[0]):
+        p = r.poses[j]
+        if not np.all(np.isfinite(p)):
+            continue
+        k += 1
+        err = float(np.max(np.abs(m.ik(p) - np.asarray(DIETMAIER_LENGTHS))))
+        rows.append({"solution": k, **dict(zip(m.pose_names, p.tolist())), "ik_error": err})
+    df = pd.DataFrame(rows)
+    df.attrs.update(n_found=int(r.n_found), n_real=int(r.n_real), complete=bool(r.complete),
+                    alpha_max=float(np.nanmax(r.alpha)))
+    return df
+
+
+def assemblies_draw(frame: pd.DataFrame, path: str | Path) -> Path:
+    """A 5 x 8 grid of 3-D drawings, one per real assembly (legs, base and platform outlines)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    m = Stewart66()
+    n = len(frame)
+    cols = 8
+    rows = max(1, int(np.ceil(n / cols)))
+    fig = Figure(figsize=(2.0 * cols, 2.0 * rows), dpi=100)
+    FigureCanvasAgg(fig)
+    allpts = np.concatenate([m.platform_world(frame[list(m.pose_names)].to_numpy()).reshape(-1, 3),
+                             m.base_points]) if n else m.base_points
+    lo, hi = allpts.min(0), allpts.max(0)
+    for i, (_, row) in enumerate(frame.iterrows()):
+        ax = fig.add_subplot(rows, cols, i + 1, projection="3d")
+        pose = row[list(m.pose_names)].to_numpy(dtype=float)
+        top = m.platform_world(pose)
+        b = m.base_points
+        for k in range(6):
+            ax.plot(*np.stack([b[k], top[k]]).T, color="tab:blue", lw=1)
+        for pts, colour in ((b, "k"), (top, "tab:red")):
+            loop = np.concatenate([pts, pts[:1]])
+            ax.plot(*loop.T, color=colour, lw=0.8)
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
+        ax.set_zlim(lo[2], hi[2])
+        ax.set_axis_off()
+        ax.set_title(f"{int(row['solution'])}", fontsize=8)
+    fig.suptitle(f"Dietmaier's 6-6 platform: {n} real assemblies (certified, IK-checked)")
+    path = Path(path)
+    fig.savefig(path)
+    return path
+
+
+# ------------------------------------------------------------------------------------ real counts
+def real_counts_data(config: dict | None = None) -> pd.DataFrame:
+    """Random platforms (one random pose each) and random poses of Dietmaier's platform: per input
+    the geometry's root count, solutions found (certified, distinct), completeness, real count,
+    IK error, tracking steps, retries. Column ``set`` is ``random platform`` or ``Dietmaier``."""
+    c = _cfg(config)
+    rng = np.random.default_rng(c["seed"])
+    rows = []
+    for i in range(int(c["n_platforms"])):
+        m = random_platform(rng)
+        pose = random_pose(rng, 1, m)
+        t0 = time.perf_counter()
+        r = m.fk_all(m.ik(pose), return_info=True)
+        wall = time.perf_counter() - t0
+        rows.append({"set": "random platform", "index": i, "root_count": m.root_count, "n_found": int(r.n_found[0]),
+                     "complete": bool(r.complete[0]), "n_real": int(r.n_real[0]),
+                     "ik_error": float(r.ik_error[0]), "steps": int(r.steps[0]), "retries": int(r.retries[0]),
+                     "wall_s": wall})
+    m = Stewart66()
+    poses = random_pose(rng, int(c["n_poses"]), m)
+    r = m.fk_all(m.ik(poses), return_info=True)
+    for i in range(len(poses)):
+        rows.append({"set": "Dietmaier", "index": i, "root_count": m.root_count, "n_found": int(r.n_found[i]),
+                     "complete": bool(r.complete[i]), "n_real": int(r.n_real[i]), "ik_error": float(r.ik_error[i]),
+                     "steps": int(r.steps[i]), "retries": int(r.retries[i]), "wall_s": np.nan})
+    return pd.DataFrame(rows)
+
+
+def real_counts_draw(frame: pd.DataFrame, path: str | Path) -> Path:
+    """Histogram of real-solution counts (even numbers 0..40), one bar series per set."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.4, 3.6), dpi=100)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    bins = np.arange(0, 42, 2)
+    sets = list(dict.fromkeys(frame["set"]))
+    width = 1.8 / max(1, len(sets))
+    for k, s in enumerate(sets):
+        counts = np.array([(frame.loc[frame["set"] == s, "n_real"] == b).sum() for b in bins])
+        ax.bar(bins - 0.9 + width * (k + 0.5), counts, width=width, label=f"{s} (n = {(frame['set'] == s).sum()})")
+    comp = frame["complete"].mean() * 100
+    ax.set_xlabel("real forward solutions (of 40 complex)")
+    ax.set_ylabel("inputs")
+    ax.set_xticks(bins[::2])
+    ax.set_title(f"6-6 Gough-Stewart: real solutions per input ({comp:.1f} % of inputs complete)")
+    ax.legend(fontsize=8)
+    path = Path(path)
+    fig.savefig(path)
+    return path
+
+
+# ------------------------------------------------------------------------------------ timing
+def timing_data(config: dict | None = None) -> pd.DataFrame:
+    """Wall time of all solutions per input: ``fk_all`` one input per call (median of 5), ``fk_all``
+    on a batch of ``n_timing`` inputs, and batched Newton (``solve_fk``) from 40 random starts per
+    input (starts uniform in :meth:`Stewart66.pose_bounds`), with the distinct real solutions each
+    finds. Threads are whatever the process has (set ``OMP_NUM_THREADS=1`` for single-threaded)."""
+    from parakin.solvers import solve_fk
+
+    c = _cfg(config)
+    rng = np.random.default_rng(c["seed"] + 1)
+    m = Stewart66()
+    _ = m.root_count  # build the geometry's start system outside the timings
+    n = int(c["n_timing"])
+    q = m.ik(random_pose(rng, n, m))
+    rows = []
+    single = []
+    for i in range(5):
+        t0 = time.perf_counter()
+        r1 = m.fk_all(q[i], return_info=True)
+        single.append(time.perf_counter() - t0)
+    rows.append({"method": "fk_all, one input per call", "inputs": 1, "per_input_s": float(np.median(single)),
+                 "inputs_per_s": 1 / float(np.median(single)), "complete_rate": 1.0 * bool(r1.complete),
+                 "mean_real_found": float(r1.n_real)})
+    t0 = time.perf_counter()
+    r = m.fk_all(q, return_info=True)
+    wall = time.perf_counter() - t0
+    rows.append({"method": "fk_all, batched", "inputs": n, "per_input_s": wall / n, "inputs_per_s": n / wall,
+                 "complete_rate": float(r.complete.mean()), "mean_real_found": float(r.n_real.mean())})
+    lo, hi = m.pose_bounds()
+    starts = rng.uniform(lo, hi, (n, 40, 6))
+    t0 = time.perf_counter()
+    res = solve_fk(m, np.broadcast_to(q[:, None], (n, 40, 6)), x0=starts, method="newton", tol=1e-10, maxiter=50)
+    wall_n = time.perf_counter() - t0
+    found = []
+    for i in range(n):
+        x = res.x[i][res.success[i]]
+        found.append(_count_distinct(m, x))
+    rows.append({"method": "Newton from 40 random starts, batched", "inputs": n, "per_input_s": wall_n / n,
+                 "inputs_per_s": n / wall_n, "complete_rate": np.nan, "mean_real_found": float(np.mean(found))})
+    df = pd.DataFrame(rows)
+    df["x_newton_time"] = df["per_input_s"] / (wall_n / n)
+    return df
+
+
+def _count_distinct(m: Stewart66, x: np.ndarray) -> int:
+    if not len(x):
+        return 0
+    rot = m.rotation(x).reshape(len(x), 9)
+    key = np.concatenate([rot, x[:, 3:]], -1)
+    d = np.max(np.abs(key[:, None] - key[None]), -1)
+    keep = [0]
+    for i in range(1, len(x)):
+        if np.all(d[i, keep] > 1e-6):
+            keep.append(i)
+    return len(keep)
+
+
+def timing_draw(frame: pd.DataFrame, path: str | Path) -> Path:
+    """Bar chart: inputs per second of each method, annotated with the real solutions found."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.4, 3.2), dpi=100)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    y = np.arange(len(frame))
+    ax.barh(y, frame["inputs_per_s"])
+    ax.set_yticks(y, frame["method"], fontsize=8)
+    ax.set_xscale("log")
+    ax.set_xlabel("inputs per second (all solutions of each input)")
+    for yi, (_, r) in zip(y, frame.iterrows()):
+        ax.text(r["inputs_per_s"], yi, f"  {r['mean_real_found']:.1f} real found", va="center", fontsize=8)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path)
+    return path

@@ -1,0 +1,164 @@
+"""The artefact registry: one declaration per artefact drives the pipeline, the check and `which`."""
+
+import ast
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from parakin import registry
+from parakin.check import compare_file
+from parakin.cli import main
+from parakin.pipeline import artefacts, describe
+
+ROOT = Path(__file__).resolve().parents[1]
+ARTEFACTS = artefacts()
+
+
+def test_every_committed_file_is_made_by_one_artefact():
+    committed = subprocess.run(["git", "ls-files", "figures"], cwd=ROOT, capture_output=True, text=True).stdout.split()
+    assert committed, "no committed record"
+    declared = {p for a in ARTEFACTS.values() for p in a.output_paths("figures", "data/generated")}
+    assert sorted(set(committed) - declared - {"figures/REPORT.md"}) == []
+    assert sorted(p for p in declared if not p.startswith("data/") and p not in committed) == []
+
+
+def test_outputs_are_declared_once_and_every_tolerance_has_a_reason():
+    seen = {}
+    for a in ARTEFACTS.values():
+        for path in a.output_paths("figures", "generated"):
+            assert path not in seen, f"{path} declared by {seen.get(path)} and {a.key}"
+            seen[path] = a.key
+        assert a.tolerance.reason.strip() and a.tolerance.kind in registry.KINDS
+        for key in a.needs:
+            assert key in ARTEFACTS, f"{a.key} needs undeclared {key}"
+
+
+def test_which_answers_for_every_committed_file(capsys):
+    committed = subprocess.run(["git", "ls-files", "figures"], cwd=ROOT, capture_output=True, text=True).stdout.split()
+    for path in committed:
+        text = describe(path, ARTEFACTS)
+        assert "made by:" in text and ".py:" in text, text
+    assert main(["which", "figures/zhao2017_3p4s/fig14_ga_convergence.png"]) == 0
+    out = capsys.readouterr().out
+    assert "zhao2017_3p4s:fig14" in out and "optimization.py:" in out and "rule:      zhao2017_3p4s_fig14" in out
+    assert main(["which", "figures/nowhere.png"]) == 2
+
+
+def test_sources_follow_the_imports():
+    table1 = ARTEFACTS["zhao2017_3p4s:table1"]
+    sources = {Path(p).relative_to(ROOT / "src").as_posix() for p in table1.sources()}
+    assert "parakin/papers/zhao2017_3p4s/kinematics.py" in sources
+    assert "parakin/mechanisms/p3p4s.py" in sources
+    assert "parakin/report.py" not in sources
+
+
+def test_prune_config_keeps_only_declared_sections():
+    from parakin.config import DEFAULT_CONFIG, load_config
+
+    config = load_config(DEFAULT_CONFIG)
+    pruned = registry.prune_config(config, ARTEFACTS["zhao2017_3p4s:table1"])
+    assert set(pruned) == {"seed", "figures_dir", "generated_dir", "zhao2017_3p4s"}
+    assert set(pruned["zhao2017_3p4s"]) == {"table1"}
+
+
+def _import_graph() -> dict[str, set[str]]:
+    src = ROOT / "src"
+    graph = {}
+    for path in (src / "parakin").rglob("*.py"):
+        mod = ".".join(path.relative_to(src).with_suffix("").parts).removesuffix(".__init__")
+        package = mod if path.name == "__init__.py" else mod.rpartition(".")[0]
+        deps = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    parts = package.split(".")[: len(package.split(".")) - node.level + 1]
+                    base = ".".join([*parts, base] if base else parts)
+                names = [base] + [f"{base}.{a.name}" for a in node.names]
+            deps |= {n for n in names if n.startswith("parakin")}
+        graph[mod] = deps
+    # a dependency on a.b.c is one on the module itself (a name imported from it is not a module)
+    return {m: {d if d in graph else d.rpartition(".")[0] for d in deps} - {m} for m, deps in graph.items()}
+
+
+def test_no_import_cycle():
+    """Late imports inside functions count too: the module graph must be acyclic."""
+    graph = _import_graph()
+    state, cycle = {}, []
+
+    def visit(m, stack):
+        state[m] = 1
+        for d in sorted(graph.get(m, ())):
+            if d not in graph:
+                continue
+            if state.get(d) == 1:
+                cycle.append(stack[stack.index(d):] + [d])
+            elif d not in state:
+                visit(d, stack + [d])
+        state[m] = 2
+
+    for m in sorted(graph):
+        if m not in state:
+            visit(m, [m])
+    assert not cycle, cycle[:3]
+
+
+def test_check_statuses(tmp_path):
+    tol = registry.ROUNDING
+    rec, new = tmp_path / "rec.csv", tmp_path / "new.csv"
+    pd.DataFrame({"a": [1.0, 2.0], "label": ["x", "y"], "time_ms": [1, 2]}).to_csv(rec, index=False)
+    pd.DataFrame({"a": [1.0, 2.0 + 1e-9], "label": ["x", "y"], "time_ms": [5, 9]}).to_csv(new, index=False)
+    assert compare_file(rec, new, tol)[0] == "within tolerance"  # timing columns never decide
+    pd.DataFrame({"a": [1.0, 2.1], "label": ["x", "y"], "time_ms": [1, 2]}).to_csv(new, index=False)
+    status, column, excess, detail = compare_file(rec, new, tol)
+    assert (status, column) == ("differs", "a") and excess > 1 and "row 1" in detail
+    pd.DataFrame({"a": [1.0, 2.0], "label": ["x", "z"], "time_ms": [1, 2]}).to_csv(new, index=False)
+    assert compare_file(rec, new, tol)[:2] == ("differs", "label")
+    new.write_bytes(rec.read_bytes())
+    assert compare_file(rec, new, tol)[0] == "identical"
+    assert compare_file(rec, tmp_path / "absent.csv", tol)[0] == "missing"
+    stat = registry.Tolerance("statistical", 0.0, 0.0, "only b is stable", columns={"b": (0.1, 0.0)})
+    pd.DataFrame({"a": [1.0], "b": [10.0]}).to_csv(rec, index=False)
+    pd.DataFrame({"a": [7.0], "b": [10.5]}).to_csv(new, index=False)
+    assert compare_file(rec, new, stat)[0] == "within tolerance"  # statistical: only declared columns
+    pd.DataFrame({"a": [1.0], "b": [12.0]}).to_csv(new, index=False)
+    assert compare_file(rec, new, stat)[:2] == ("differs", "b")
+
+
+def _workdir(tmp_path: Path) -> Path:
+    for item in ("Snakefile", "workflow", "config"):
+        src = ROOT / item
+        (shutil.copytree if src.is_dir() else shutil.copy)(src, tmp_path / item)
+    shutil.copytree(ROOT / "data" / "reference", tmp_path / "data" / "reference")
+    return tmp_path
+
+
+def test_fresh_clone_schedules_every_artefact(tmp_path):
+    """Nothing counts as done because it is committed: a dry run on a fresh tree plans every rule."""
+    work = _workdir(tmp_path)
+    shutil.copytree(ROOT / "figures", work / "figures")
+    res = subprocess.run([sys.executable, "-m", "snakemake", "-n", "--cores", "2", "--quiet", "rules"],
+                         cwd=work, capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr[-2000:]
+    planned = {line.split()[0] for line in res.stdout.splitlines() if line.strip() and line.split()[-1].isdigit()}
+    assert {a.rule for a in ARTEFACTS.values()} | {"report", "reproduction_check", "all"} <= planned
+
+
+def test_a_toy_study_runs_from_one_registration_line(tmp_path):
+    """A new mechanism with its own paper: one line in the config's `studies`, nothing else shared."""
+    work = _workdir(tmp_path)
+    shutil.copy(ROOT / "tests" / "data" / "toy_study.py", work / "toy_study.py")
+    (work / "toy.yaml").write_text("studies: [toy_study]\nrecord_dir: null\n")
+    env = {**__import__("os").environ, "PYTHONPATH": str(work)}
+    res = subprocess.run([sys.executable, "-m", "snakemake", "--cores", "2", "--configfile", "config/quick.yaml",
+                          "toy.yaml", "-q"], cwd=work, capture_output=True, text=True, timeout=600, env=env)
+    assert res.returncode == 0, res.stdout[-2000:] + res.stderr[-2000:]
+    table = pd.read_csv(work / "build" / "quick" / "figures" / "toy_study" / "table1.csv")
+    assert len(table) == 10 and table["error_m"].max() < 1e-9
