@@ -1,4 +1,4 @@
-"""The solver atlas (src/parakin/atlas.py, src/parakin/extras.py) and the benchmark summary."""
+"""The solver atlas (src/parakin/atlas.py, src/parakin/studies/solver_atlas.py) and the benchmark summary."""
 
 from __future__ import annotations
 
@@ -13,11 +13,11 @@ import pandas as pd
 import pytest
 from matplotlib.testing.compare import compare_images
 
-from parakin import extras
+from parakin.studies import solver_atlas as extras
 from parakin.atlas import AtlasCase, AtlasSolver, Scenario, evaluate, make_scenario, pose_error, run_atlas
 from parakin.io import is_timing_column
 from parakin.mechanisms import P3P4S, Stewart36, UPS2
-from parakin.solvers import solve_fk
+from parakin.solvers import Status, solve_fk
 from parakin.workspace import sample_reachable
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -30,18 +30,21 @@ def _stewart36_box(m: Stewart36, fraction: float = 0.15):
 # ------------------------------------------------------------------------------ success = right assembly
 def test_converged_on_the_mirror_assembly_is_a_failure():
     """Constructed case: Newton started at the mirror image (below the base) of the true pose
-    converges there with zero residual; the atlas counts it as a wrong assembly, not a success."""
+    converges there with zero residual; solve_fk and the atlas count it as a wrong assembly, not a
+    success."""
     m = Stewart36()
     truth = sample_reachable(m, 5, np.random.default_rng(1), bounds=_stewart36_box(m))
     q = m.ik(truth)
     mirror = m.mirror(truth)
     sc = Scenario("constructed", q, mirror, truth, np.ones(5))
     res = solve_fk(m, q, x0=mirror, method="newton", tol=1e-12)
-    assert np.all(res.success)  # the solver itself says "converged" ...
+    assert np.all(res.residual <= 1e-12) and np.all(res.joint_error <= 1e-9)  # Newton converged ...
     assert np.all(pose_error(m, res.x, mirror) < 1e-9)  # ... on the mirror assembly
+    assert not res.success.any() and np.all(res.status == Status.WRONG_ASSEMBLY)
+    assert res.message.endswith("5 converged on another assembly")
     row = evaluate(m, AtlasSolver("Newton", "newton"), sc, tol=1e-10, success_tol=1e-6)
     assert row["success_rate"] == 0.0
-    assert row["wrong_assembly_rate"] == 1.0
+    assert row["wrong_assembly_rate"] == 1.0 and row["n_wrong_assembly"] == 5 and row["n_wrong_answer"] == 0
     # and from the truth itself the same rows are successes
     ok = evaluate(m, AtlasSolver("Newton", "newton"), Scenario("c", q, truth, truth, np.ones(5)))
     assert ok["success_rate"] == 1.0 and ok["wrong_assembly_rate"] == 0.0
@@ -56,6 +59,7 @@ def test_other_branch_of_the_closed_form_is_a_wrong_assembly():
     lower = evaluate(m, AtlasSolver("closed, lower", "closed-form", {"branch": "lower"}), sc)
     assert upper["success_rate"] == 1.0
     assert lower["success_rate"] == 0.0 and lower["wrong_assembly_rate"] == 1.0
+    assert np.all(solve_fk(m, q, method="closed-form", branch="lower").status == Status.WRONG_ASSEMBLY)
 
 
 def test_pose_error_compares_angles_modulo_2pi():
@@ -73,8 +77,15 @@ def test_all_solutions_method_returns_the_solution_nearest_the_start():
     q = m.ik(truth)
     near = solve_fk(m, q, x0=truth, method="all-solutions")
     assert np.all(near.success) and np.max(pose_error(m, near.x, truth)) < 1e-9
-    far = solve_fk(m, q, x0=m.mirror(truth), method="all-solutions")  # nearest to the mirror: the mirror
-    assert np.all(far.success) and np.max(pose_error(m, far.x, m.mirror(truth))) < 1e-9
+    # from the mirror image (below the base): the nearest solution *above* the base, the assembly asked for
+    far = solve_fk(m, q, x0=m.mirror(truth), method="all-solutions")
+    assert np.all(far.success) and np.all(far.x[:, 5] > 0)
+    sols = m.fk_all(q)
+    above = np.where(np.nan_to_num(sols[..., 5]) > 0, 0.0, np.inf)
+    lo, hi = m.pose_bounds()
+    dist = np.sqrt(np.sum((m.pose_difference(sols, m.mirror(truth)[:, None]) / (hi - lo)) ** 2, -1)) + above
+    nearest = sols[np.arange(len(q)), np.nanargmin(dist, -1)]
+    assert np.max(pose_error(m, far.x, nearest)) < 1e-9
     with pytest.raises(ValueError, match="no all-solutions"):
         solve_fk(P3P4S(), P3P4S().ik(P3P4S().home()), method="all-solutions")
 

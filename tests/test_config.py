@@ -60,3 +60,43 @@ def test_snakemake_validates_the_config():
     )
     assert res.returncode != 0
     assert "seed" in res.stdout + res.stderr and "minimum" in res.stdout + res.stderr
+
+
+# ------------------------------------------------------------------ hostile configs: rejected at the door
+@pytest.mark.parametrize(
+    "path, value, message",
+    [
+        (("ye_stewart12", "d_grid_pct"), [[5, 100, 1e-12]], r"d_grid_pct.0' = \[5, 100, step 1e-12\]: .* more than the limit 100000"),
+        (("ye_stewart12", "d_grid_pct"), [[100, 5, 5]], r"start 100 must be <= stop 5"),
+        (("ye_stewart12", "basin_levels_pct"), [1e308], r"basin_levels_pct.0' = 1e\+308: .*maximum"),
+        (("ye_stewart12", "structures_mm"), {"min": 30, "max": 10, "step": 10}, r"start 30 must be <= stop 10"),
+        (("zhao2017_3p4s", "optimization", "bounds", "L"), [0.45, 0.30], r"bounds.L' = \[0.45, 0.3\]: lower bound"),
+        (("zhao2017_3p4s", "indices", "k"), float("nan"), r"'zhao2017_3p4s.indices.k' = nan: must be a finite number"),
+        (("li2020_2ups", "fig2_seed"), 10**30, r"fig2_seed"),
+    ],
+)
+def test_hostile_values_are_rejected_by_name(quick_config, path, value, message):
+    cfg = copy.deepcopy(quick_config)
+    node = cfg
+    for key in path[:-1]:
+        node = node[key]
+    node[path[-1]] = value
+    with pytest.raises(ConfigError, match=message):
+        validate(cfg)
+
+
+def test_one_short_message_per_bad_key(quick_config):
+    cfg = copy.deepcopy(quick_config)
+    cfg["zhao2017_3p4s"]["table1"] = "not a section"  # a whole section replaced: no dump of it or the schema
+    cfg["seed"] = -3
+    with pytest.raises(ConfigError) as err:
+        validate(cfg)
+    text = str(err.value)
+    assert text.count("config key") == 2 and len(text) < 600 and "\n" not in text
+
+
+def test_yaml_syntax_error_is_one_line(tmp_path):
+    bad = tmp_path / "tab.yaml"
+    bad.write_text("seed: 1\nzhao2017_3p4s:\n\ttable1: {}\n")
+    with pytest.raises(ConfigError, match=r"is not valid YAML \(line 3, column 1\)"):
+        load_config(bad)

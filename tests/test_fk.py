@@ -5,11 +5,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from parakin.errors import UnreachableError
 from parakin.mechanisms import P3P4S
 from parakin.nn import BPNetwork
 from parakin.papers.zhao2017_3p4s import fk
-from parakin.solvers import solve_fk
+from parakin.solvers import Status, solve_fk
 from parakin.workspace import sample_reachable
 
 
@@ -57,11 +56,13 @@ def test_closed_form_agrees_with_every_numeric_solver(inputs, method):
     assert np.max(np.abs(res.x - closed)) <= 1e-10
 
 
-def test_hybrid_rejects_unreachable_strokes(network):
-    with pytest.raises(UnreachableError, match="do not meet"):
-        solve_fk(P3P4S(), [0.0, 1.5, 0.0], method="hybrid", network=network)
-    with pytest.raises(UnreachableError, match="in the other mode"):
-        solve_fk(P3P4S(), [[0.43, 0.43, 0.43], [0.0, 0.9, 0.2]], method="hybrid", network=network)
+def test_hybrid_flags_unreachable_strokes_without_aborting_the_batch(network):
+    """Strokes whose spheres do not meet, or that assemble only in the other mode, get their own
+    status; the reachable row of the same batch is still solved."""
+    res = solve_fk(P3P4S(), [[0.43, 0.43, 0.43], [0.0, 1.5, 0.0], [0.0, 0.9, 0.2]], method="hybrid",
+                   network=network)
+    assert res.success.tolist() == [True, False, False]
+    assert np.all(res.status[1:] == Status.UNREACHABLE)
 
 
 def test_training_is_reproducible(trained, tmp_path):

@@ -27,7 +27,7 @@ def test_table2_contradicts_own_ik():
     c = consistency_checks()
     assert c["same_l1_Y_spread_mm"] == pytest.approx(1.043)  # cases 1, 2: l_i1 = 0, Y differ
     assert c["order_violations"] >= 1  # Y5 < Y4 though l_i1(5) < l_i1(4)
-    assert c["a_max_mm"] < 15 and c["c_max_mm"] < 18  # notes: a <= 14.6, c <= 17.3 mm
+    assert c["a_max_mm"] < 15 and c["c_max_mm"] < 18  # docs/li2020_2ups.md#s4.3: a <= 14.6, c <= 17.3 mm
     assert c["a_max_with_positive_l1_mm"] == 0.0
     assert c["sign_violations"] == 4
 
@@ -55,7 +55,7 @@ def test_artefacts_and_claims(outputs):
     thr = {c.variant.split(":")[0]: c.verdict for c in claims if c.quantity == "fitness_threshold"}
     assert thr["PSO as_printed"] == "differs"
     assert by  # summary is built from outputs
-    # notes §6 claims 2, 4, 5, 8, 9, 11
+    # docs/li2020_2ups.md#s6: claims C2, C4, C5, C8, C9, C11
     q = {(c.artefact, c.quantity): c for c in claims}
     for key in (("eq7", "B2B3_identity"), ("eq14", "P_identity"), ("eq14", "X_residual"), ("eq14", "Z_residual"),
                 ("eq9-11", "l1_identity"), ("eq9-11", "l2_identity"), ("eq9-11", "l3_identity")):

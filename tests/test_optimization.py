@@ -46,7 +46,7 @@ def test_rank_scaling_and_normalisation():
     assert e.sum() == pytest.approx(8) and e[1] > e[3] > e[0] > e[2]
     f = normalised_sum(np.array([[10.0, 0.5, 2.0], [20.0, 0.1, 4.0]]), [10, 0.1, 2], [20, 0.5, 4],
                        [False, True, False])
-    np.testing.assert_allclose(f, [0.0, 3.0])  # stiffness term flipped (notes G18)
+    np.testing.assert_allclose(f, [0.0, 3.0])  # stiffness term flipped (docs/zhao2017_3p4s.md#g18)
     with pytest.raises(ValueError, match="max > min"):
         normalised_sum(np.ones((1, 3)), [1, 1, 1], [1, 2, 3], [False] * 3)
 
@@ -100,7 +100,7 @@ def test_section_artefacts_write_their_files(small_config, tmp_path):
     assert all(np.isfinite(c.ours) for c in claims)
     text = op.summary(tmp_path, ref)
     assert "sigma1" in text and "f_min" in text
-    # ellipsoid semi-axes are 1/sigma_i(J) at home: cond 9.936 (notes §3.5)
+    # ellipsoid semi-axes are 1/sigma_i(J) at home: cond 9.936 (docs/zhao2017_3p4s.md#s3.5)
     ax = pd.read_csv(tmp_path / "fig12_velocity_ellipsoid_axes.csv")
     assert ax["semi_axis_m_s"].max() / ax["semi_axis_m_s"].min() == pytest.approx(9.936, abs=1e-3)
 

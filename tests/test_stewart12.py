@@ -9,7 +9,7 @@ from parakin.papers.ye_stewart12.common import run_mode, steps  # registers gaus
 from parakin.solvers import solve_fk
 
 TEST_POSE = np.array([0.5e-3, 0.0, 0.0, -0.05, 0.05, 0.05])
-#: notes 002 §1.3: leg lengths (mm) at the §3.3 pose, Euler-parameter and Cayley readings
+#: docs/ye_stewart12.md#s1.3: leg lengths (mm) at the §3.3 pose, Euler-parameter and Cayley readings
 NOTES_EP = [26.865024, 23.922647, 26.585689, 24.132186, 23.605347, 26.108406, 26.976044, 24.047256,
             26.639024, 23.134415, 23.671737, 27.106966]
 NOTES_CAYLEY = [26.856652, 23.924807, 26.579426, 24.136746, 23.610032, 26.102050, 26.967297, 24.048945,
@@ -42,7 +42,7 @@ def test_fk_inverts_ik_on_1000_poses(convention):
 
 
 def test_linear_fk_matches_notes_closed_forms_off_manifold():
-    """notes §1.5's explicit formulas (x0, u1y, u2z) hold for ANY lengths, not only consistent ones."""
+    """docs/ye_stewart12.md#s1.5's explicit formulas (x0, u1y, u2z) hold for ANY lengths, not only consistent ones."""
     m = Stewart12()
     n, L = m.n, m.L
     q = np.random.default_rng(1).uniform(0.02, 0.03, (50, 12)) ** 2

@@ -29,7 +29,7 @@ def wrap(d):
 
 
 def test_reconstructed_inputs_match_notes():
-    # notes §3.2: L = IK(Table 3 row 1, b)
+    # docs/li2017_stewart36.md#s3.2: L = IK(Table 3 row 1, b)
     assert np.allclose(Stewart36(b=1.0).ik(pose_from_paper(TABLE3_ROW1)),
                        [2.201919, 1.889476, 2.025009, 1.901896, 1.871540, 1.573125], atol=1e-6)
     assert np.allclose(Stewart36(b=3.0).ik(pose_from_paper(TABLE3_ROW1)),
@@ -98,7 +98,7 @@ def test_fk_all_certified_roots_and_true_pose():
 
 
 def test_fk_all_reconstructed_input_counts():
-    # notes §4.3: 4 real (2 above) for b = 1, 2; 8 real (4 above) for b = 3; row 1 among them
+    # docs/li2017_stewart36.md#s4.3: 4 real (2 above) for b = 1, 2; 8 real (4 above) for b = 3; row 1 among them
     for b, n in ((1.0, 4), (2.0, 4), (3.0, 8)):
         m = Stewart36(b=b)
         sols = m.fk_all(m.ik(m.home()))

@@ -1,5 +1,5 @@
 """Reproduction of Zhao 2017 Table 1: the documented discrepancy is asserted, so a change of the
-geometry or the IK that alters it fails here (notes §4.1-4.2)."""
+geometry or the IK that alters it fails here (docs/zhao2017_3p4s.md#s4.1, #s4.2)."""
 
 import numpy as np
 import pandas as pd
@@ -27,20 +27,20 @@ def test_stated_geometry_misses_table1(table1_outputs):
     geo = pd.read_csv(table1_outputs / "extra_table1_fit.csv").set_index("geometry")
     stated = geo.loc["stated"]
     assert stated["delta"] == pytest.approx(0.427307, abs=1e-6)
-    assert stated["max_abs_err"] == pytest.approx(0.02044, abs=5e-5)  # notes §4.1: 0.0204 m
-    assert stated["n_within_rounding"] == 5  # notes §4.1: 5/15
+    assert stated["max_abs_err"] == pytest.approx(0.02044, abs=5e-5)  # docs/zhao2017_3p4s.md#s4.1: 0.0204 m
+    assert stated["n_within_rounding"] == 5  # docs/zhao2017_3p4s.md#s4.1: 5/15
 
 
 def test_fitted_geometry_reproduces_table1_within_rounding(table1_outputs):
     geo = pd.read_csv(table1_outputs / "extra_table1_fit.csv").set_index("geometry")
     fit, mm, opt = geo.loc["best fit"], geo.loc["minimax"], geo.loc["optimised"]
-    # least squares: near the optimised design's phi = 35 deg (notes §4.2: phi in [34.6, 36.1])
+    # least squares: near the optimised design's phi = 35 deg (docs/zhao2017_3p4s.md#s4.2: phi in [34.6, 36.1])
     assert 34.6 <= fit["phi_deg"] <= 36.2 and 0.49 <= fit["delta"] <= 0.505
     assert fit["n_within_rounding"] >= 14
-    # a geometry exists that reproduces all 15 strokes within rounding (notes: delta 0.4933-0.4946 at 35 deg)
+    # a geometry exists that reproduces all 15 strokes within rounding (docs/zhao2017_3p4s.md#notes-differ: delta 0.4933-0.4946 at 35 deg)
     assert mm["n_within_rounding"] == 15 and mm["max_abs_err"] <= 0.005
     assert 34.6 <= mm["phi_deg"] <= 36.1
-    assert opt["max_abs_err"] == pytest.approx(0.01244, abs=5e-5)  # notes §4.2: 0.0124
+    assert opt["max_abs_err"] == pytest.approx(0.01244, abs=5e-5)  # docs/zhao2017_3p4s.md#s4.2: 0.0124
 
 
 def test_table1_csv_matches_the_ik(table1_outputs):

@@ -23,7 +23,7 @@ def test_reference_transcription():
     t5 = ref[ref["artefact"] == "table5"].set_index("quantity")["value"]
     assert [t5[f"d{d}.nr_steps"] for d in range(20, 26)] == ["5", "5", "5", "5", "6", "6"]
     assert [t5[f"d{d}.broyden_time"] for d in range(20, 26)] == ["156.3", "156.3", "156.3", "156.3", "171.9", "187.5"]
-    # the printed means are the means of the printed rows (notes §3)
+    # the printed means are the means of the printed rows (docs/ye_stewart12.md#s3)
     nr_t = np.mean([float(t5[f"d{d}.nr_time"]) for d in range(20, 26)])
     assert f"{nr_t:.1f}" == t5["mean.nr_time"]
     t6 = ref[ref["artefact"] == "table6"].set_index("quantity")["value"]
@@ -83,9 +83,9 @@ def test_figures_exist_and_match_their_csv(outputs):
     assert len(f9) == 6 * 12 and (f9.groupby("R")["active"].sum() == f9.groupby("R")["active_legs"].first()).all()
     assert f9.groupby("R")["active"].sum().to_dict() == {r: 6 + r for r in range(6)}
     home = f9[f9["R"] == 0].set_index("leg")["home_direction"]
-    assert [home[k] for k in range(1, 7)] == ["+y", "-z", "+y", "-x", "-z", "+x"]  # notes §1.2
+    assert [home[k] for k in range(1, 7)] == ["+y", "-z", "+y", "-x", "-z", "+x"]  # docs/ye_stewart12.md#s1.2
     cond = pd.read_csv(outputs / "extra_conditioning.csv").set_index("R")
-    assert cond.loc[0, "cond_dF_dX"] == pytest.approx(179.37, abs=0.01)  # notes §2.3
+    assert cond.loc[0, "cond_dF_dX"] == pytest.approx(179.37, abs=0.01)  # docs/ye_stewart12.md#s2.3
 
 
 # the notebook itself is executed by nbmake (pytest --nbmake over notebooks/)

@@ -15,13 +15,17 @@ seeded generator, one set of *scenarios*, each a set of FK problems with a known
 * ``near-singular``: the ``n`` poses of largest condition number of ``A = d residual / d pose``
   (a forward, type-II singularity where ``A`` is singular) out of ``pool_factor * n`` random ones.
 
-A solve succeeds when the solver says it converged **and** its pose is within ``success_tol`` of
-the reference pose (angles compared modulo 2 pi): a converged solve on another assembly (a mirror
-image, the other branch) is a failure, counted separately as ``wrong_assembly_rate``.
+A solve succeeds when :func:`~parakin.solvers.solve_fk` calls it a success (converged *and* a
+valid answer: in the domain, on the mechanism's assembly, its IK within ``joint_tol`` of the joints)
+**and** its pose is within ``success_tol`` of the reference pose (angles compared modulo 2 pi).
+Failures that look like answers are counted apart: ``wrong_assembly_rate`` / ``n_wrong_assembly``, a
+converged solve on another assembly (a mirror image, the other branch: status ``WRONG_ASSEMBLY``,
+or a valid answer far from the reference); ``wrong_answer_rate`` / ``n_wrong_answer``, a residual
+within ``tol`` whose pose is not an answer (status ``WRONG_ANSWER`` or ``OUT_OF_DOMAIN``).
 
 Every solver of a mechanism sees the same joints and the same starts (PSO searches the box and
 ignores the start; the hybrid starts from its network). Columns per (mechanism, scenario, solver):
-success rate, wrong-assembly rate, median / 95th-percentile pose error, median iterations and
+success rate, wrong-assembly and wrong-answer rates and counts, median / 95th-percentile pose error, median iterations and
 function evaluations, and in the nominal scenario the median latency of one solve per call and the
 throughput of one batched call, with ratios against ``scipy.optimize.root`` measured in the same
 run. Timing columns carry the words latency / throughput / speedup (see
@@ -39,7 +43,7 @@ import numpy as np
 import pandas as pd
 
 from parakin.mechanisms.base import Array, Mechanism
-from parakin.solvers import solve_fk
+from parakin.solvers import Status, solve_fk
 from parakin.workspace import sample_reachable
 
 __all__ = ["AtlasSolver", "AtlasCase", "Scenario", "SCENARIOS", "BASELINE", "make_scenario", "pose_error",
@@ -146,11 +150,12 @@ def _solve(mech: Mechanism, solver: AtlasSolver, joints: Array, start: Array, to
     t0 = time.perf_counter()
     if solver.batched:
         r = solve_fk(mech, joints, x0=start, **solver.kwargs(tol, maxiter, slice(0, len(joints))))
-        out = (r.x, r.success, r.nit, r.nfev)
+        out = (r.x, r.success, r.status, r.nit, r.nfev)
     else:
         rs = [solve_fk(mech, joints[i], x0=start[i], **solver.kwargs(tol, maxiter, i)) for i in range(len(joints))]
         out = (np.array([r.x for r in rs]).reshape(start.shape), np.array([bool(r.success) for r in rs]),
-               np.array([int(r.nit) for r in rs]), np.array([int(r.nfev) for r in rs]))
+               np.array([int(r.status) for r in rs]), np.array([int(r.nit) for r in rs]),
+               np.array([int(r.nfev) for r in rs]))
     return out, time.perf_counter() - t0
 
 
@@ -168,14 +173,18 @@ def evaluate(
     q, x0, ref = scenario.joints[rows], scenario.start[rows], scenario.reference[rows]
     if len(q) == 0:
         raise ValueError(f"scenario {scenario.name!r} has no inputs left for {solver.label}")
-    (x, converged, nit, nfev), seconds = _solve(mech, solver, q, x0, tol, maxiter)
+    (x, success, status, nit, nfev), seconds = _solve(mech, solver, q, x0, tol, maxiter)
     err = pose_error(mech, x, ref)
     right = err <= success_tol
+    wrong_assembly = (status == Status.WRONG_ASSEMBLY) | (success & ~right)
+    wrong_answer = np.isin(status, [Status.WRONG_ANSWER, Status.OUT_OF_DOMAIN])
     return {
         "solver": solver.label, "method": solver.method, "scenario": scenario.name, "n": len(q),
         "median_cond": float(np.median(scenario.cond[rows])),
-        "success_rate": float(np.mean(converged & right)),
-        "wrong_assembly_rate": float(np.mean(converged & ~right)),
+        "success_rate": float(np.mean(success & right)),
+        "wrong_assembly_rate": float(np.mean(wrong_assembly)),
+        "wrong_answer_rate": float(np.mean(wrong_answer)),
+        "n_wrong_assembly": int(np.sum(wrong_assembly)), "n_wrong_answer": int(np.sum(wrong_answer)),
         "median_err": float(np.median(err)), "p95_err": float(np.percentile(err, 95)),
         "median_nit": float(np.median(nit)), "median_nfev": float(np.median(nfev)),
         "_throughput": len(q) / seconds,

@@ -8,7 +8,10 @@ paper`` reads and prints the units the paper uses.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
+import math
+import re
 import sys
 from pathlib import Path
 from typing import Sequence
@@ -23,9 +26,62 @@ EXIT_BAD_INPUT = 2
 EXIT_NOT_CONVERGED = 1
 
 
+#: largest --maxiter (a bound on the work one command may ask for)
+MAXITER_LIMIT = 100_000
+#: largest magnitude of a --param value in SI units (m, rad): far beyond any real mechanism
+PARAM_LIMIT = 1e6
+#: what argparse must read as a (negative) number, not an option: -1, -1.5, -.5, -1e-3, -1.5E+02, -inf, -nan
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
+
+
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        # argparse's own pattern misses scientific notation: "-1e-3" would be taken for an option
+        self._negative_number_matcher = _NEGATIVE_NUMBER
+
     def error(self, message: str):  # one line, status 2 (argparse prints usage too; keep it short)
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
+
+
+def finite_float(text: str) -> float:
+    """A finite number (decimal or scientific notation, any sign), or a clear argparse error."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return value
+
+
+def nonnegative_float(text: str) -> float:
+    value = finite_float(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r} must be >= 0")
+    return value
+
+
+def iteration_count(text: str) -> int:
+    """An integer in [0, MAXITER_LIMIT]; "1e3" is accepted (an integral number)."""
+    value = finite_float(text)
+    if not value.is_integer() or not 0 <= value <= MAXITER_LIMIT:
+        raise argparse.ArgumentTypeError(f"{text!r} must be an integer in [0, {MAXITER_LIMIT}]")
+    return int(value)
+
+
+def parameters_of(cls) -> list[str]:
+    """The real parameters ``--param`` may set: the mechanism's float fields (class attributes,
+    tuples, switches such as a branch or a convention are not parameters)."""
+    return sorted(f.name for f in dataclasses.fields(cls) if f.type in ("float", float))
+
+
+def _parameter(name: str, key: str, text: str) -> float:
+    value = parse_quantity(text)
+    if not (math.isfinite(value) and 0 < value <= PARAM_LIMIT):
+        raise ValueError(f"--param {key}={text} of {name}: {value!r} must be a positive finite number "
+                         f"<= {PARAM_LIMIT:g} (SI units)")
+    return value
 
 
 def _mechanism(name: str, params: Sequence[str]):
@@ -35,12 +91,27 @@ def _mechanism(name: str, params: Sequence[str]):
         key, sep, value = item.partition("=")
         if not sep:
             raise ValueError(f"--param {item!r} must look like NAME=VALUE (e.g. phi=35deg)")
-        changes[key.strip()] = parse_quantity(value)
-    fields = cls.__dataclass_fields__
-    unknown = sorted(set(changes) - set(fields))
+        changes[key.strip()] = value
+    known = parameters_of(cls)
+    unknown = sorted(set(changes) - set(known))
     if unknown:
-        raise ValueError(f"unknown parameter(s) {unknown} of {name}; known: {sorted(fields)}")
-    return cls(**changes)
+        raise ValueError(f"unknown parameter(s) {unknown} of {name}; known: {known}")
+    return cls(**{key: _parameter(name, key, text) for key, text in changes.items()})
+
+
+def _finite(values: np.ndarray, what: str, inputs: np.ndarray) -> np.ndarray:
+    """``values`` if every entry is finite; else a ValueError naming the input (too large?)."""
+    bad = ~np.all(np.isfinite(np.atleast_2d(values)), axis=-1)
+    if np.any(bad):
+        row = np.atleast_2d(inputs)[int(np.argmax(bad))]
+        raise ValueError(f"{what} of {np.array2string(row, precision=6)} is not finite "
+                         f"(|values| up to {np.max(np.abs(row)):.3g}: too large for this mechanism?)")
+    return values
+
+
+def _dumps(obj) -> str:
+    """Strict JSON (no NaN or Infinity)."""
+    return json.dumps(obj, allow_nan=False)
 
 
 def _batch(values: Sequence[float], n: int, what: str, names: Sequence[str]) -> np.ndarray:
@@ -55,17 +126,20 @@ def _units(mech, kind: str, paper: bool) -> tuple[str, ...]:
 
 
 def _fmt_vector(names, values, units) -> str:
+    """``name = value unit`` per entry; values in a form the options read back (``-2.1e-17`` too)."""
     return "  ".join(f"{n} = {v:.10g} {u}" for n, v, u in zip(names, values, units))
 
 
 def cmd_ik(args) -> int:
     mech = _mechanism(args.mechanism, args.param)
     pu, ju = _units(mech, "pose", args.units == "paper"), _units(mech, "joint", args.units == "paper")
-    pose = to_si(_batch(args.pose, mech.n_pose, "--pose", mech.pose_names), pu)
-    joints = from_si(mech.ik(pose), ju)
+    given = _batch(args.pose, mech.n_pose, "--pose", mech.pose_names)
+    pose = _finite(to_si(given, pu), "--pose in SI units", given)
+    with np.errstate(all="ignore"):
+        joints = _finite(from_si(mech.ik(pose), ju), "the inverse kinematics", given)
     if args.json:
-        print(json.dumps({"mechanism": mech.name, "parameters": mech.parameters(), "pose": from_si(pose, pu).tolist(),
-                          "pose_units": pu, "joints": joints.tolist(), "joint_units": ju}))
+        print(_dumps({"mechanism": mech.name, "parameters": mech.parameters(), "pose": given.tolist(),
+                      "pose_units": pu, "joints": joints.tolist(), "joint_units": ju}))
     else:
         for q in np.atleast_2d(joints):
             print(_fmt_vector(mech.joint_names, q, ju))
@@ -77,28 +151,42 @@ def cmd_fk(args) -> int:
 
     mech = _mechanism(args.mechanism, args.param)
     pu, ju = _units(mech, "pose", args.units == "paper"), _units(mech, "joint", args.units == "paper")
-    joints = to_si(_batch(args.joints, mech.n_joints, "--joints", mech.joint_names), ju)
-    mech.check_joints(joints)  # unreachable joints: the mechanism's own error, whatever the solver
+    given = _batch(args.joints, mech.n_joints, "--joints", mech.joint_names)
+    joints = _finite(to_si(given, ju), "--joints in SI units", given)
+    with np.errstate(all="ignore"):
+        mech.check_joints(joints)  # unreachable joints: the mechanism's own error, whatever the solver
     method = args.solver or ("closed-form" if mech.fk is not None else "newton")
     if method not in METHODS:
         raise ValueError(f"unknown solver {method!r}; known: {', '.join(sorted(METHODS))}")
     x0 = None if args.x0 is None else to_si(_batch(args.x0, mech.n_pose, "--x0", mech.pose_names), pu)
     options = {"network": _network(mech, args.network)} if method == "hybrid" else {}
-    res = solve_fk(mech, joints, x0=x0, method=method, tol=args.tol, maxiter=args.maxiter, **options)
-    pose = from_si(res.x, pu)
+    res = solve_fk(mech, joints, x0=x0, method=method, tol=args.tol, maxiter=args.maxiter,
+                   joint_tol=args.joint_tol, **options)
+    with np.errstate(all="ignore"):
+        pose = _finite(from_si(res.x, pu), "the solution in --units " + args.units, given)
     if args.json:
-        out = {"mechanism": mech.name, "parameters": mech.parameters(), "joints": from_si(joints, ju).tolist(),
+        out = {"mechanism": mech.name, "parameters": mech.parameters(), "joints": given.tolist(),
                "joint_units": ju, "pose_units": pu, **res.to_dict()}
         out["x"] = pose.tolist()
-        print(json.dumps(out))
+        print(_dumps(out))
     else:
         for x in np.atleast_2d(pose):
             print(_fmt_vector(mech.pose_names, x, pu))
     if not np.all(res.success):
-        print(f"parakin fk: error: {res.message} (residual {np.max(res.residual):.3g} > tol {args.tol:g}; "
-              "raise --maxiter, or the joints may be unreachable)", file=sys.stderr)
+        print(f"parakin fk: error: {res.message} ({_why(res, args.tol)})", file=sys.stderr)
         return EXIT_NOT_CONVERGED
     return 0
+
+
+def _why(res, tol: float) -> str:
+    """The numbers behind a failed solve and what to try."""
+    from parakin.solvers import Status
+
+    residual, joint = np.max(res.residual), np.max(res.joint_error)
+    hint = ("raise --maxiter, or the joints may be unreachable" if np.any(res.status == Status.MAXITER)
+            else "try another --x0 (the start decides the assembly)" if np.any(res.status == Status.WRONG_ASSEMBLY)
+            else "tighten --tol, or the joints may be unreachable")
+    return f"max residual {residual:.3g} (tol {tol:g}), max joint error {joint:.3g}; {hint}"
 
 
 #: mechanism name -> (paper key, file name) of the network the pipeline trains for it
@@ -106,16 +194,15 @@ NETWORKS = {"3p4s": ("zhao2017_3p4s", "bp_network.npz")}
 
 
 def _network(mech, path: str | None):
-    """The trained network for the hybrid solver: ``--network PATH`` or the pipeline's output."""
-    from parakin.config import DEFAULT_CONFIG, load_config
-    from parakin.nn import BPNetwork
+    """The trained network for the hybrid solver: ``--network PATH``, or the one parakin ships (the
+    pipeline's, trained on the full config: :mod:`parakin.nn.packaged`)."""
+    from parakin.nn import load_network
 
-    if path is None:
-        if mech.name not in NETWORKS:
-            raise ValueError(f"no trained network is known for {mech.name}: pass --network PATH")
-        key, name = NETWORKS[mech.name]
-        path = str(Path(load_config(DEFAULT_CONFIG)["generated_dir"]) / key / name)
-    return BPNetwork.load(path)
+    if path is not None:
+        return load_network(path)
+    if mech.name not in NETWORKS:
+        raise ValueError(f"no trained network is known for {mech.name}: pass --network PATH")
+    return load_network(key=NETWORKS[mech.name][0])
 
 
 def cmd_bench(args) -> int:
@@ -123,7 +210,7 @@ def cmd_bench(args) -> int:
     the summary ``benchmarks.md`` (what the pipeline's ``extra_benchmarks`` rule writes)."""
     import pandas as pd
 
-    from parakin import extras
+    from parakin.studies import solver_atlas as extras
     from parakin.config import DEFAULT_CONFIG, QUICK_CONFIG, load_config
     from parakin.papers import PAPERS
 
@@ -163,7 +250,7 @@ BENCHES = {"fk-3p4s": ("zhao2017_3p4s", "fk_benchmark"), "indices-3p4s": ("zhao2
 def cmd_readme(args) -> int:
     """Copy the "at a glance" block of ``figures/benchmarks.md`` into README (``--check``: only compare)."""
     from parakin.config import ROOT
-    from parakin.extras import readme_block, sync_readme
+    from parakin.studies.solver_atlas import readme_block, sync_readme
 
     readme = Path(args.readme) if args.readme else ROOT / "README.md"
     bench = Path(args.benchmarks) if args.benchmarks else ROOT / "figures" / "benchmarks.md"
@@ -176,30 +263,61 @@ def cmd_readme(args) -> int:
 
 
 def _config(args) -> dict:
-    from parakin.config import DEFAULT_CONFIG, load_config, validate
+    from parakin.config import DEFAULT_CONFIG, load_config, validate_sections
 
-    if args.config_json:
-        return validate(json.loads(args.config_json))
+    if args.config_json:  # one pipeline rule's sections (registry.prune_config)
+        return validate_sections(json.loads(args.config_json))
     return load_config(args.config or [DEFAULT_CONFIG])
 
 
 def cmd_reproduce(args) -> int:
-    from parakin import extras
-    from parakin.papers import PAPERS
+    from parakin.pipeline import reproduce
 
-    modules = {**PAPERS, extras.KEY: extras}
-    if args.paper not in modules:
-        raise ValueError(f"unknown paper {args.paper!r}; known: {', '.join(modules)}")
-    artefacts = modules[args.paper].ARTEFACTS
     config = _config(args)
-    names = list(artefacts) if args.artefact == "all" else [args.artefact]
-    for name in names:
-        if name not in artefacts:
-            raise ValueError(f"unknown artefact {name!r} of {args.paper}; known: {', '.join(artefacts)}")
-        default = Path(config["figures_dir"]) / ("" if args.paper == extras.KEY else args.paper)
-        outdir = Path(args.outdir) if args.outdir else default
-        for path in artefacts[name](config, outdir):
-            print(path)
+    for path in reproduce(args.paper, args.artefact, config, Path(args.outdir) if args.outdir else None,
+                          module=args.module):
+        print(path)
+    return 0
+
+
+def cmd_check(args) -> int:
+    from parakin.config import load_config
+    from parakin.pipeline import check
+
+    config = load_config(args.config) if args.config else None
+    results = Path(args.results or (config or _default_config())["figures_dir"])
+    record = Path(args.record or (config or _default_config())["record_dir"] or "figures")
+    out = Path(args.out) if args.out else results.parent / "reproduction_check"
+    csv, md, line = check(results, record, out, args.studies or None)
+    print(f"{line}; see {md}")
+    bad = line.count(" differs") + line.count(" missing")
+    return EXIT_NOT_CONVERGED if args.strict and bad else 0
+
+
+def _default_config() -> dict:
+    from parakin.config import DEFAULT_CONFIG, load_config
+
+    return load_config(DEFAULT_CONFIG)
+
+
+def cmd_which(args) -> int:
+    from parakin.pipeline import which
+
+    if not args.path and not args.list:
+        raise ValueError("give a file (e.g. figures/zhao2017_3p4s/table1.csv) or --list")
+    print(which(args.path, list_all=args.list))
+    return 0
+
+
+def cmd_record(args) -> int:
+    from parakin.pipeline import record
+
+    config = _default_config()
+    results = Path(args.results or config["figures_dir"])
+    target = Path(args.record or config["record_dir"])
+    record(results, target)
+    if args.readme:
+        return cmd_readme(argparse.Namespace(readme=None, benchmarks=str(target / "benchmarks.md"), check=False))
     return 0
 
 
@@ -212,8 +330,18 @@ def cmd_report(args) -> int:
     return 0
 
 
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("parakin")
+    except PackageNotFoundError:  # running from a source tree that was never installed
+        return "unknown"
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="parakin", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"parakin {_version()}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     names = sorted(mechanisms.REGISTRY)
 
@@ -226,16 +354,20 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("ik", help="inverse kinematics: joints of a pose")
     mech_args(p)
-    p.add_argument("--pose", type=float, nargs="+", required=True, help="pose value(s), n per pose")
+    p.add_argument("--pose", type=finite_float, nargs="+", required=True, help="pose value(s), n per pose")
     p.set_defaults(func=cmd_ik)
 
     p = sub.add_parser("fk", help="forward kinematics: pose of joint values")
     mech_args(p)
-    p.add_argument("--joints", type=float, nargs="+", required=True, help="joint value(s), m per pose")
+    p.add_argument("--joints", type=finite_float, nargs="+", required=True, help="joint value(s), m per pose")
     p.add_argument("--solver", default=None, help="solver name (default: closed-form where one exists, else newton)")
-    p.add_argument("--x0", type=float, nargs="+", default=None, help="initial pose (default: the mechanism's home)")
-    p.add_argument("--tol", type=float, default=1e-10, help="residual tolerance (default 1e-10)")
-    p.add_argument("--maxiter", type=int, default=50, help="iteration limit (default 50)")
+    p.add_argument("--x0", type=finite_float, nargs="+", default=None,
+                   help="initial pose (default: the mechanism's home)")
+    p.add_argument("--tol", type=nonnegative_float, default=1e-10, help="residual tolerance (default 1e-10)")
+    p.add_argument("--joint-tol", type=nonnegative_float, default=None,
+                   help="largest |ik(x) - joints| of a success (default: 100 x tol, at least 1e-8)")
+    p.add_argument("--maxiter", type=iteration_count, default=50,
+                   help=f"iteration limit (default 50, at most {MAXITER_LIMIT})")
     p.add_argument("--network", default=None, help="trained network for --solver hybrid (default: the pipeline's)")
     p.set_defaults(func=cmd_fk)
 
@@ -257,12 +389,34 @@ def build_parser() -> argparse.ArgumentParser:
                        help="config file(s), later ones override earlier ones (default config/config.yaml)")
         p.add_argument("--config-json", default=None, help="the whole config as JSON (what Snakemake passes)")
 
-    p = sub.add_parser("reproduce", help="compute one artefact (table or figure) of a paper")
-    p.add_argument("paper", help="paper key, e.g. zhao2017_3p4s, or 'extra' (beyond the papers: solver atlas, benchmarks)")
+    p = sub.add_parser("reproduce", help="compute one artefact (table or figure) of a paper or study")
+    p.add_argument("paper", help="study key, e.g. zhao2017_3p4s, or 'extra' (beyond the papers: solver atlas, benchmarks)")
     p.add_argument("artefact", help="artefact name, e.g. table1, or 'all'")
     p.add_argument("--outdir", default=None, help="output folder (default: <figures_dir>/<paper>)")
+    p.add_argument("--module", default=None, help="the study's module (default: those the config lists)")
     config_args(p)
     p.set_defaults(func=cmd_reproduce)
+
+    p = sub.add_parser("check", help="check a run's outputs against the committed record, within declared tolerances")
+    p.add_argument("--results", default=None, help="the run's figures folder (default: figures_dir of the config)")
+    p.add_argument("--record", default=None, help="the record (default: record_dir of the config, figures/)")
+    p.add_argument("--out", default=None, help="output stem (default: <results>/../reproduction_check)")
+    p.add_argument("--studies", nargs="*", default=None, help="study modules (default: the config's)")
+    p.add_argument("--config", action="append", default=None, metavar="YAML", help="config file(s)")
+    p.add_argument("--strict", action="store_true", help="exit 1 if anything differs or is missing")
+    p.set_defaults(func=cmd_check)
+
+    p = sub.add_parser("which", help="which function and rule make a committed figure or table")
+    p.add_argument("path", nargs="*", help="file(s), e.g. figures/zhao2017_3p4s/table1.csv")
+    p.add_argument("--list", action="store_true", help="list every registered output file and its artefact")
+    p.set_defaults(func=cmd_which)
+
+    p = sub.add_parser("record", help="copy a finished run (results/) into the committed record (figures/)")
+    p.add_argument("--results", default=None, help="the run's figures folder (default: figures_dir of the config)")
+    p.add_argument("--record", default=None, help="the record (default: record_dir of the config)")
+    p.add_argument("--no-readme", dest="readme", action="store_false",
+                   help="do not copy the benchmark block into README")
+    p.set_defaults(func=cmd_record)
 
     p = sub.add_parser("report", help="write the claim-by-claim REPORT.md")
     p.add_argument("--figures", default=None, help="figures folder (default: figures_dir of the config)")
@@ -275,11 +429,24 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        return args.func(args)
-    except (ParakinError, ValueError, KeyError, FileNotFoundError) as exc:
-        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
-        print(f"parakin {args.command}: error: {message}", file=sys.stderr)
+        with np.errstate(all="ignore"):  # non-finite results are checked, not warned about
+            return args.func(args)
+    except (ParakinError, ValueError, KeyError, ArithmeticError, OSError, MemoryError) as exc:
+        print(f"parakin {args.command}: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
+
+
+def _one_line(exc: BaseException) -> str:
+    """The error's message on one line (a KeyError's without quotes; an OSError's with its path)."""
+    if isinstance(exc, KeyError) and exc.args:
+        message = str(exc.args[0])
+    elif isinstance(exc, MemoryError):
+        message = f"out of memory ({exc or 'the request is too large'})"
+    elif isinstance(exc, OSError) and exc.filename is not None:
+        message = f"{exc.strerror or exc}: {exc.filename}"
+    else:
+        message = str(exc) or type(exc).__name__
+    return " ".join(message.split())
 
 
 if __name__ == "__main__":

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import json
+import math
 import zlib
 from pathlib import Path
 from typing import Any, Iterable
@@ -15,7 +16,12 @@ from parakin.errors import ConfigError
 
 __all__ = ["load_config", "validate", "merge", "rng", "seed_for", "ROOT", "SCHEMA_PATH", "DEFAULT_CONFIG", "QUICK_CONFIG"]
 
-ROOT = Path(__file__).resolve().parents[2]
+_CHECKOUT = Path(__file__).resolve().parents[2]
+#: The project tree that holds ``config/`` and ``data/reference/``: the checkout (tests, Snakemake,
+#: an editable install), or, for parakin installed from a wheel, the copy that the build ships
+#: inside the package (``parakin/_project/``, same layout; see setup.py).
+ROOT = (_CHECKOUT if (_CHECKOUT / "pyproject.toml").is_file() and (_CHECKOUT / "config" / "schema.yaml").is_file()
+        else Path(__file__).resolve().parent / "_project")
 SCHEMA_PATH = ROOT / "config" / "schema.yaml"
 DEFAULT_CONFIG = ROOT / "config" / "config.yaml"
 QUICK_CONFIG = ROOT / "config" / "quick.yaml"
@@ -32,17 +38,93 @@ def merge(base: dict, override: dict) -> dict:
     return out
 
 
+def _short(text: str, limit: int = 80) -> str:
+    """``text`` on one line, cut to ``limit`` characters (a config error never dumps a whole section)."""
+    text = " ".join(str(text).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 def _describe(error: jsonschema.ValidationError) -> str:
     key = ".".join(str(p) for p in error.absolute_path) or "(top level)"
     where = f"config key '{key}'"
+    message = _short(error.message, 160)
     if error.validator == "additionalProperties":
-        return f"{where}: {error.message} (see config/schema.yaml for the allowed keys)"
+        return f"{where}: {message} (see config/schema.yaml for the allowed keys)"
     if error.validator == "required":
-        return f"{where}: {error.message}"
+        return f"{where}: {message}"
     limits = {k: error.schema[k] for k in ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum",
                                            "minItems", "maxItems", "type", "enum") if k in error.schema}
-    allowed = ", ".join(f"{k} {v}" for k, v in limits.items())
-    return f"{where} = {json.dumps(error.instance)}: {error.message}" + (f" (allowed: {allowed})" if allowed else "")
+    allowed = _short(", ".join(f"{k} {v}" for k, v in limits.items()), 120)
+    value = _short(json.dumps(error.instance, default=str))
+    return f"{where} = {value}: {message}" + (f" (allowed: {allowed})" if allowed else "")
+
+
+def _one_per_key(errors: list[jsonschema.ValidationError]) -> list[jsonschema.ValidationError]:
+    """The first error of each config key (jsonschema may report several for one bad value)."""
+    seen, out = set(), []
+    for e in errors:
+        key = tuple(map(str, e.absolute_path))
+        if key not in seen:
+            seen.add(key)
+            out.append(e)
+    return out
+
+
+def _nonfinite(node: Any, path: str = "") -> list[str]:
+    """Keys whose value is a non-finite number (YAML .inf / .nan pass a JSON schema's range tests)."""
+    if isinstance(node, dict):
+        return [k for key, v in node.items() for k in _nonfinite(v, f"{path}.{key}" if path else str(key))]
+    if isinstance(node, list):
+        return [k for i, v in enumerate(node) for k in _nonfinite(v, f"{path}.{i}")]
+    if isinstance(node, float) and not math.isfinite(node):
+        return [f"config key '{path}' = {node}: must be a finite number"]
+    return []
+
+
+def _get(config: dict, dotted: str) -> Any:
+    node: Any = config
+    for key in dotted.split("."):
+        if not isinstance(node, dict) or key not in node:
+            return None
+        node = node[key]
+    return node
+
+
+#: [low, high] pairs that must be ordered (what the code would otherwise fail on at run time)
+_ORDERED_PAIRS = ["zhao2017_3p4s.table1.fit.delta_range", "zhao2017_3p4s.table1.fit.phi_range_deg",
+                  "zhao2017_3p4s.table1.region.delta_range", "zhao2017_3p4s.table1.region.phi_range_deg",
+                  *(f"zhao2017_3p4s.optimization.bounds.{k}" for k in ("r_a", "r_b", "L", "d", "phi_deg"))]
+#: most points of one generated grid (a tiny step would ask for petabytes)
+GRID_LIMIT = 100_000
+
+
+def check_orderings(config: dict) -> list[str]:
+    """Cross-key checks a JSON schema cannot state: ordered bounds, grid sizes (missing keys skipped)."""
+    out = []
+    for key in _ORDERED_PAIRS:
+        pair = _get(config, key)
+        if isinstance(pair, list) and len(pair) == 2 and not pair[0] < pair[1]:
+            out.append(f"config key '{key}' = {pair}: lower bound must be < upper bound")
+    for i, part in enumerate(_get(config, "ye_stewart12.d_grid_pct") or []):
+        out += _grid(f"ye_stewart12.d_grid_pct.{i}", *part) if isinstance(part, list) and len(part) == 3 else []
+    s = _get(config, "ye_stewart12.structures_mm")
+    if isinstance(s, dict) and {"min", "max", "step"} <= set(s):
+        out += _grid("ye_stewart12.structures_mm", s["min"], s["max"], s["step"])
+    for i, box in enumerate(_get(config, "zhao2017_3p4s.fk.accuracy_boxes") or []):
+        lo, hi = box.get("low"), box.get("high")
+        if isinstance(lo, list) and isinstance(hi, list) and not all(a < b for a, b in zip(lo, hi)):
+            out.append(f"config key 'zhao2017_3p4s.fk.accuracy_boxes.{i}' low {lo} must be < high {hi} per axis")
+    return out
+
+
+def _grid(key: str, start: float, stop: float, step: float) -> list[str]:
+    if not start <= stop:
+        return [f"config key '{key}': start {start} must be <= stop {stop}"]
+    points = (stop - start) / step + 1 if step > 0 else math.inf
+    if not points <= GRID_LIMIT:
+        return [f"config key '{key}' = [{start}, {stop}, step {step}]: {points:.3g} points, more than the limit "
+                f"{GRID_LIMIT}"]
+    return []
 
 
 def validate(config: dict, schema_path: Path = SCHEMA_PATH) -> dict:
@@ -50,14 +132,11 @@ def validate(config: dict, schema_path: Path = SCHEMA_PATH) -> dict:
     schema = yaml.safe_load(Path(schema_path).read_text())
     validator = jsonschema.Draft202012Validator(schema)
     errors = sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.absolute_path)))
-    if errors:
-        raise ConfigError("; ".join(_describe(e) for e in errors))
-    for section in ("fit", "region"):
-        for key in ("delta_range", "phi_range_deg"):
-            lo, hi = config["zhao2017_3p4s"]["table1"][section][key]
-            if not lo < hi:
-                raise ConfigError(f"config key 'zhao2017_3p4s.table1.{section}.{key}' = [{lo}, {hi}]: "
-                                  "lower bound must be < upper bound")
+    problems = [_describe(e) for e in _one_per_key(errors)] + _nonfinite(config)
+    if not problems:
+        problems = check_orderings(config)
+    if problems:
+        raise ConfigError("; ".join(problems))
     return config
 
 
@@ -70,7 +149,13 @@ def load_config(paths: str | Path | Iterable[str | Path] = DEFAULT_CONFIG) -> di
         path = Path(path)
         if not path.is_file():
             raise ConfigError(f"config file {str(path)!r} does not exist")
-        loaded = yaml.safe_load(path.read_text()) or {}
+        try:
+            loaded = yaml.safe_load(path.read_text()) or {}
+        except yaml.YAMLError as exc:  # e.g. a tab in the indentation: where, in one line
+            mark = getattr(exc, "problem_mark", None)
+            where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""
+            what = getattr(exc, "problem", None) or "not valid YAML"
+            raise ConfigError(f"config file {str(path)!r} is not valid YAML{where}: {_short(what)}") from None
         if not isinstance(loaded, dict):
             raise ConfigError(f"config file {str(path)!r} must hold a mapping, got {type(loaded).__name__}")
         config = merge(config, loaded)
@@ -88,3 +173,32 @@ def rng(config: dict, stream: str):
     import numpy as np
 
     return np.random.default_rng(seed_for(config, stream))
+
+
+def _relax_required(schema: Any, config: Any) -> Any:
+    """A copy of ``schema`` whose ``required`` lists keep only the keys ``config`` has (recursively)."""
+    if isinstance(schema, list):
+        return [_relax_required(s, config) for s in schema]
+    if not isinstance(schema, dict):
+        return schema
+    out = {}
+    for key, value in schema.items():
+        if key == "required" and isinstance(value, list) and isinstance(config, dict):
+            out[key] = [k for k in value if k in config]
+        elif key == "properties" and isinstance(value, dict):
+            sub = config if isinstance(config, dict) else {}
+            out[key] = {k: _relax_required(v, sub.get(k)) for k, v in value.items()}
+        else:
+            out[key] = value
+    return out
+
+
+def validate_sections(config: dict, schema_path: Path = SCHEMA_PATH) -> dict:
+    """Validate a config pruned to some sections (what one pipeline rule receives): every key it has
+    must obey the schema; the sections it lacks are not required."""
+    schema = _relax_required(yaml.safe_load(Path(schema_path).read_text()), config)
+    validator = jsonschema.Draft202012Validator(schema)
+    errors = sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.absolute_path)))
+    if errors:
+        raise ConfigError("; ".join(_describe(e) for e in errors))
+    return config

@@ -172,6 +172,29 @@ class Mechanism(ABC):
             visit(np.arange(len(flat)))
         return out.reshape(x.shape[:-1])
 
+    # ------------------------------------------------------------------ is a pose a valid answer?
+    def in_domain(self, pose: ArrayLike) -> NDArray[np.bool_]:
+        """Boolean mask ``(...)``: True where ``pose`` lies in the mechanism's domain (finite, and
+        where its IK is defined). Default: :meth:`is_reachable`. A forward solve that converges
+        outside it is not a success (:mod:`parakin.solvers.verify`)."""
+        x = np.asarray(pose, dtype=float)
+        fin = np.all(np.isfinite(x), axis=-1)
+        out = np.zeros(x.shape[:-1], dtype=bool)
+        out[fin] = self.is_reachable(x[fin])
+        return out
+
+    def on_assembly(self, pose: ArrayLike, joints: ArrayLike) -> NDArray[np.bool_]:
+        """Boolean mask ``(...)``: True where ``pose`` is on the assembly mode / branch this
+        mechanism asks for (the papers' by default). Default: every pose (no assembly modes told
+        apart beyond what :meth:`ik` reproduces)."""
+        x = np.asarray(pose, dtype=float)
+        return np.ones(np.broadcast_shapes(x.shape[:-1], np.shape(joints)[:-1]), dtype=bool)
+
+    def joint_error(self, pose: ArrayLike, joints: ArrayLike) -> Array:
+        """``max_k |ik(pose)_k - joints_k|`` per row (joint units): how far ``pose`` is from being an
+        answer for ``joints``. Raises where :meth:`ik` does (callers isolate such rows)."""
+        return np.max(np.abs(self.ik(pose) - np.asarray(joints, dtype=float)), axis=-1, initial=0.0)
+
     def check_joints(self, joints: ArrayLike) -> None:
         """Raise UnreachableError where ``joints`` cannot be assembled in the working mode.
 

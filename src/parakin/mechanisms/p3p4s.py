@@ -11,7 +11,7 @@ Geometry (paper §1.1, eqs 1-3; frames as in Fig. 2):
 * base vertices ``u_i = r_b e_i``, ``e_i = (cos g_i, sin g_i, 0)``, ``g = (0, 120, 240) deg``;
 * rail direction ``m_i = -cos(phi) e_i + sin(phi) e_z`` (inward and up). The paper writes the rail
   frame as ``R(z, alpha_i) R(x, -phi)``; read as a right-handed rotation that rail points *down*
-  and no Table 1 pose is reachable, so the only feasible reading is inward-up (notes §1.3, G1);
+  and no Table 1 pose is reachable, so the only feasible reading is inward-up (docs/zhao2017_3p4s.md#s1.3, #g1);
 * slider midpoint ``c_i = u_i + l_i m_i`` (eq 3), platform point ``d_i = p + a e_i`` with
   ``a = r_a cos(theta) = sqrt(r_a^2 - d^2/4)`` (eq 1, ``theta = arcsin(d / 2 r_a)``).
 
@@ -140,6 +140,23 @@ class P3P4S(Mechanism):
         _, disc = self._discriminant(as_batch(pose, 3, "pose"))
         return np.all(disc >= 0, axis=-1)
 
+    def in_domain(self, pose: ArrayLike) -> np.ndarray:
+        """Finite and reachable (every limb's eq. (5) square root real)."""
+        x = np.asarray(pose, dtype=float)
+        with np.errstate(all="ignore"):
+            _, disc = self._discriminant(x)
+        return np.all(np.isfinite(x), axis=-1) & np.all(disc >= 0, axis=-1)
+
+    def on_assembly(self, pose: ArrayLike, joints: ArrayLike) -> np.ndarray:
+        """The working mode of :meth:`ik` (the minus root of eq. 5): every rod leans along its rail,
+        ``n_i . m_i >= 0``, up to a rounding slack of 1e-6 where the two modes merge at the
+        workspace edge (there the joint tolerance decides). The mirror assembly below the rails
+        (z ~ -0.16 m at home strokes) has ``n_i . m_i < 0``."""
+        x, q = np.asarray(pose, dtype=float), np.asarray(joints, dtype=float)
+        with np.errstate(all="ignore"):
+            nm = np.einsum("...ij,ij->...i", self._rod(x, q), self.m) / self.L
+        return np.all(nm >= -1e-6, axis=-1)
+
     def ik(self, pose: ArrayLike) -> Array:
         """Strokes ``l_i`` (m) of platform position ``pose`` (m), eqs (2)-(5), working branch.
 
@@ -249,6 +266,19 @@ class P3P4S(Mechanism):
             frames=frames,
         )
 
+    def _check_edge(self, pose: Array, q: Array) -> None:
+        """UnreachableError where the computed pose lies (by rounding) just outside the workspace,
+        so that :meth:`ik` would reject it: ``fk`` returns only poses its IK accepts."""
+        _, disc = self._discriminant(pose)
+        out = np.any(disc < 0, axis=-1)
+        if np.any(out):
+            idx = tuple(np.argwhere(out)[0]) if out.ndim else ()
+            raise UnreachableError(
+                f"strokes (l1, l2, l3) = {tuple(np.round(q[idx], 6).tolist())} m put the platform on the workspace "
+                f"edge: at the computed pose L^2 - x_u^2 - z_u^2 = {disc[idx].min():.3g} m^2 < 0 (eq. 5), which ik "
+                f"rejects{describe_first(out, q.shape[:-1])}"
+            )
+
     def check_joints(self, joints: ArrayLike) -> None:
         """Raise UnreachableError unless the strokes assemble in the working mode (via :meth:`fk`)."""
         self.fk(joints)
@@ -293,6 +323,7 @@ class P3P4S(Mechanism):
         upper_first = p1[..., 2] >= p2[..., 2]
         pick_first = upper_first if branch == "upper" else ~upper_first
         pose = np.where(pick_first[..., None], p1, p2)
+        self._check_edge(pose, q)
         if branch == "upper":
             # working mode: every rod leans along its rail (n_i . m_i > 0), i.e. the strokes are
             # the minus root of eq (5); otherwise ik(fk(q)) != q and the pose is another assembly

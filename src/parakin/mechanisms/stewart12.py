@@ -1,20 +1,20 @@
 """The 12-leg Stewart-derived cube mechanism of Ye, You, Shen, Wu, Ru (paper key ``ye_stewart12``).
 
-Geometry (paper §1; notes ``002_stewart12.md`` §1): a moving cube of side ``2n`` inside a static
+Geometry (paper §1; ``docs/ye_stewart12.md#s1``): a moving cube of side ``2n`` inside a static
 cube of side ``2(n+L)``; six double compound spherical joints ``B_i = M + R p_i`` at the midpoints
 of the moving cube's edges, each carrying two prismatic legs to ``b_k`` on the static cube, normal
 to one of the two faces adjacent to the edge; all legs have length ``L`` at home.
 
-* joint offsets (notes §1.2): ``p1 = (0, n, -n)``, ``p2 = (-n, n, 0)``, ``p3 = (n, 0, -n)``,
+* joint offsets (docs/ye_stewart12.md#s1.2): ``p1 = (0, n, -n)``, ``p2 = (-n, n, 0)``, ``p3 = (n, 0, -n)``,
   ``p_{i+3} = -p_i``; b1, b3, b5 VERIFIED from eqs (12)-(14); the others ASSUMED
   (``b_{k+6} = -b_k``, legs normal to the adjacent faces);
 * pose ``(x0, y0, z0, lambda1, lambda2, lambda3)`` (m, m, m, 1, 1, 1); the paper never defines
-  lambda (notes §1.3): ``convention`` = ``"euler_parameters"`` (default: vector part of a unit
+  lambda (docs/ye_stewart12.md#s1.3): ``convention`` = ``"euler_parameters"`` (default: vector part of a unit
   quaternion, lambda0 = +sqrt(1 - |lambda|^2)), ``"cayley"`` (Gibbs vector) or ``"euler_xyz"``
   (R = Rx Ry Rz, radians);
 * joints: the 12 absolute leg lengths ``l1..l12`` (m).
 
-Closed-form FK from all 12 lengths (paper eqs 6-11, lost in extraction; notes §1.5): with
+Closed-form FK from all 12 lengths (paper eqs 6-11, lost in extraction; docs/ye_stewart12.md#s1.5): with
 ``q = l^2`` the same-joint differences give ``M`` linearly, and three opposite-leg sums plus three
 differences give ``u1 = B1 - M``, ``u2 = B2 - M`` by one constant 6x6 solve (``u3 = u1 - u2``,
 eq. 4). Both constant matrices are inverted once per mechanism; the FK is a few matrix products.
@@ -43,7 +43,7 @@ __all__ = ["Stewart12", "DriveMode", "ActiveLegs", "CONVENTIONS", "NESTED_PASSIV
 
 CONVENTIONS = ("euler_parameters", "cayley", "euler_xyz")
 
-#: the notes' nested passive-leg sets per redundancy R (Fig. 9 lost; ASSUMED, notes §2.3)
+#: the nested passive-leg sets per redundancy R (Fig. 9 lost; ASSUMED, docs/ye_stewart12.md#s2.3)
 NESTED_PASSIVE: dict[int, tuple[int, ...]] = {
     0: (7, 8, 9, 10, 11, 12), 1: (8, 9, 10, 11, 12), 2: (9, 10, 11, 12),
     3: (10, 11, 12), 4: (11, 12), 5: (12,),
@@ -119,7 +119,7 @@ class Stewart12(Mechanism):
     """12-leg cube mechanism. Lengths in metres.
 
     ``n``: half edge of the moving cube (paper: 15 mm); ``L``: initial leg length (25 mm);
-    ``convention``: meaning of lambda (paper undefined; notes §1.3, default Euler parameters);
+    ``convention``: meaning of lambda (paper undefined; docs/ye_stewart12.md#s1.3, default Euler parameters);
     ``compat_tol``: relative tolerance (of ``(n+L)^2``) on the compatibility functions above
     which :meth:`check_joints` declares lengths non-assemblable.
     """
@@ -152,7 +152,7 @@ class Stewart12(Mechanism):
     # ------------------------------------------------------------------ geometry
     @cached_property
     def platform_points_local(self) -> Array:
-        """p1..p6 (6, 3): edge midpoints of the moving cube (notes §1.2)."""
+        """p1..p6 (6, 3): edge midpoints of the moving cube (docs/ye_stewart12.md#s1.2)."""
         n = self.n
         p = np.array([[0.0, n, -n], [-n, n, 0.0], [n, 0.0, -n]])
         return np.concatenate([p, -p])
@@ -166,7 +166,7 @@ class Stewart12(Mechanism):
 
     @cached_property
     def _fk_matrices(self) -> dict[str, Array]:
-        """Constant matrices of the linear FK (notes §1.5), inverted once."""
+        """Constant matrices of the linear FK (docs/ye_stewart12.md#s1.5), inverted once."""
         n, b = self.n, self.base_points
         c = float(b[0] @ b[0])
         d = np.array([b[2 * i] - b[2 * i + 1] for i in range(3)])  # d_i = b_{2i-1} - b_{2i}
@@ -202,7 +202,7 @@ class Stewart12(Mechanism):
         return np.zeros(6)
 
     def pose_bounds(self) -> tuple[Array, Array]:
-        """|x0|, |y0|, |z0| <= 3 mm, |lambda_i| <= 0.15 (the notes' test box; the paper gives none)."""
+        """|x0|, |y0|, |z0| <= 3 mm, |lambda_i| <= 0.15 (our test box, docs/ye_stewart12.md#s1.5; the paper gives none)."""
         hi = np.array([0.003, 0.003, 0.003, 0.15, 0.15, 0.15])
         return -hi, hi
 
@@ -238,14 +238,34 @@ class Stewart12(Mechanism):
         v = self.leg_vectors(pose)
         return np.sqrt(np.einsum("...ij,...ij->...i", v, v))
 
+    def in_domain(self, pose: ArrayLike) -> np.ndarray:
+        """Finite, and ``|lambda|^2 < 1`` for Euler parameters (lambda0 real)."""
+        x = np.asarray(pose, dtype=float)
+        return np.all(np.isfinite(x), axis=-1) & ~self._outside(x)
+
+    def _outside(self, x: Array) -> np.ndarray:
+        """True where lambda leaves the convention's domain (Euler parameters: |lambda| >= 1)."""
+        if self.convention != "euler_parameters":
+            return np.zeros(x.shape[:-1], dtype=bool)
+        with np.errstate(all="ignore"):
+            return ~(np.einsum("...i,...i->...", x[..., 3:], x[..., 3:]) < 1.0)
+
     def residual(self, pose: ArrayLike, joints: ArrayLike) -> Array:
-        """``l(pose) - joints`` (12 equations in 6 unknowns: least squares for numeric FK)."""
+        """``l(pose) - joints`` (12 equations in 6 unknowns: least squares for numeric FK); NaN rows
+        outside the lambda domain (a solver iterate may leave it, which must not raise mid-solve)."""
         q = as_batch(joints, 12, "joints")
-        return self.ik(pose) - q
+        x = as_batch(pose, 6, "pose")
+        bad = self._outside(x)
+        r = self.ik(np.where(bad[..., None], 0.0, x)) - q
+        return np.where(bad[..., None], np.nan, r)
 
     def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
-        """Analytic ``d l / d pose`` (..., 12, 6): ``e_k . dB_j`` (see :meth:`leg_jacobian`)."""
-        return self.leg_jacobian(pose, range(12))
+        """Analytic ``d l / d pose`` (..., 12, 6): ``e_k . dB_j`` (see :meth:`leg_jacobian`); NaN
+        rows outside the lambda domain."""
+        x = as_batch(pose, 6, "pose")
+        bad = self._outside(x)
+        j = self.leg_jacobian(np.where(bad[..., None], 0.0, x), range(12))
+        return np.where(bad[..., None, None], np.nan, j)
 
     def leg_jacobian(self, pose: ArrayLike, legs) -> Array:
         """Rows ``legs`` (0-based) of ``d l / d pose`` (..., len(legs), 6): ``e_k . dB_j`` with
@@ -478,6 +498,21 @@ class DriveMode(Mechanism):
     def ik(self, pose: ArrayLike) -> Array:
         raise NotImplementedError("a drive mode maps active to passive lengths only (use solve_fk)")
 
+    def in_domain(self, pose: ArrayLike) -> np.ndarray:
+        """Finite, positive passive lengths."""
+        x = np.asarray(pose, dtype=float)
+        return np.all(np.isfinite(x) & (x > 0), axis=-1)
+
+    def joint_error(self, pose: ArrayLike, joints: ArrayLike) -> Array:
+        """``max_k |l_k(fk(l)) - l_k|`` over all 12 legs ``l = (X, active)``: the pose of the linear
+        FK (eqs 6-11) must reproduce every length, passive and active, through the IK (eq. 2)."""
+        lengths = self.assemble(pose, joints)
+        with np.errstate(all="ignore"):
+            x = self.mech.fk(lengths, check=False)
+        bad = ~self.mech.in_domain(x)
+        legs = self.mech.ik(np.where(bad[..., None], 0.0, x))
+        return np.where(bad, np.inf, np.max(np.abs(legs - lengths), axis=-1))
+
     def _pad(self, f: Array) -> Array:
         r = self.redundancy
         return f if r == 0 else np.concatenate([f, np.zeros(f.shape[:-1] + (r,), dtype=f.dtype)], -1)
@@ -500,7 +535,7 @@ class DriveMode(Mechanism):
 @dataclass(frozen=True)
 class ActiveLegs(Mechanism):
     """Pose-space FK from any ``N >= 6`` active legs: residual ``l_k(pose) - l_k`` over the active
-    legs only (beyond the paper, notes §7.1); solve with ``lm`` (least squares for N > 6) or
+    legs only (beyond the paper, docs/ye_stewart12.md#s7.1); solve with ``lm`` (least squares for N > 6) or
     ``newton``. The passive lengths then follow by :meth:`Stewart12.ik`."""
 
     mech: Stewart12 = field(default_factory=Stewart12)
@@ -532,6 +567,9 @@ class ActiveLegs(Mechanism):
 
     def ik(self, pose: ArrayLike) -> Array:
         return self.mech.ik(pose)[..., [k - 1 for k in self.active]]
+
+    def in_domain(self, pose: ArrayLike) -> np.ndarray:
+        return self.mech.in_domain(pose)
 
     def _inside(self, pose: ArrayLike) -> tuple[Array, Array]:
         """Pose with out-of-domain rows (|lambda| >= 1 for Euler parameters) replaced by home, and

@@ -5,18 +5,18 @@ Moving platform: equilateral triangle A1 A2 A3 of side ``a``; base: regular hexa
 lengths dimensionless (divided by the top side, paper §3), so ``a = 1`` by default. Notes
 ``004_stewart36.md`` §1.
 
-Layout (notes §1.2, ASSUMED: the paper's coordinates are lost in the extraction)::
+Layout (docs/li2017_stewart36.md#s1.2, ASSUMED: the paper's coordinates are lost in the extraction)::
 
     A1 = (-a/(2 sqrt3),  a/2, 0)   A2 = (-a/(2 sqrt3), -a/2, 0)   A3 = (a/sqrt3, 0, 0)   (moving frame)
     B_k = b (cos phi_k, sin phi_k, 0),  phi_k = 90 deg + 60 deg (k - 1)                   (fixed frame)
 
-Pose ``(alpha, beta, gamma, X, Y, Z)``: ``T = Rz(alpha) Ry(beta) Rx(gamma)`` ("Z-Y-X Euler", notes
-§1.3, ASSUMED reading) and the triangle centre ``O_A = (X, Y, Z)``. Joints: absolute leg lengths
-``L_1 .. L_6``. Residual (eq. 3, squared form, notes G4 ASSUMED): ``f_i = |T A_p(i) + O_A - B_i|^2 - L_i^2``;
+Pose ``(alpha, beta, gamma, X, Y, Z)``: ``T = Rz(alpha) Ry(beta) Rx(gamma)`` ("Z-Y-X Euler",
+docs/li2017_stewart36.md#s1.3, ASSUMED reading) and the triangle centre ``O_A = (X, Y, Z)``. Joints: absolute leg lengths
+``L_1 .. L_6``. Residual (eq. 3, squared form, docs/li2017_stewart36.md#g4 ASSUMED): ``f_i = |T A_p(i) + O_A - B_i|^2 - L_i^2``;
 the paper's objective (4) is ``F = sum f_i^2`` (:meth:`Stewart36.objective`).
 
 Beyond the paper: :meth:`Stewart36.fk_all`, every forward solution (16 complex, in mirror pairs about
-the base plane) from a degree-16 univariate polynomial (notes §1.5), real roots refined by Newton
+the base plane) from a degree-16 univariate polynomial (docs/li2017_stewart36.md#s1.5), real roots refined by Newton
 and verified by the IK.
 """
 
@@ -38,18 +38,18 @@ __all__ = ["Stewart36", "TABLE3_ROW1"]
 _SQ3 = float(np.sqrt(3.0))
 #: platform point of each leg (0-based): leg i joins A_ceil(i/2) and B_i (paper eq. 2)
 LEG_TOP = np.array([0, 0, 1, 1, 2, 2])
-#: Table 3 row 1 (deg, deg, deg, -, -, -): the FK input is reconstructed as its IK (notes G1, ASSUMED)
+#: Table 3 row 1 (deg, deg, deg, -, -, -): the FK input is reconstructed as its IK (docs/li2017_stewart36.md#g1, ASSUMED)
 TABLE3_ROW1 = (79.675, 47.468, 10.064, -0.282, 0.130, 1.571)
 
 
 @dataclass(frozen=True)
 class Stewart36(Mechanism):
-    """3-6 Stewart platform, dimensionless lengths (top side ``a`` = 1, notes §1.1).
+    """3-6 Stewart platform, dimensionless lengths (top side ``a`` = 1, docs/li2017_stewart36.md#s1.1).
 
-    ``b``: base hexagon side, LOST with Table 2 (notes G1): default 3 (ASSUMED; sweep 0.5, 1, 2, 3).
+    ``b``: base hexagon side, LOST with Table 2 (docs/li2017_stewart36.md#g1): default 3 (ASSUMED; sweep 0.5, 1, 2, 3).
     """
 
-    b: float = 3.0  #: base hexagon side = circumradius (Table 2 LOST; ASSUMED 3, notes G1)
+    b: float = 3.0  #: base hexagon side = circumradius (Table 2 LOST; ASSUMED 3, docs/li2017_stewart36.md#g1)
     a: float = 1.0  #: top triangle side (dimensionless unit, paper §3)
 
     name: ClassVar[str] = "stewart36"
@@ -69,7 +69,7 @@ class Stewart36(Mechanism):
     # ------------------------------------------------------------------ geometry
     @cached_property
     def top_points(self) -> Array:
-        """A1, A2, A3 in the moving frame, rows of (3, 3) (notes §1.2)."""
+        """A1, A2, A3 in the moving frame, rows of (3, 3) (docs/li2017_stewart36.md#s1.2)."""
         a = self.a
         return np.array([[-a / (2 * _SQ3), a / 2, 0.0], [-a / (2 * _SQ3), -a / 2, 0.0], [a / _SQ3, 0.0, 0.0]])
 
@@ -80,11 +80,11 @@ class Stewart36(Mechanism):
         return self.b * np.stack([np.cos(phi), np.sin(phi), np.zeros(6)], axis=-1)
 
     def home(self) -> Array:
-        """Table 3 row 1 (rad, -): the pose whose IK is the reconstructed FK input (notes G1)."""
+        """Table 3 row 1 (rad, -): the pose whose IK is the reconstructed FK input (docs/li2017_stewart36.md#g1)."""
         return pose_from_paper(TABLE3_ROW1)
 
     def pose_bounds(self) -> tuple[Array, Array]:
-        """The PSO search box of notes §2.3 (ASSUMED, the paper states none): alpha, gamma in [-pi, pi],
+        """The PSO search box of docs/li2017_stewart36.md#s2.3 (ASSUMED, the paper states none): alpha, gamma in [-pi, pi],
         beta in [-pi/2, pi/2], X, Y in [-2, 2] (scaled by max(1, b/2)), Z in [0, 3 max(1, b/3)]."""
         s = max(1.0, self.b / 2)
         return (np.array([-np.pi, -np.pi / 2, -np.pi, -2 * s, -2 * s, 0.0]),
@@ -116,8 +116,17 @@ class Stewart36(Mechanism):
         v = self.leg_vectors(pose)
         return np.einsum("...ij,...ij->...i", v, v) - q * q
 
+    def in_domain(self, pose: ArrayLike) -> np.ndarray:
+        """Every finite pose has an IK."""
+        return np.all(np.isfinite(np.asarray(pose, dtype=float)), axis=-1)
+
+    def on_assembly(self, pose: ArrayLike, joints: ArrayLike) -> np.ndarray:
+        """The assembly above the base, ``Z > 0``, as :meth:`fk` and the paper take it (the mirror
+        image below the base has the same leg lengths)."""
+        return np.asarray(pose, dtype=float)[..., 5] > 0
+
     def objective(self, pose: ArrayLike, joints: ArrayLike) -> Array:
-        """The paper's fitness, eq. (4): ``F = sum_i f_i^2`` (the text's "eq. (5)" is a slip, notes G5)."""
+        """The paper's fitness, eq. (4): ``F = sum_i f_i^2`` (the text's "eq. (5)" is a slip, docs/li2017_stewart36.md#g5)."""
         f = self.residual(pose, joints)
         return np.sum(f * f, axis=-1)
 
@@ -145,7 +154,7 @@ class Stewart36(Mechanism):
 
     def check_joints(self, joints: ArrayLike) -> None:
         """Raise UnreachableError where a leg pair cannot reach its base edge: ``L_i > 0`` and
-        ``|L_2k-1 - L_2k| <= b <= L_2k-1 + L_2k`` (the circle of A_k must exist, notes §1.5).
+        ``|L_2k-1 - L_2k| <= b <= L_2k-1 + L_2k`` (the circle of A_k must exist, docs/li2017_stewart36.md#s1.5).
         Inputs passing this may still have no real solution (the triangle does not close):
         :meth:`fk_all` then returns no real pose."""
         q = as_batch(joints, 6, "joints")
@@ -249,7 +258,7 @@ class Stewart36(Mechanism):
     def fk_all(self, joints: ArrayLike, *, newton_steps: int = 8, return_info: bool = False):
         """Every real forward solution, shape (..., 16, 6) NaN-padded, sorted by Z descending.
 
-        Method (notes §1.5): the three A_k move on circles fixed by the leg pairs; the triangle
+        Method (docs/li2017_stewart36.md#s1.5): the three A_k move on circles fixed by the leg pairs; the triangle
         closure gives three biquadratics in ``t_k = tan(theta_k / 2)``; two resultants give a
         degree-16 polynomial in t1 (:meth:`fk_poly`), whose 16 complex roots are found as companion
         eigenvalues; t2, t3 are back-substituted, all three refined by complex Newton on the
@@ -315,7 +324,7 @@ class Stewart36(Mechanism):
         return out
 
     def pose_from_points(self, pts: ArrayLike) -> Array:
-        """Pose (..., 6) of the platform whose vertices A1, A2, A3 are ``pts`` (..., 3, 3) (notes §1.5):
+        """Pose (..., 6) of the platform whose vertices A1, A2, A3 are ``pts`` (..., 3, 3) (docs/li2017_stewart36.md#s1.5):
         ``O_A`` the centroid, ``y = (A1 - A2)/|.|``, ``x`` along ``A3 - (A1 + A2)/2``, ``z = x cross y``."""
         p = np.asarray(pts, dtype=float)
         o = p.mean(axis=-2)

@@ -3,24 +3,24 @@
 Base: equilateral triangle A0 A2 A3 of side ``a`` (A0 a vertex, the origin), A1 the midpoint of
 A2A3. Platform: isosceles right triangle B1 B2 B3 with legs ``b`` (right angle at B1). Limbs: two
 UPS legs A2B2, A3B3 (actuated lengths l2, l3); a rigid SR link A0B1 of length ``c``; an SPR leg
-from A1 to B0 = (2/3) B1 on that link (actuated length l1). Paper §1, eqs (1)-(14); notes
-``001_2ups.md`` §1.
+from A1 to B0 = (2/3) B1 on that link (actuated length l1). Paper §1, eqs (1)-(14); see
+``docs/li2020_2ups.md#s1``.
 
-Kinematics (all VERIFIED in the notes, re-checked by ``tests/test_ups2.py``):
+Kinematics (all VERIFIED, docs/li2020_2ups.md#s4.1; re-checked by ``tests/test_ups2.py``):
 
 * orientation ``R = Rz(alpha) Ry(beta) Rx(gamma)`` (eq 1) with ``alpha = 0`` (eqs 6-8: the first
   constraint ``B2B3 . e_y = 0`` gives ``sin(alpha) cos(beta) = 0``);
 * position of B1 ``P = (rho sin(beta), Y, rho cos(beta))``, ``rho = +sqrt(c^2 - Y^2)`` (eq 14);
 * pose ``(beta, gamma, Y)`` in (rad, rad, m); leg vectors from the vector form (9)-(11) (the
-  printed scalar IK (15)-(17) has typos, notes §1.7, and is not used);
+  printed scalar IK (15)-(17) has typos, docs/li2020_2ups.md#s1.7, and is not used);
 * joints: **stroke changes** ``q_j = l_j - l_j(home)`` (m), the home pose being the paper's
-  initial pose beta = gamma = Y = 0 (notes G2, ASSUMED: Table 2's inputs are signed).
+  initial pose beta = gamma = Y = 0 (docs/li2020_2ups.md#g2, ASSUMED: Table 2's inputs are signed).
 
-The paper gives no values for a, b, c (notes G1): the defaults 150, 100, 300 mm are our choice
+The paper gives no values for a, b, c (docs/li2020_2ups.md#g1): the defaults 150, 100, 300 mm are our choice
 (ASSUMED), under which every Table 2 input has exactly one FK solution inside the Table 1 box and
 that box is free of singularities.
 
-Beyond the paper (notes §7.1): ``l1`` depends on ``Y`` only, so ``Y`` is closed form; ``beta`` and
+Beyond the paper (docs/li2020_2ups.md#s7.1): ``l1`` depends on ``Y`` only, so ``Y`` is closed form; ``beta`` and
 ``gamma`` then solve one degree-8 polynomial in ``t = tan(gamma/2)`` (:meth:`UPS2.fk_all`).
 """
 
@@ -47,11 +47,11 @@ _SQ3 = float(np.sqrt(3.0))
 class UPS2(Mechanism):
     """2-UPS/(S+SPR)R mechanism. Lengths in metres.
 
-    ``a``, ``b``, ``c``: ASSUMED 0.150, 0.100, 0.300 m (the paper gives none, notes G1/§5).
+    ``a``, ``b``, ``c``: ASSUMED 0.150, 0.100, 0.300 m (the paper gives none, docs/li2020_2ups.md#g1, #s5).
     ``stroke_limits``: eq (19), |q1| <= 23 mm, |q2|, |q3| <= 32 mm.
     """
 
-    a: float = 0.150  #: base triangle side |A0A2| (m) -- not in the paper, ASSUMED (notes G1)
+    a: float = 0.150  #: base triangle side |A0A2| (m) -- not in the paper, ASSUMED (docs/li2020_2ups.md#g1)
     b: float = 0.100  #: platform leg |B1B2| = |B1B3| (m) -- not in the paper, ASSUMED
     c: float = 0.300  #: SR link length |A0B1| (m) -- not in the paper, ASSUMED
     stroke_limits: tuple[float, float, float] = (0.023, 0.032, 0.032)  #: eq (19), m
@@ -164,7 +164,7 @@ class UPS2(Mechanism):
         return np.sqrt(np.einsum("...ij,...ij->...i", v, v))
 
     def lengths_closed_form(self, pose: ArrayLike) -> Array:
-        """|l_j| from the scalar closed forms (notes §1.7; equal to the vector form (9)-(11)):
+        """|l_j| from the scalar closed forms (docs/li2020_2ups.md#s1.7; equal to the vector form (9)-(11)):
         ``l1^2 = 4c^2/9 + 3a^2/4 - (2/sqrt3) a Y``, ``l2,3^2 = Q -/+ a (rho + k sin g) sin b`` with
         ``Q = (rho + k sin g)^2 + k^2 + a^2/4 + (k cos g + Y - h)^2 - a k cos b``. Cheaper: used by
         :meth:`residual`."""
@@ -196,6 +196,18 @@ class UPS2(Mechanism):
         if check_limits:
             self._check_limits(q)
         return q
+
+    def in_domain(self, pose: ArrayLike) -> np.ndarray:
+        """Finite, with ``|Y| < c`` (eq. 14 has a real rho)."""
+        x = np.asarray(pose, dtype=float)
+        return np.all(np.isfinite(x), axis=-1) & (np.abs(x[..., 2]) < self.c)
+
+    def on_assembly(self, pose: ArrayLike, joints: ArrayLike) -> np.ndarray:
+        """The working assembly of :meth:`fk`: ``|beta|, |gamma| < 90 deg`` (angles modulo 2 pi), on
+        this instance's ``branch`` of eq. (14) (which the pose coordinates cannot leave)."""
+        x = np.asarray(pose, dtype=float)
+        wrapped = (x[..., :2] + np.pi) % (2 * np.pi) - np.pi
+        return np.all(np.abs(wrapped) < np.pi / 2, axis=-1)
 
     def _check_limits(self, q: Array) -> None:
         lim = np.asarray(self.stroke_limits)
@@ -288,7 +300,7 @@ class UPS2(Mechanism):
         ``Y`` from l1 in closed form; then, with ``D = (l3^2 - l2^2)/(2a)`` and
         ``E = (l2^2 + l3^2)/2 - rho^2 - 2k^2 - a^2/4 - (Y - h)^2``, ``sin(beta) = D/(rho + k sin(gamma))``
         and ``a cos(beta) = 2 rho sin(gamma) + 2 (Y - h) cos(gamma) - E/k``; ``sin^2 + cos^2 = 1``
-        is a degree-8 polynomial in ``t = tan(gamma/2)`` (notes §7.1). Each real root gives one
+        is a degree-8 polynomial in ``t = tan(gamma/2)`` (docs/li2020_2ups.md#s7.1). Each real root gives one
         ``(beta, gamma)`` with beta in (-pi, pi]; ``polish`` Newton steps on the 2x2 system refine
         it. Rows are sorted by ``|beta| + |gamma|`` with unused rows NaN (2, 4, 6 or 8 are real).
         """
@@ -305,7 +317,7 @@ class UPS2(Mechanism):
         if not np.any(ok):
             return out.reshape(*batch, 8, 3)
         yy = y[ok]
-        rho = self.branch * np.sqrt(self.c**2 - yy**2)  # the polynomial holds for either sign (notes §7.1)
+        rho = self.branch * np.sqrt(self.c**2 - yy**2)  # the polynomial holds for either sign (docs/li2020_2ups.md#s7.1)
         d = (sq[ok, 2] - sq[ok, 1]) / (2 * a)
         e = 0.5 * (sq[ok, 1] + sq[ok, 2]) - rho**2 - 2 * k**2 - a**2 / 4 - (yy - h) ** 2
         m = len(yy)

@@ -1,9 +1,12 @@
 """Neural-network initial guesses for forward kinematics (Zhao et al. 2017, §1.1, Fig. 3).
 
 :class:`BPNetwork` (numpy only) predicts; :func:`train_lm` (needs torch) trains it by
-Levenberg-Marquardt as MATLAB's ``trainlm``.
+Levenberg-Marquardt as MATLAB's ``trainlm``; :func:`load_network` reads a saved network or the one
+that ships with parakin (:mod:`parakin.nn.packaged`).
 """
 
 from parakin.nn.bp import BPNetwork, residual_jacobian, residuals, torch_forward, train_lm
+from parakin.nn.packaged import load_network, packaged_network_path
 
-__all__ = ["BPNetwork", "train_lm", "torch_forward", "residuals", "residual_jacobian"]
+__all__ = ["BPNetwork", "train_lm", "torch_forward", "residuals", "residual_jacobian", "load_network",
+           "packaged_network_path"]

@@ -4,7 +4,7 @@ training, in the spirit of MATLAB's ``feedforwardnet(10)`` + ``trainlm``.
 The paper gives the architecture (3 inputs = strokes l1..l3, one hidden layer of 10 neurons,
 3 outputs = platform position) and the training algorithm (Levenberg-Marquardt, offline); it leaves
 out the activations, the data scaling, the initialisation, the split and the stopping rules
-(notes/000_3p4s.md §3.1). We take MATLAB's defaults, since the paper used MATLAB:
+(docs/zhao2017_3p4s.md#s3.1). We take MATLAB's defaults, since the paper used MATLAB:
 
 * inputs and targets scaled column-wise to [-1, 1] by ``mapminmax`` (range taken over the whole
   data set before the split, as MATLAB's ``train`` does);

@@ -154,7 +154,7 @@ def normalised_sum(values: np.ndarray, vmin: np.ndarray, vmax: np.ndarray, maxim
     to minimise and ``(max_i - sigma_i)/(max_i - min_i)`` for one to maximise.
 
     Eq (38) prints the first form for all three indices, which for the stiffness index (larger is
-    better) would *minimise* stiffness; we flip it (notes G18). ``values`` (P, 3) -> (P,).
+    better) would *minimise* stiffness; we flip it (docs/zhao2017_3p4s.md#g18). ``values`` (P, 3) -> (P,).
     """
     values = np.asarray(values, dtype=float)
     vmin, vmax = np.asarray(vmin, dtype=float), np.asarray(vmax, dtype=float)

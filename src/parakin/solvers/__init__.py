@@ -9,57 +9,42 @@
 
 Every method sees the mechanism only through ``residual(pose, joints)`` and
 ``jacobian_pose(pose, joints)`` (``"closed-form"`` through ``fk``), works on a whole batch at once
-and returns an :class:`FKResult`. Methods live in :data:`METHODS`; later modules add theirs with
-:func:`register`. A registered method is called as
+and returns an :class:`FKResult`. Methods live in :data:`METHODS` (:mod:`parakin.solvers.registry`);
+later modules add theirs with :func:`register`. A registered method is called as
 ``fn(mech, joints, x0, *, tol, maxiter, **options)`` with flat 2-D ``joints (N, m)`` and
 ``x0 (N, n)`` and returns an :class:`FKResult` with per-pose fields of shape ``(N,)``;
-:func:`solve_fk` does the validation, broadcasting, reshaping and timing around it.
+:func:`solve_fk` does the validation, broadcasting, reshaping and timing around it, and decides
+what a success is: the method's stopping rule *and* a valid answer (:mod:`parakin.solvers.verify`:
+in the mechanism's domain, on its assembly, ``ik(x)`` within ``joint_tol`` of the joints).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from parakin.errors import ParakinError, ShapeError
-from parakin.mechanisms.base import Array, Mechanism, as_batch
-from parakin.solvers.lm import levenberg_marquardt
+from parakin.errors import ShapeError
+from parakin.mechanisms.base import Array, Mechanism
 from parakin.solvers.baseline import scipy_root
+from parakin.solvers.closed import all_solutions, closed_form
 from parakin.solvers.gauss_newton import broyden_ls, gauss_newton
 from parakin.solvers.hybrid import hybrid
+from parakin.solvers.lm import levenberg_marquardt
 from parakin.solvers.newton import newton
+from parakin.solvers.pso import pso as _pso
 from parakin.solvers.quasi_newton import bfgs, broyden
-from parakin.solvers.result import FKResult, Status, inf_norm, summarize
+from parakin.solvers.registry import METHODS, Method, register
+from parakin.solvers.result import FKResult, Status, summarize
+from parakin.solvers.verify import default_joint_tol, verify
 
-__all__ = ["METHODS", "FKResult", "Status", "flatten_problem", "register", "solve_fk"]
+__all__ = ["MAXITER_LIMIT", "METHODS", "FKResult", "Method", "Status", "flatten_problem", "register", "solve_fk"]
 
-Method = Callable[..., FKResult]
-
-#: method name -> solver; extend with :func:`register`.
-METHODS: dict[str, Method] = {}
-
-
-def register(name: str, *, override: bool = False) -> Callable[[Method], Method]:
-    """Decorator adding a solver to :data:`METHODS` under ``name`` (see the module docstring).
-
-    Registering a different function under a taken name raises ValueError unless ``override``.
-    """
-
-    def add(fn: Method) -> Method:
-        if not override and METHODS.get(name, fn) is not fn:
-            raise ValueError(
-                f"FK method {name!r} is already registered ({METHODS[name].__module__})"
-            )
-        METHODS[name] = fn
-        return fn
-
-    return add
-
+#: largest ``maxiter`` accepted (a bound on the work one call may ask for)
+MAXITER_LIMIT = 10_000_000
 
 register("newton")(newton)
 register("broyden")(broyden)
@@ -69,106 +54,29 @@ register("hybrid")(hybrid)
 register("scipy-root")(scipy_root)
 register("gauss-newton")(gauss_newton)  # least-squares Newton, m >= n (redundant drive modes)
 register("broyden-ls")(broyden_ls)
-
-from parakin.solvers.pso import pso as _pso  # noqa: E402  (pso.py imports register from here)
-
 register("pso")(_pso)
+register("closed-form")(closed_form)
+register("all-solutions")(all_solutions)
 
 
-def _fk_by_halves(
-    fk: Callable[[Array], Array], joints: Array, n_pose: int
-) -> tuple[Array, NDArray[np.bool_]]:
-    """``fk`` on the whole batch; where it raises, bisect the batch to isolate the bad rows.
-
-    One vectorised call when every row is fine, ``O(k log N)`` calls for ``k`` bad rows.
-    Returns the poses (NaN where there is none) and the mask of rows that have one.
-    """
-    if len(joints) == 0:
-        return np.zeros((0, n_pose)), np.zeros(0, dtype=bool)
+def _rows(values: ArrayLike, size: int, what: str) -> Array:
+    """``values`` as a float array whose last axis has ``size`` entries (non-finite allowed)."""
     try:
-        with np.errstate(all="ignore"):
-            x = np.asarray(fk(joints), dtype=float)
-        return x, np.all(np.isfinite(x), axis=-1)
-    except ParakinError:
-        if len(joints) == 1:
-            return np.full((1, n_pose), np.nan), np.zeros(1, dtype=bool)
-        half = len(joints) // 2
-        (xa, oka), (xb, okb) = (
-            _fk_by_halves(fk, part, n_pose) for part in np.split(joints, [half])
-        )
-        return np.concatenate([xa, xb]), np.concatenate([oka, okb])
+        a = np.asarray(values, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{what} must be an array of numbers, got {values!r:.80}") from None
+    if a.ndim == 0 or a.shape[-1] != size:
+        raise ShapeError(f"{what} must have {size} values along its last axis, got shape {a.shape}")
+    return a
 
 
-@register("closed-form")
-def closed_form(
-    mech: Mechanism, joints: Array, x0: Array, *, tol: float, maxiter: int = 0, **options: Any
-) -> FKResult:
-    """The mechanism's own closed-form ``fk`` (``options`` are passed to it, e.g. ``branch``).
-
-    ``nit = nfev = njev = 0``; ``success`` where ``fk`` has a solution whose residual inf-norm
-    is ``<= tol``; elsewhere ``x = x0`` and ``Status.NO_SOLUTION``. ``x0`` and ``maxiter`` are
-    otherwise unused.
-    """
-    if getattr(mech, "fk", None) is None:
-        raise ValueError(
-            f"{type(mech).__name__} has no closed-form fk; use one of "
-            f"{', '.join(sorted(set(METHODS) - {'closed-form'}))}"
-        )
-    start = time.perf_counter()
-    n = len(joints)
-    x, ok = _fk_by_halves(lambda q: mech.fk(q, **options), joints, mech.n_pose)
-    x = np.where(ok[:, None], x, x0)
-    with np.errstate(all="ignore"):
-        res = inf_norm(mech.residual(x, joints))
-    status = np.where(ok & (res <= tol), Status.CONVERGED, Status.NO_SOLUTION).astype(np.int64)
-    zeros = np.zeros(n, dtype=np.int64)
-    return FKResult(
-        x=x,
-        success=status >= 0,
-        status=status,
-        nit=zeros,
-        nfev=zeros.copy(),
-        njev=zeros.copy(),
-        residual=res,
-        wall_time=time.perf_counter() - start,
-        method="closed-form",
-        message=summarize(status),
-    )
-
-
-@register("all-solutions")
-def all_solutions(
-    mech: Mechanism, joints: Array, x0: Array, *, tol: float, maxiter: int = 0, **options: Any
-) -> FKResult:
-    """Every real solution from the mechanism's ``fk_all`` (``(N, k, n)``, NaN-padded), then the one
-    nearest ``x0``: what a controller that knows its last pose does with an all-solutions FK.
-
-    Distances are taken per coordinate in units of the ``pose_bounds()`` box width, angle
-    coordinates (unit ``rad``) modulo 2 pi. ``success`` where a solution exists whose residual
-    inf-norm is ``<= tol``; elsewhere ``x = x0`` and ``Status.NO_SOLUTION``. ``options`` go to
-    ``fk_all``; ``maxiter`` is unused (``nit = nfev = njev = 0``).
-    """
-    if not hasattr(mech, "fk_all"):
-        raise ValueError(f"{type(mech).__name__} has no all-solutions fk_all; use one of "
-                         f"{', '.join(sorted(set(METHODS) - {'all-solutions'}))}")
-    start = time.perf_counter()
-    n = len(joints)
-    with np.errstate(all="ignore"):
-        sols = np.asarray(mech.fk_all(joints, **options), dtype=float).reshape(n, -1, mech.n_pose)
-        lo, hi = mech.pose_bounds()
-        d = mech.pose_difference(sols, x0[:, None, :])
-        dist = np.sqrt(np.sum((d / (np.asarray(hi) - np.asarray(lo))) ** 2, axis=-1))
-    dist = np.where(np.isfinite(dist), dist, np.inf)
-    best = np.argmin(dist, axis=-1)
-    ok = np.isfinite(dist[np.arange(n), best])
-    x = np.where(ok[:, None], sols[np.arange(n), best], x0)
-    with np.errstate(all="ignore"):
-        res = inf_norm(mech.residual(x, joints))
-    status = np.where(ok & (res <= tol), Status.CONVERGED, Status.NO_SOLUTION).astype(np.int64)
-    zeros = np.zeros(n, dtype=np.int64)
-    return FKResult(x=x, success=status >= 0, status=status, nit=zeros, nfev=zeros.copy(), njev=zeros.copy(),
-                    residual=res, wall_time=time.perf_counter() - start, method="all-solutions",
-                    message=summarize(status))
+def _check_settings(tol: float, maxiter: int, joint_tol: float | None) -> None:
+    if not (isinstance(tol, (int, float, np.number)) and np.isfinite(tol) and tol >= 0):
+        raise ValueError(f"tol = {tol!r} must be a finite number >= 0")
+    if isinstance(maxiter, bool) or int(maxiter) != maxiter or not 0 <= maxiter <= MAXITER_LIMIT:
+        raise ValueError(f"maxiter = {maxiter!r} must be an integer in [0, {MAXITER_LIMIT}]")
+    if joint_tol is not None and not (np.isfinite(joint_tol) and joint_tol >= 0):
+        raise ValueError(f"joint_tol = {joint_tol!r} must be a finite number >= 0")
 
 
 def flatten_problem(
@@ -177,14 +85,13 @@ def flatten_problem(
     """Validate an FK call and flatten it: ``(batch shape, joints (N, m), x0 (N, n))``, owned copies.
 
     ``x0`` defaults to ``mech.home()``; the batch is the broadcast of both batch shapes. Raises
-    ValueError for a negative ``tol`` or ``maxiter`` and ShapeError for shapes that do not fit.
+    ValueError for a negative or non-finite ``tol``, a ``maxiter`` outside ``[0, MAXITER_LIMIT]``,
+    and ShapeError for shapes that do not fit. Non-finite values are left in place (see
+    :func:`solve_fk`: such a row gets :attr:`Status.BAD_INPUT`).
     """
-    if not tol >= 0:
-        raise ValueError(f"tol = {tol!r} must be >= 0")
-    if int(maxiter) != maxiter or maxiter < 0:
-        raise ValueError(f"maxiter = {maxiter!r} must be a non-negative integer")
-    q = as_batch(joints, mech.n_joints, "joints")
-    x = as_batch(mech.home() if x0 is None else x0, mech.n_pose, "x0")
+    _check_settings(tol, maxiter, None)
+    q = _rows(joints, mech.n_joints, "joints")
+    x = _rows(mech.home() if x0 is None else x0, mech.n_pose, "x0")
     try:
         batch = np.broadcast_shapes(q.shape[:-1], x.shape[:-1])
     except ValueError:
@@ -196,6 +103,21 @@ def flatten_problem(
     return batch, flat_q, flat_x
 
 
+def _mark_bad_rows(mech: Mechanism, result: FKResult, bad: NDArray[np.bool_], maxiter: int) -> FKResult:
+    """``result`` with the rows ``bad`` (non-finite joints or start) set to :attr:`Status.BAD_INPUT`,
+    ``x = home``, no iterations, infinite residual and joint error."""
+    fields = {f: getattr(result, f).copy() for f in ("x", "success", "status", "nit", "nfev", "njev", "residual",
+                                                      "joint_error")}
+    fields["x"][bad] = mech.home()
+    fields["success"][bad] = False
+    fields["status"][bad] = Status.BAD_INPUT
+    for f in ("nit", "nfev", "njev"):
+        fields[f][bad] = 0
+    fields["residual"][bad] = np.inf
+    fields["joint_error"][bad] = np.inf
+    return dataclasses.replace(result, **fields, message=summarize(fields["status"], maxiter))
+
+
 def solve_fk(
     mech: Mechanism,
     joints: ArrayLike,
@@ -203,6 +125,7 @@ def solve_fk(
     method: str = "newton",
     tol: float = 1e-10,
     maxiter: int = 50,
+    joint_tol: float | None = None,
     **options: Any,
 ) -> FKResult:
     """Forward kinematics: the pose(s) ``x`` with ``residual(x, joints) = 0``.
@@ -210,28 +133,58 @@ def solve_fk(
     ``joints``: ``(..., n_joints)``. ``x0``: initial guess ``(..., n_pose)``, default
     ``mech.home()``; the batch is the broadcast of both batch shapes (one joint vector from many
     starts works too). ``method``: a key of :data:`METHODS` (``"newton"``, ``"broyden"``,
-    ``"bfgs"``, ``"lm"``, ``"closed-form"``, and whatever later modules register). A pose has
-    converged when the inf-norm of its residual is ``<= tol`` (the residual's units: metres for
-    the 3-P(4S)). ``maxiter``: iterations per pose. ``options`` go to the method, e.g.
-    ``xtol``, ``gtol``, ``callback(k, x, residual_norm)`` (called with batch-shaped arrays).
+    ``"bfgs"``, ``"lm"``, ``"closed-form"``, and whatever later modules register). A method stops
+    a pose when the inf-norm of its residual is ``<= tol`` (the residual's units: metres for the
+    3-P(4S)). ``maxiter``: iterations per pose. ``options`` go to the method, e.g. ``xtol``,
+    ``gtol``, ``callback(k, x, residual_norm)`` (called with batch-shaped arrays).
+
+    A pose is a **success** only if its method converged *and* it is a valid answer: inside the
+    mechanism's domain, on the assembly the mechanism asks for (the papers' by default), and with
+    ``max_k |ik(x)_k - joints_k| <= joint_tol`` (joint units; default 100 x the requested accuracy
+    ``tol`` / ``xtol``, at least 1e-8). Otherwise its ``status`` says why
+    (:attr:`Status.WRONG_ASSEMBLY`, :attr:`Status.OUT_OF_DOMAIN`, :attr:`Status.WRONG_ANSWER`);
+    ``joint_error`` reports that error for every pose.
 
     Returns an :class:`FKResult` whose per-pose fields have the batch shape (0-d for a single
-    joint vector). Never raises for a pose that does not converge: see ``success``/``status``.
+    joint vector). Never raises for a pose that does not converge, nor for a row with non-finite
+    joints or start (:attr:`Status.BAD_INPUT`): see ``success``/``status``.
     """
     try:
         fn = METHODS[method]
-    except KeyError:
+    except (KeyError, TypeError):
         raise ValueError(
             f"unknown FK method {method!r}; known: {', '.join(sorted(METHODS))}"
         ) from None
     start = time.perf_counter()
+    _check_settings(tol, maxiter, joint_tol)
     batch, flat_q, flat_x = flatten_problem(mech, joints, x0, tol, maxiter)
+    jtol = default_joint_tol(tol, options) if joint_tol is None else float(joint_tol)
+    bad = ~(np.all(np.isfinite(flat_q), axis=-1) & np.all(np.isfinite(flat_x), axis=-1))
+    if bad.any():  # solved on stand-in values (a good row's joints, the home start), then marked
+        fine = np.flatnonzero(~bad)
+        flat_q[bad] = flat_q[fine[0]] if fine.size else 0.0
+        flat_x[bad] = mech.home()
     callback = options.get("callback")
     if callback is not None:
         options["callback"] = lambda k, xk, rk: callback(
             k, xk.reshape(*batch, xk.shape[-1]), rk.reshape(batch)
         )
-    result = fn(mech, flat_q, flat_x, tol=tol, maxiter=int(maxiter), **options)
+    if bad.size and bad.all():
+        result = _mark_bad_rows(mech, _nothing(mech, flat_q, flat_x, method), bad, int(maxiter))
+    else:
+        result = fn(mech, flat_q, flat_x, tol=tol, maxiter=int(maxiter), **options)
+        result = verify(mech, flat_q, result, jtol, int(maxiter))
+        if bad.any():
+            result = _mark_bad_rows(mech, result, bad, int(maxiter))
     return dataclasses.replace(
         result.reshape(batch), wall_time=time.perf_counter() - start, method=method
     )
+
+
+def _nothing(mech: Mechanism, joints: Array, x0: Array, method: str) -> FKResult:
+    """A result with no solve at all (every row is bad input): fields to be marked."""
+    n = len(joints)
+    zeros = np.zeros(n, dtype=np.int64)
+    return FKResult(x=x0.copy(), success=np.zeros(n, dtype=bool), status=zeros.copy(), nit=zeros, nfev=zeros.copy(),
+                    njev=zeros.copy(), residual=np.full(n, np.inf), wall_time=0.0, method=method, message="",
+                    joint_error=np.full(n, np.inf))

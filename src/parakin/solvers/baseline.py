@@ -14,13 +14,14 @@ import numpy as np
 from scipy.optimize import root
 
 from parakin.mechanisms.base import Array, Mechanism
-from parakin.solvers.result import FKResult, Status, inf_norm, summarize
+from parakin.solvers.result import FKResult, Status, inf_norm, rowwise, summarize
 
 __all__ = ["scipy_root"]
 
 
 def scipy_root(
-    mech: Mechanism, joints: Array, x0: Array, *, tol: float, maxiter: int, root_method: str = "hybr", **options: Any
+    mech: Mechanism, joints: Array, x0: Array, *, tol: float, maxiter: int, root_method: str | None = None,
+    **options: Any
 ) -> FKResult:
     """``scipy.optimize.root(residual, x0, jac=jacobian_pose)`` pose by pose (a Python loop).
 
@@ -28,7 +29,9 @@ def scipy_root(
     iterates) and success is then judged like every other method: residual inf-norm ``<= tol``
     with a floor of 1e-12 (hybr stops on the step, not the residual). ``maxiter`` bounds the
     function evaluations (``maxfev = 20 * maxiter``). ``nit`` reports scipy's ``nfev``
-    (MINPACK counts evaluations, not iterations).
+    (MINPACK counts evaluations, not iterations). ``root_method`` defaults to ``"hybr"`` for a
+    square system and to ``"lm"`` (MINPACK's Levenberg-Marquardt, least squares) where the mechanism
+    has more equations than unknowns (``hybr`` needs ``m == n``).
     """
     start = time.perf_counter()
     n = len(joints)
@@ -36,14 +39,18 @@ def scipy_root(
     nfev = np.zeros(n, dtype=np.int64)
     njev = np.zeros(n, dtype=np.int64)
     nonfinite = np.zeros(n, dtype=bool)
+    square = joints.shape[-1] == x0.shape[-1]
+    kind = root_method or ("hybr" if square else "lm")
+    budget = {"maxfev" if kind == "hybr" else "maxiter": 20 * max(maxiter, 1)}
     for i in range(n):
         q = joints[i]
         try:
-            sol = root(
-                lambda p: mech.residual(p, q), x0[i], jac=lambda p: mech.jacobian_pose(p, q),
-                method=root_method, tol=tol, options={"maxfev": 20 * max(maxiter, 1), **options},
-            )
-        except ValueError:  # MINPACK stepped to a non-finite pose (the mechanism's residual refused it)
+            with np.errstate(all="ignore"):
+                sol = root(
+                    lambda p: mech.residual(p, q), x0[i], jac=lambda p: mech.jacobian_pose(p, q),
+                    method=kind, tol=tol, options={**budget, **options},
+                )
+        except (ValueError, ArithmeticError):  # MINPACK stepped to a pose the mechanism refused
             nonfinite[i] = True
             continue
         nonfinite[i] = not np.all(np.isfinite(sol.x))
@@ -51,8 +58,7 @@ def scipy_root(
             x[i] = sol.x
         nfev[i] = sol.get("nfev", 0)
         njev[i] = sol.get("njev", 0)
-    with np.errstate(all="ignore"):
-        res = inf_norm(mech.residual(x, joints))
+    res = inf_norm(rowwise(mech.residual, x, joints, tail=(joints.shape[-1],)))
     ok = np.isfinite(res) & (res <= max(tol, 1e-12)) & ~nonfinite
     status = np.where(ok, Status.CONVERGED, np.where(nonfinite, Status.NONFINITE, Status.MAXITER)).astype(np.int64)
     return FKResult(

@@ -17,7 +17,8 @@ from typing import Any, Protocol
 import numpy as np
 
 from parakin.mechanisms.base import Array, Mechanism
-from parakin.solvers.result import FKResult, Status, summarize
+from parakin.solvers.registry import METHODS
+from parakin.solvers.result import FKResult, Status, rowwise, summarize
 
 __all__ = ["hybrid", "Network"]
 
@@ -51,22 +52,32 @@ def hybrid(
     residual is a local minimum of unreachable joints, not a solution). ``nit`` counts the
     quasi-Newton iterations (the network evaluation is not an iteration).
 
-    ``check``: first call ``mech.check_joints`` so that joints outside the reachable set raise
-    the mechanism's UnreachableError (the network would silently extrapolate).
+    ``check``: first call ``mech.check_joints`` so that joints outside the reachable set are not
+    refined from a network that would silently extrapolate: those rows stop with
+    :attr:`Status.UNREACHABLE` (``x = x0``), the others are solved.
     """
-    from parakin.solvers import METHODS
-
     if network is None:
         raise ValueError("the hybrid method needs network=... (e.g. parakin.nn.BPNetwork.load(path))")
     if refine == "hybrid" or refine not in METHODS:
         raise ValueError(f"refine = {refine!r} must be one of {sorted(set(METHODS) - {'hybrid'})}")
-    if check:
-        mech.check_joints(joints)
-    guess = np.broadcast_to(np.asarray(network.predict(joints), dtype=float), x0.shape).copy()
+    reachable = np.ones(len(joints), dtype=bool)
+    if check:  # row by row where it raises: one unreachable input never costs the batch
+        reachable = rowwise(lambda q: _passes(mech, q), joints, tail=(), fill=0.0) > 0.5
+    with np.errstate(all="ignore"):
+        guess = np.broadcast_to(np.asarray(network.predict(joints), dtype=float), x0.shape).copy()
+    guess = np.where(reachable[:, None] & np.all(np.isfinite(guess), axis=-1, keepdims=True), guess, x0)
     res = METHODS[refine](mech, joints, guess, tol=tol, maxiter=maxiter, xtol=eps, **options)
     # a step below eps counts only where the residual is at the level of eps too
     ok = (res.residual <= tol) | ((res.status == Status.SMALL_STEP) & (res.residual <= 10 * eps))
     status = np.where(ok | (res.status < 0), res.status, Status.LOCAL_MINIMUM).astype(np.int64)
+    status[~reachable] = Status.UNREACHABLE
+    x = np.where(reachable[:, None], res.x, x0)
     return dataclasses.replace(
-        res, success=status >= 0, status=status, method="hybrid", message=summarize(status, maxiter)
+        res, x=x, success=status >= 0, status=status, method="hybrid", message=summarize(status, maxiter)
     )
+
+
+def _passes(mech: Mechanism, joints: Array) -> Array:
+    """Ones where ``mech.check_joints`` accepts the batch (it raises otherwise)."""
+    mech.check_joints(joints)
+    return np.ones(len(joints))

@@ -9,9 +9,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from parakin.mechanisms.base import Array, Mechanism
+from parakin.solvers.gauss_newton import lstsq_step
 from parakin.solvers.result import Evaluator, FKResult, State, StepInfo, inf_norm, iterate
 
-__all__ = ["newton", "solve_linear"]
+__all__ = ["newton", "solve_linear", "newton_direction"]
 
 
 def solve_linear(a: Array, b: Array) -> Array:
@@ -39,9 +40,16 @@ def solve_linear(a: Array, b: Array) -> Array:
     return out[..., 0] if vector else out
 
 
+def newton_direction(a: Array, r: Array) -> Array:
+    """``a^-1 r`` for square ``a`` (:func:`solve_linear`), the least-squares ``pinv(a) r`` for
+    ``m > n`` rows (:func:`~parakin.solvers.gauss_newton.lstsq_step`: e.g. the 12 legs of the cube
+    mechanism, or a redundant drive mode's padded compatibility equations)."""
+    return solve_linear(a, r) if a.shape[-1] == a.shape[-2] else lstsq_step(a, r)
+
+
 def _newton_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
     """``x <- x - J(x)^-1 r(x)``: one Jacobian and one residual evaluation."""
-    dx = solve_linear(ev.jacobian(s["x"], rows), s["r"])
+    dx = newton_direction(ev.jacobian(s["x"], rows), s["r"])
     x = s["x"] - dx
     return {"x": x, "r": ev.residual(x, rows)}, StepInfo(step=inf_norm(dx))
 
@@ -62,7 +70,8 @@ def newton(
     the current iterate (one Jacobian and one residual evaluation); no line search, so the
     convergence is quadratic near a regular solution and the basin is that of pure Newton.
     A singular ``J`` falls back to the least-squares step ``pinv(J) r`` (see
-    :func:`solve_linear`); a pose that diverges stops as non-finite. Needs ``m == n``.
+    :func:`solve_linear`); a pose that diverges stops as non-finite. For ``m > n`` the step is
+    the least-squares (Gauss-Newton) one, ``pinv(J) r``.
 
     Options: ``xtol`` (stop with success when the step inf-norm is ``<= xtol``; 0 = off),
     ``callback(k, x, residual_norm)`` after every iteration.

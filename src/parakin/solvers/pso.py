@@ -38,14 +38,38 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from parakin.mechanisms.base import Array, Mechanism
-from parakin.solvers.result import FKResult, Status, inf_norm, summarize
+from parakin.solvers.result import FKResult, Status, inf_norm, rowwise, summarize
 
-__all__ = ["pso", "PSOResult", "ChaoticLogistic", "linear_inertia", "inertia_schedule"]
+__all__ = ["pso", "PSOResult", "ChaoticLogistic", "linear_inertia", "inertia_schedule", "check_size", "MEMORY_LIMIT"]
 
 Schedule = Callable[[int, int, NDArray[np.intp]], "float | Array"]
 Fitness = Callable[[Array, Array], Array]
 
 _BLOCK = 64  # iterations of random numbers drawn per generator call (fixed: part of reproducibility)
+#: most bytes the swarms of one call may hold (positions, velocities, bests, random block, history)
+MEMORY_LIMIT = 2 * 1024**3
+
+
+def _positive_integer(value: Any) -> bool:
+    try:
+        return not isinstance(value, bool) and float(value).is_integer() and value >= 1
+    except (TypeError, ValueError, OverflowError):
+        return False
+
+
+def memory_needed(runs: int, swarm: int, maxiter: int, n: int) -> int:
+    """Bytes :func:`pso` allocates for ``runs`` swarms of ``swarm`` particles in ``n`` dimensions."""
+    return 8 * (runs * swarm * n * (4 + 2 * _BLOCK) + runs * (maxiter + 1) + (maxiter + 1))
+
+
+def check_size(runs: int, swarm: int, maxiter: int, n: int) -> None:
+    """ValueError naming the values and the limit where one call would need more than
+    :data:`MEMORY_LIMIT` bytes."""
+    need = memory_needed(runs, swarm, maxiter, n)
+    if need > MEMORY_LIMIT:
+        raise ValueError(f"pso with {runs} run(s) x swarm = {swarm} particles x maxiter = {maxiter} needs "
+                         f"{need / 1024**3:.3g} GiB, more than the limit of {MEMORY_LIMIT / 1024**3:g} GiB: "
+                         "use fewer particles, iterations or rows per call")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -157,8 +181,10 @@ def pso(
         raise TypeError(f"pso() got unexpected options {sorted(options)}")
     start = time.perf_counter()
     n_runs, n = x0.shape
-    if swarm < 1 or int(swarm) != swarm:
+    if not _positive_integer(swarm):
         raise ValueError(f"swarm = {swarm!r} must be a positive integer")
+    swarm = int(swarm)
+    check_size(n_runs, swarm, maxiter, n)
     lo, hi = (np.asarray(b, dtype=float) for b in (bounds if bounds is not None else mech.pose_bounds()))
     if lo.shape != (n,) or hi.shape != (n,) or np.any(hi <= lo):
         raise ValueError(f"bounds must be two arrays of {n} values with lower < upper, got {lo}, {hi}")
@@ -181,7 +207,7 @@ def pso(
         x[:, 0, :] = np.clip(x0, lo, hi)
     v = np.zeros_like(x)
     with np.errstate(all="ignore"):
-        f = fit(x, joints)
+        f = rowwise(fit, x, joints, tail=(swarm,), fill=np.inf)
     f = np.where(np.isfinite(f), f, np.inf)
     pbest, pf = x.copy(), f.copy()
     gi = np.argmin(pf, axis=1)
@@ -218,7 +244,7 @@ def pso(
             vr = np.clip(vr, -vmax, vmax)
         xr = np.clip(xr + vr, lo, hi)
         with np.errstate(all="ignore"):
-            fr = fit(xr, joints[idx])
+            fr = rowwise(fit, xr, joints[idx], tail=(len(xr[0]),), fill=np.inf)
         fr = np.where(np.isfinite(fr), fr, np.inf)
         better = fr < pf[idx]
         pr = np.where(better[..., None], xr, pr)
@@ -234,8 +260,7 @@ def pso(
         running[idx] = gf[idx] > ftol
         if callback is not None:
             callback(k, gbest.copy(), gf.copy())
-    with np.errstate(all="ignore"):
-        res = inf_norm(mech.residual(gbest, joints))
+    res = inf_norm(rowwise(mech.residual, gbest, joints, tail=(joints.shape[-1],)))
     status = np.where(gf <= ftol, Status.CONVERGED, Status.MAXITER).astype(np.int64)
     return PSOResult(
         x=gbest, success=status >= 0, status=status, nit=nit, nfev=nfev, njev=np.zeros(n_runs, dtype=np.int64),
@@ -243,10 +268,3 @@ def pso(
         fitness=gf, history=history, inertia=weights,
     )
 
-
-# registration: at import when parakin.solvers is already initialised; when parakin.solvers imports
-# this module itself (circular import), it registers ``pso`` with its own ``register("pso")(pso)``.
-from parakin import solvers as _solvers  # noqa: E402
-
-if hasattr(_solvers, "register"):
-    _solvers.register("pso")(pso)

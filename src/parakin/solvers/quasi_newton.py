@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from parakin.mechanisms.base import Array, Mechanism
-from parakin.solvers.newton import solve_linear
+from parakin.solvers.newton import newton_direction, solve_linear
 from parakin.solvers.result import Evaluator, FKResult, State, StepInfo, inf_norm, iterate
 
 __all__ = ["bfgs", "broyden"]
@@ -40,7 +40,7 @@ def _broyden_init(ev: Evaluator, rows: NDArray[np.intp], s: State) -> State:
 
 def _broyden_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
     """``x+ = x - B^-1 r``, then ``B+ = B + (y - B d) d^T / d^T d`` with ``y = r+ - r``."""
-    d = -solve_linear(s["B"], s["r"])
+    d = -newton_direction(s["B"], s["r"])
     x = s["x"] + d
     r = ev.residual(x, rows)
     dd = _dot(d, d)
@@ -67,7 +67,8 @@ def broyden(
     Jacobian evaluation per pose that does not start converged) and is then corrected by the
     rank-one secant update ``B += (y - B d) d^T / (d^T d)`` after each full step
     ``d = -B^-1 r``. One iteration = one step = one residual evaluation, no Jacobian.
-    Superlinear near a solution, no line search. Needs ``m == n``.
+    Superlinear near a solution, no line search. For ``m > n`` the step is the least-squares one,
+    ``-pinv(B) r`` (then identical to ``"broyden-ls"``).
 
     Options: ``xtol`` (stop with success when the step inf-norm is ``<= xtol``; 0 = off),
     ``callback(k, x, residual_norm)``.

@@ -28,9 +28,32 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from parakin.errors import ParakinError
 from parakin.mechanisms.base import Array, Mechanism
 
-__all__ = ["Evaluator", "FKResult", "Status", "StepInfo", "inf_norm", "iterate", "summarize"]
+__all__ = ["Evaluator", "FKResult", "ROW_ERRORS", "Status", "StepInfo", "inf_norm", "iterate", "rowwise",
+           "summarize"]
+
+#: what a mechanism raises for one pose or joint row it cannot handle (outside its domain, singular)
+ROW_ERRORS = (ParakinError, ArithmeticError)
+
+
+def rowwise(f: Callable[..., Any], *rows: Array, tail: tuple[int, ...], fill: float = np.nan) -> Array:
+    """``f(*rows)`` on the whole batch; where it raises one of :data:`ROW_ERRORS`, on halves of the
+    batch, so that a bad row gives ``fill`` (shape ``tail``) and never costs its neighbours.
+    One vectorised call when every row is fine, ``O(k log N)`` calls for ``k`` bad rows."""
+    n = len(rows[0])
+    if n == 0:
+        return np.full((0, *tail), fill)
+    try:
+        with np.errstate(all="ignore"):
+            return np.asarray(f(*rows), dtype=float).reshape(n, *tail)
+    except ROW_ERRORS:
+        if n == 1:
+            return np.full((1, *tail), fill)
+    half = n // 2
+    return np.concatenate([rowwise(f, *(r[:half] for r in rows), tail=tail, fill=fill),
+                           rowwise(f, *(r[half:] for r in rows), tail=tail, fill=fill)])
 
 
 class Status(IntEnum):
@@ -44,6 +67,11 @@ class Status(IntEnum):
     STALLED = -3  #: no acceptable step (line search exhausted its trials)
     NO_SOLUTION = -4  #: the closed form has no (accurate enough) solution for these joints
     LOCAL_MINIMUM = -5  #: the step became small at a large residual (unreachable joints?)
+    WRONG_ASSEMBLY = -6  #: converged, but on another assembly mode / branch than the one asked for
+    OUT_OF_DOMAIN = -7  #: converged, but the pose lies outside the mechanism's domain (its IK rejects it)
+    WRONG_ANSWER = -8  #: residual within tol, but ik(x) misses the joints by more than joint_tol
+    BAD_INPUT = -9  #: the row's joints or start are not finite (x is the mechanism's home)
+    UNREACHABLE = -10  #: the mechanism's check_joints rejects the row's joints (no solve attempted)
 
 
 _RUNNING = 127  # internal status of a pose still iterating
@@ -54,6 +82,11 @@ _WHY = {
     Status.STALLED: "stalled (line search found no decrease)",
     Status.NO_SOLUTION: "had no closed-form solution within tol",
     Status.LOCAL_MINIMUM: "stopped at a small step with a large residual",
+    Status.WRONG_ASSEMBLY: "converged on another assembly",
+    Status.OUT_OF_DOMAIN: "converged outside the mechanism's domain",
+    Status.WRONG_ANSWER: "had a small residual but ik(x) missed the joints by more than joint_tol",
+    Status.BAD_INPUT: "had non-finite joints or start",
+    Status.UNREACHABLE: "had joints that cannot be assembled",
 }
 
 
@@ -78,6 +111,8 @@ def summarize(status: NDArray[np.integer], maxiter: int | None = None) -> str:
 
 def _to_json(a: Any) -> Any:
     """Python lists/scalars; non-finite floats become None (JSON ``null``)."""
+    if a is None:
+        return None
     a = np.asarray(a)
     if a.dtype.kind == "f":
         a = np.where(np.isfinite(a), a, None)
@@ -102,6 +137,9 @@ class FKResult:
     wall_time: float  #: seconds for the whole call
     method: str  #: the method's registered name
     message: str  #: "converged" or a summary of the failures
+    #: ``max_k |ik(x)_k - joints_k|`` per pose (inf where x is outside the IK's domain); set by
+    #: :func:`parakin.solvers.solve_fk` (None from a method called directly)
+    joint_error: Array | None = None
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -114,13 +152,15 @@ class FKResult:
             f: getattr(self, f).reshape(shape)
             for f in ("success", "status", "nit", "nfev", "njev", "residual")
         }
+        if self.joint_error is not None:
+            per_pose["joint_error"] = self.joint_error.reshape(shape)
         return dataclasses.replace(self, x=self.x.reshape(*shape, self.x.shape[-1]), **per_pose)
 
     def to_dict(self) -> dict[str, Any]:
         """Every field as JSON-serialisable python lists/scalars (non-finite floats -> None)."""
         return {
             f.name: _to_json(getattr(self, f.name))
-            if isinstance(getattr(self, f.name), np.ndarray)
+            if isinstance(getattr(self, f.name), np.ndarray) or getattr(self, f.name) is None
             else getattr(self, f.name)
             for f in dataclasses.fields(self)
         }
@@ -184,11 +224,14 @@ class Evaluator:
             counter[rows] += 1
             # every row running (rows = 0..N-1): the joints as they are, no gather
             q = self.joints if len(rows) == len(self.joints) else self.joints[rows]
-            return np.asarray(f(x, q), dtype=float)
+            try:
+                return np.asarray(f(x, q), dtype=float)
+            except ROW_ERRORS:  # one row left the mechanism's domain: isolate it, NaN there
+                return rowwise(f, x, q, tail=tail)
         out = np.full((len(rows), *tail), np.nan)
         if ok.any():
             counter[rows[ok]] += 1
-            out[ok] = f(x[ok], self.joints[rows[ok]])
+            out[ok] = rowwise(f, x[ok], self.joints[rows[ok]], tail=tail)
         return out
 
 

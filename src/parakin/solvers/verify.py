@@ -1,0 +1,68 @@
+"""What makes a solve a success: the pose is a valid answer for the joints, not only a small residual.
+
+A method reports success where its own stopping rule holds (residual inf-norm ``<= tol``, or a
+small step / gradient where the caller asked for one). :func:`verify` then checks, on the rows that
+claim success, that the pose is an answer of the mechanism for those joints:
+
+* the pose lies in the mechanism's domain (``mech.in_domain``: where its IK is defined), else
+  :attr:`Status.OUT_OF_DOMAIN`;
+* it is on the assembly mode / branch the mechanism instance asks for (``mech.on_assembly``, the
+  papers' by default), else :attr:`Status.WRONG_ASSEMBLY`;
+* the IK of the pose reproduces the joints: ``max_k |ik(x)_k - q_k| <= joint_tol``
+  (``mech.joint_error``), else :attr:`Status.WRONG_ANSWER`. A residual tolerance alone does not
+  bound this near a singularity, where the joints are very sensitive to the pose.
+
+The joint error of every row is reported in ``FKResult.joint_error``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+
+from parakin.mechanisms.base import Array, Mechanism
+from parakin.solvers.result import FKResult, Status, rowwise, summarize
+
+__all__ = ["JOINT_TOL_FLOOR", "default_joint_tol", "verify"]
+
+#: smallest default joint tolerance (joint units: m, or the dimensionless lengths of the 3-6 Stewart)
+JOINT_TOL_FLOOR = 1e-8
+
+
+def default_joint_tol(tol: float, options: dict[str, Any]) -> float:
+    """100 x the accuracy the call asked for (``tol``, or the step / fitness tolerance ``xtol``,
+    ``eps``, ``ftol`` of a method that stops on it), at least :data:`JOINT_TOL_FLOOR`."""
+    asked = [tol] + [float(options[k]) for k in ("xtol", "eps", "ftol") if options.get(k) is not None]
+    return max(JOINT_TOL_FLOOR, 100.0 * max(asked))
+
+
+def _mask(f, *rows: Array) -> Array:
+    """A boolean hook evaluated row-safely (a row that raises counts as False)."""
+    return rowwise(f, *rows, tail=(), fill=0.0) > 0.5
+
+
+def verify(mech: Mechanism, joints: Array, result: FKResult, joint_tol: float, maxiter: int | None = None) -> FKResult:
+    """``result`` (flat, ``(N,)``) with ``joint_error`` filled in and every claimed success that is
+    not a valid answer turned into its failure status (see the module docstring)."""
+    x, n = result.x, len(joints)
+    fin = np.all(np.isfinite(x), axis=-1)
+    dom = np.zeros(n, dtype=bool)
+    dom[fin] = _mask(mech.in_domain, x[fin])
+    err = np.full(n, np.inf)
+    asm = np.zeros(n, dtype=bool)
+    if dom.any():
+        err[dom] = rowwise(mech.joint_error, x[dom], joints[dom], tail=(), fill=np.inf)
+        asm[dom] = _mask(mech.on_assembly, x[dom], joints[dom])
+    err = np.where(np.isnan(err), np.inf, err)
+    claimed = result.status >= 0
+    status = result.status.copy()
+    status[claimed & ~(err <= joint_tol)] = Status.WRONG_ANSWER
+    status[claimed & dom & ~asm] = Status.WRONG_ASSEMBLY
+    status[claimed & ~dom] = Status.OUT_OF_DOMAIN
+    if np.array_equal(status, result.status):
+        return dataclasses.replace(result, joint_error=err)
+    message = summarize(status, maxiter)
+    return dataclasses.replace(result, success=status >= 0, status=status, joint_error=err, message=message)
+
