@@ -4,8 +4,13 @@
 # One rule per artefact, generated from the artefact registry (src/parakin/registry.py): each
 # table or figure is declared beside the function that makes it (`parakin which FILE` finds it).
 # The committed figures/ folder is the record; updating it is an explicit step: `parakin record`.
+# Report: snakemake --report report.html (every figure and table, captioned); on a SLURM cluster:
+#   snakemake --workflow-profile profiles/slurm    (docs/cluster.md)
 
 configfile: "config/config.yaml"
+
+
+report: "workflow/report/workflow.rst"
 
 
 include: "workflow/rules/common.smk"

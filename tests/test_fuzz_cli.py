@@ -206,3 +206,72 @@ def test_issue_cases(argv, message):
 def test_version():
     code, stdout, _ = run(["--version"])
     assert code == 0 and stdout.startswith("parakin ")
+
+
+# ------------------------------------------------------------ hostile files and --all (issue 18)
+CELLS = ["0", "0.43", "-0.08", "0.592", "1e308", "nan", "inf", "", "abc", "x", "x [m]", "l1 [mm]", "1e-3", '"1"']
+
+
+@st.composite
+def file_argv(draw):
+    """ik/fk --input FILE with hostile CSV content (headers, counts, notations), or .npy of any shape."""
+    import tempfile
+
+    command = draw(st.sampled_from(["ik", "fk"]))
+    name = draw(st.sampled_from(sorted(mechanisms.REGISTRY)))
+    folder = tempfile.mkdtemp(prefix="parakin-fuzz-")
+    if draw(st.booleans()):
+        rows = draw(st.lists(st.lists(st.sampled_from(CELLS), min_size=0, max_size=7), min_size=0, max_size=4))
+        path = f"{folder}/in.csv"
+        with open(path, "w") as fh:
+            fh.write("\n".join(draw(st.sampled_from([",", ";", ", "])).join(r) for r in rows))
+    else:
+        shape = draw(st.sampled_from([(3,), (2, 3), (1, 6), (2, 12), (0, 3), (3, 3, 3), (4,)]))
+        values = draw(st.sampled_from([0.0, 0.43, -0.08, 1e308, np.nan, np.inf]))
+        path = f"{folder}/in.npy"
+        np.save(path, np.full(shape, values))
+    argv = [command, name, "--input", path]
+    if command == "fk" and name in ("2ups", "stewart36") and draw(st.booleans()):
+        argv.append("--all")
+    if draw(st.booleans()):
+        argv += ["--output", f"{folder}/out" + draw(st.sampled_from([".csv", ".npy", ".txt"]))]
+    if draw(st.booleans()):
+        argv += ["--units", draw(st.sampled_from(["si", "paper"]))]
+    if draw(st.booleans()):
+        argv.append("--json")
+    return argv
+
+
+@settings(max_examples=120, derandomize=True, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(argv=file_argv())
+def test_input_files_survive_hostile_content(argv):
+    _check(argv)
+    if "--output" in argv:
+        out = argv[argv.index("--output") + 1]
+        code, _, _ = run(argv)
+        if code == 0 and out.endswith(".npy"):
+            a = np.load(out)
+            assert "--all" in argv or np.all(np.isfinite(a))
+
+
+@settings(max_examples=60, derandomize=True, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(name=st.sampled_from(["2ups", "stewart36"]), values=st.data())
+def test_fk_all_every_listed_solution_is_right(name, values):
+    """--all on any joints: exit 0/1/2, strict JSON, and every listed solution's IK gives the joints."""
+    cls = mechanisms.REGISTRY[name]
+    joints = values.draw(st.lists(st.sampled_from(NUMBERS[:13] + ["0.5", "1.8", "2.93", "3.2"]),
+                                  min_size=len(cls.joint_names), max_size=len(cls.joint_names)))
+    argv = ["fk", name, "--joints", *joints, "--all", "--json"]
+    code, stdout, stderr = run(argv)
+    assert code in (0, 1, 2) and "Traceback" not in stderr, (argv, stderr)
+    if code == 2:
+        assert len(stderr.strip().splitlines()) == 1
+        return
+    out = _strict_json(stdout)
+    q = np.asarray(out["joints"], dtype=float)[0]
+    assert (code == 0) == (out["n_real"][0] > 0)
+    for s in out["solutions"][0]:
+        mech = cls(branch=-1) if "branch -1" in s["assembly"] else cls()
+        assert np.max(np.abs(mech.ik(np.asarray(s["x"])) - q)) <= 1e-7 * max(1.0, np.max(np.abs(q))), (argv, s)

@@ -10,6 +10,7 @@ from parakin.errors import ConfigError
 from parakin.optimize import GAOptions, ga, non_dominated, normalised_sum, nsga2, rank_expectation
 from parakin.papers.zhao2017_3p4s import optimization as op
 from parakin.report import load_reference
+from parakin.registry import of_module
 
 
 def sphere(X):
@@ -81,7 +82,7 @@ def small_config():
 
 def test_section_artefacts_write_their_files(small_config, tmp_path):
     written = []
-    for name, fn in op.ARTEFACTS.items():
+    for name, fn in of_module(op).items():
         paths = fn(small_config, tmp_path)
         assert paths and all(p.exists() and p.stat().st_size > 0 for p in paths), name
         written += [p.name for p in paths]

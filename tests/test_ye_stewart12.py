@@ -9,6 +9,7 @@ import pytest
 
 from parakin.config import DEFAULT_CONFIG, QUICK_CONFIG, load_config
 from parakin.papers import ye_stewart12 as Y
+from parakin.claims import resolve
 from parakin.report import claims_table, load_reference
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -51,12 +52,14 @@ def test_table2_and_table5_reproduced(outputs):
 
 def test_claims_and_summary(outputs):
     ref = load_reference(Y.KEY)
-    claims = Y.claims(outputs, ref)
+    claims = [resolve(c, ref) for c in Y.claims(outputs, ref)]  # judged as the report judges them
     table = claims_table(claims).set_index("quantity")
     for q in ("equations.before", "highest_terms.after", "d20.nr_steps", "d25.nr_steps", "mean.nr_steps",
-              "accuracy_factor", "fk.max_position_error", "composite.initial"):
+              "fk.max_position_error", "composite.initial"):
         assert table.loc[q, "verdict"] == "reproduced", q
-    assert table.loc["broyden.match_step", "verdict"] == "differs"  # C7: Fig. 8's narrative is refuted
+    assert table.loc["accuracy_factor", "verdict"] == "bound satisfied"  # against a round-off floor
+    assert table.loc["broyden.match_step", "verdict"].startswith("differs")  # C7: Fig. 8's narrative is refuted
+    assert table.loc["time_fraction", "verdict"] == "not comparable"  # wall-clock of another machine
     assert float(table.loc["accuracy_factor", "ours"]) > 1e3
     assert {"composite.nr", "composite_ratio", "width.R2.nr", "bump.R0.L"} <= set(table.index)
     # C9, C10, C11, C15 and the rest of C8 are rows (qualitative statements, encodings in the reasons)
@@ -64,7 +67,7 @@ def test_claims_and_summary(outputs):
             "broyden.most_initial_dependence_R", "nr.step_drops", "broyden.step_drops", "broyden.drops_near_dmax",
             "broyden.trend_spearman", "dmax_vs_n.spearman", "dmax_vs_L.spearman", "odd_even_ratio.nr",
             "odd_even_ratio.broyden"} <= set(table.index)
-    assert table.loc["broyden.trend_spearman", "verdict"] == "reproduced"  # C10: Broyden's steps rise with d
+    assert table.loc["broyden.trend_spearman", "verdict"] == "bound satisfied"  # C10: Broyden's steps rise with d
     text = Y.summary(outputs, ref)
     assert "Table 5 steps" in text and "cond(dF/dX)" in text
 

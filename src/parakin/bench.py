@@ -110,3 +110,104 @@ def bench_fk(
         df["speedup_single"] = b["median_latency_us"] / df["median_latency_us"]
         df["speedup_per_solve"] = df["throughput_per_s"] / b["throughput_per_s"]
     return df
+
+
+# ---------------------------------------------------------------------------- compiled-path goals
+#: the goals of the compiled path (issue 17), checked by :func:`kernel_goals`
+GOALS = {"single_vs_scipy": 30.0, "newton_per_s": 1e6, "lm_per_s": 5e5, "stewart36_all_per_s": 2e4,
+         "li2017_pso_s": 2.0}
+
+
+def _sample(mech: Mechanism, n: int, seed: int) -> tuple[Array, Array]:
+    """``n`` poses uniform in ``mech.pose_bounds()`` inside the domain, and their joints."""
+    rng = np.random.default_rng(seed)
+    lo, hi = mech.pose_bounds()
+    x = rng.uniform(lo, hi, size=(3 * n, mech.n_pose))
+    x = x[mech.in_domain(x)][:n]
+    return x, mech.ik(x)
+
+
+def _best(f: Callable[[], Any], repeats: int) -> float:
+    best = np.inf
+    for _ in range(max(repeats, 1)):
+        t0 = time.perf_counter()
+        f()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def kernel_goals(n_single: int = 200, n_batch: int = 100_000, n_all: int = 2000, repeats: int = 3,
+                 pso: bool = True, progress: Callable[[str], None] | None = None) -> pd.DataFrame:
+    """The compiled path's goals measured in one run (ratios against ``scipy.optimize.root`` in the
+    same run): per mechanism, the median single-call latency of ``solve_fk`` (Newton, LM, Broyden,
+    BFGS; one joint vector per call, start = home) over ``scipy-root``'s, and the batched Newton
+    and LM throughput (``n_batch`` inputs, one call); the 3-6 Stewart's all-solutions FK (inputs/s)
+    and Li 2017's PSO experiment as published (50 runs x 50 particles x 1000 iterations, seconds).
+    One row per measurement: ``mechanism, what, value, unit, goal, met``."""
+    from parakin.mechanisms import P3P4S, UPS2, Stewart12, Stewart36
+
+    rows: list[dict[str, Any]] = []
+
+    def add(mech: str, what: str, value: float, unit: str, goal: float, higher: bool = True) -> None:
+        rows.append({"mechanism": mech, "what": what, "value": value, "unit": unit, "goal": goal,
+                     "met": bool(value >= goal if higher else value <= goal)})
+
+    for mech in (P3P4S(), UPS2(), Stewart12(), Stewart36()):
+        if progress:
+            progress(mech.name)
+        _, q1 = _sample(mech, n_single, seed=17)
+        _, q2 = _sample(mech, n_batch, seed=18)
+
+        def latency(method: str, mech: Mechanism = mech, q1: Array = q1) -> float:
+            solve_fk(mech, q1[0], method=method, maxiter=100)  # warm-up: load the cached kernels
+            lat = np.empty(len(q1))
+            for i in range(len(q1)):
+                t0 = time.perf_counter()
+                solve_fk(mech, q1[i], method=method, maxiter=100)
+                lat[i] = time.perf_counter() - t0
+            return float(np.median(lat))
+
+        base = latency(BASELINE)
+        add(mech.name, "scipy.optimize.root single call", base * 1e6, "us", np.nan)
+        for method in ("newton", "lm", "broyden", "bfgs"):
+            t = latency(method)
+            add(mech.name, f"{method} single call", t * 1e6, "us", np.nan)
+            add(mech.name, f"{method} single call vs scipy", base / t, "x", GOALS["single_vs_scipy"])
+        for method, goal in (("newton", GOALS["newton_per_s"]), ("lm", GOALS["lm_per_s"])):
+            solve_fk(mech, q2[:1000], method=method, maxiter=100)
+            t = _best(lambda: solve_fk(mech, q2, method=method, maxiter=100), repeats)  # noqa: B023
+            add(mech.name, f"{method} batched", len(q2) / t, "solves/s", goal)
+    mech = Stewart36()
+    _, qa = _sample(mech, n_all, seed=19)
+    solve_fk(mech, qa[:10], method="all-solutions")
+    t = _best(lambda: solve_fk(mech, qa, method="all-solutions"), 1)
+    add(mech.name, "all-solutions FK", len(qa) / t, "inputs/s", GOALS["stewart36_all_per_s"])
+    if pso:
+        if progress:
+            progress("Li 2017 PSO")
+        q = np.broadcast_to(mech.ik(mech.home()), (50, 6))
+        fit = lambda x, joints: mech.objective(x, joints[:, None, :])  # noqa: E731  (as chaos.run_pso)
+        t = _best(lambda: solve_fk(mech, q, method="pso", seed=np.arange(50), tol=0.0, maxiter=1000, swarm=50,
+                                   inertia="linear", vclamp=0.2, fitness=fit), 1)
+        add(mech.name, "Li 2017 PSO experiment (50 x 50 x 1000)", t, "s", GOALS["li2017_pso_s"], higher=False)
+    return pd.DataFrame(rows)
+
+
+def format_goals(df: pd.DataFrame) -> str:
+    """The rows of :func:`kernel_goals` as a Markdown table."""
+    lines = ["| mechanism | measurement | value | goal | met |", "|---|---|---|---|---|"]
+    for r in df.itertuples():
+        goal = "" if not np.isfinite(r.goal) else f"{'<=' if r.unit == 's' else '>='} {r.goal:.3g} {r.unit}"
+        met = "" if not np.isfinite(r.goal) else ("yes" if r.met else "no")
+        lines.append(f"| {r.mechanism} | {r.what} | {r.value:.3g} {r.unit} | {goal} | {met} |")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":  # python -m parakin.bench [--quick]
+    import sys
+
+    quick = "--quick" in sys.argv
+    table = kernel_goals(n_single=50 if quick else 200, n_batch=10_000 if quick else 100_000,
+                         n_all=200 if quick else 2000, pso=not quick,
+                         progress=lambda s: print(f"parakin.bench: {s} ...", file=sys.stderr))
+    print(format_goals(table))

@@ -1,16 +1,32 @@
-"""Claims: one published number, our value for it and a verdict.
+"""Claims: one published number, our value for it and a verdict that cannot flatter.
 
 Each paper module (:mod:`parakin.papers`) turns its pipeline outputs into :class:`Claim` objects
-(``claims(figures_dir, reference)``); :mod:`parakin.report` collects them into ``REPORT.md``.
-Our values are always read from pipeline outputs, never typed in; published values come from
-``data/reference/<paper>.csv`` exactly as printed, so the rounding of the print is known. This
-module imports no paper, so papers, the report and the tests all depend on it, never the reverse.
+(``claims(figures_dir, reference)``); :mod:`parakin.report` collects them into ``REPORT.md`` and
+``report.csv``. Our values are always read from pipeline outputs, never typed in; published values
+come from ``data/reference/<paper>.csv`` exactly as printed, so the rounding of the print is known,
+and so does the tolerance of each comparison (the ``tolerance`` column, declared there before the
+comparison; :func:`resolve` applies it). This module imports no paper, so papers, the report and
+the tests all depend on it, never the reverse.
+
+The verdicts (:data:`VERDICTS`), from the strongest:
+
+- *reproduced*: an independent computation agrees within the tolerance declared in
+  ``data/reference`` (or within a bound's / an order of magnitude's stated sense);
+- *reproduced within rounding*: within half a unit of the last printed digit;
+- *bound satisfied*: the paper states a bound (``≤ 20 ms``) and ours meets it;
+- *consistent after fitting or assuming*: agreement that rests on something fitted to the same
+  numbers or assumed because it matches (the claim names it, ``basis``); never counted as reproduced;
+- *differs — cause shown*: ours differs and an artefact or test shows why (``evidence``);
+- *differs — cause unknown*: ours differs and nothing shows why;
+- *not comparable*: the published number is lost, qualitative, or a wall-clock time of another
+  machine (the reason says which);
+- *input*: a set-up value the paper gives (geometry, masses, solver settings), not a result.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import pandas as pd
@@ -18,13 +34,31 @@ import pandas as pd
 from parakin.config import ROOT
 
 __all__ = ["Claim", "judge", "half_ulp", "load_reference", "printed_value", "claims_table", "REFERENCE_DIR",
-           "REPRODUCED", "WITHIN_ROUNDING", "DIFFERS"]
+           "REPRODUCED", "WITHIN_ROUNDING", "BOUND", "CONSISTENT", "DIFFERS_SHOWN", "DIFFERS_UNKNOWN",
+           "NOT_COMPARABLE", "INPUT", "NOT_JUDGED", "VERDICTS", "DIFFERS", "parse_tolerance", "resolve",
+           "reference_row", "row_verdicts", "ROLES"]
 
 REFERENCE_DIR = ROOT / "data" / "reference"
 
 REPRODUCED = "reproduced"
 WITHIN_ROUNDING = "reproduced within rounding"
+BOUND = "bound satisfied"
+CONSISTENT = "consistent after fitting or assuming"
+DIFFERS_SHOWN = "differs — cause shown"
+DIFFERS_UNKNOWN = "differs — cause unknown"
+NOT_COMPARABLE = "not comparable"
+INPUT = "input"
+#: a published result no artefact judges yet (the tests require none; it keeps the counts honest)
+NOT_JUDGED = "not judged yet"
+#: every verdict, strongest first: a reference row with several claims gets the strongest
+VERDICTS = (REPRODUCED, WITHIN_ROUNDING, BOUND, CONSISTENT, DIFFERS_SHOWN, DIFFERS_UNKNOWN, NOT_COMPARABLE, INPUT,
+            NOT_JUDGED)
+#: the raw outcome of a comparison before basis and evidence are applied
 DIFFERS = "differs"
+
+#: the ``role`` column of a reference CSV: a result to judge, a set-up value, or a number that
+#: cannot be compared (lost, qualitative, another machine's clock; the note says why)
+ROLES = ("result", "input", "not comparable")
 
 
 def half_ulp(printed: str) -> float:
@@ -39,24 +73,24 @@ def half_ulp(printed: str) -> float:
 KINDS = ("value", "upper", "lower", "order")
 
 
-def judge(printed: str, ours: float, tol: float | None = None, kind: str = "value") -> str:
-    """Verdict for our value against the printed one.
+def judge(printed: str, ours: float, tol: float | None = None, kind: str = "value", margin: float = 1.0) -> str:
+    """The raw outcome of comparing our value with the printed one.
 
-    ``kind="value"``: ``reproduced`` when ``|ours - paper| <= tol`` (a claim-specific tolerance,
-    e.g. a solver's accuracy), ``reproduced within rounding`` when the difference is within half a
-    unit of the last printed digit, ``differs`` otherwise. ``kind="upper"`` / ``"lower"``: the
-    paper states a bound ("within 20 ms", "at least ..."): ``reproduced`` when ours meets it.
-    ``kind="order"``: the paper states an order of magnitude ("10^-4 level"): ``reproduced``
-    when ours lies within half a decade of it.
+    ``kind="value"``: ``reproduced`` when ``|ours - paper| <= tol`` (a tolerance declared in the
+    reference CSV), ``reproduced within rounding`` within half a unit of the last printed digit,
+    ``differs`` otherwise. ``kind="upper"`` / ``"lower"``: the paper states a bound: ``bound
+    satisfied`` when ours meets it with the declared ``margin`` (``ours * margin <= paper`` for an
+    upper bound). ``kind="order"``: an order of magnitude ("10^-4 level"): ``reproduced`` within
+    half a decade.
     """
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} must be one of {KINDS}")
     if not math.isfinite(float(ours)):
         return DIFFERS
     if kind == "upper":
-        return REPRODUCED if float(ours) <= float(printed) else DIFFERS
+        return BOUND if float(ours) * margin <= float(printed) else DIFFERS
     if kind == "lower":
-        return REPRODUCED if float(ours) >= float(printed) else DIFFERS
+        return BOUND if float(ours) >= float(printed) * margin else DIFFERS
     if kind == "order":
         ok = float(ours) > 0 and abs(math.log10(float(ours) / float(printed))) <= 0.5
         return REPRODUCED if ok else DIFFERS
@@ -68,9 +102,41 @@ def judge(printed: str, ours: float, tol: float | None = None, kind: str = "valu
     return DIFFERS
 
 
+def parse_tolerance(text: str, printed: str) -> tuple[str, float | None, float]:
+    """``(kind, tol, margin)`` of a reference CSV's ``tolerance`` cell.
+
+    ``""``: rounding only (half a printed digit); ``abs:X`` / ``rel:X``: agreement within X
+    (absolute, or relative to the printed value); ``exact``: abs:0 (counts, symbolic results);
+    ``upper`` / ``lower`` (optionally ``upper:M``: met with a margin of M, e.g. a time bound met
+    10x over); ``order``: within half a decade.
+    """
+    text = (text or "").strip()
+    if not text:
+        return "value", None, 1.0
+    name, _, arg = text.partition(":")
+    if name == "exact":
+        return "value", 0.0, 1.0
+    if name == "abs":
+        return "value", float(arg), 1.0
+    if name == "rel":
+        return "value", float(arg) * abs(float(printed)), 1.0
+    if name in ("upper", "lower"):
+        return name, None, float(arg) if arg else 1.0
+    if name == "order":
+        return "order", None, 1.0
+    raise ValueError(f"unknown tolerance {text!r} (one of '', exact, abs:X, rel:X, upper[:M], lower[:M], order)")
+
+
 @dataclass(frozen=True)
 class Claim:
-    """One published number, our value for it and the verdict."""
+    """One published number, our value for it and the verdict.
+
+    ``basis`` names what was fitted or assumed *because it matches* (the verdict is then at most
+    "consistent after fitting or assuming"); ``evidence`` names the artefact or test that shows why
+    ours differs (without it a difference is "cause unknown"); ``comparable=False`` marks a number
+    that cannot be compared (``reason`` says why). ``tol`` / ``kind`` are the code's reading of the
+    tolerance; the report replaces them by the reference CSV's declaration (:func:`resolve`).
+    """
 
     paper: str
     artefact: str
@@ -82,32 +148,105 @@ class Claim:
     tol: float | None = None  #: claim-specific tolerance for "reproduced"
     reason: str = ""  #: why it differs, or what was assumed
     kind: str = "value"  #: "value", "upper"/"lower" (a bound the paper states), "order" (see judge)
+    basis: str = ""  #: what was fitted or assumed to get agreement ("" = an independent computation)
+    evidence: str = ""  #: the file or test that shows the cause of a difference
+    comparable: bool = True  #: False: lost, qualitative or another machine's clock (reason says why)
+    margin: float = 1.0  #: a bound must be met this many times over
+    tolerance: str = ""  #: the declared tolerance as written in the reference CSV (set by resolve)
+    outcome: str = field(init=False)  #: raw comparison: reproduced / within rounding / bound satisfied / differs
     verdict: str = field(init=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "verdict", judge(self.printed, self.ours, self.tol, self.kind))
+        outcome = judge(self.printed, self.ours, self.tol, self.kind, self.margin)
+        object.__setattr__(self, "outcome", outcome)
+        if not self.comparable:
+            verdict = NOT_COMPARABLE
+        elif outcome == DIFFERS:
+            verdict = DIFFERS_SHOWN if self.evidence else DIFFERS_UNKNOWN
+        elif self.basis:
+            verdict = CONSISTENT
+        else:
+            verdict = outcome
+        object.__setattr__(self, "verdict", verdict)
 
     @property
     def diff(self) -> float:
         return float(self.ours) - float(self.printed)
 
+    @property
+    def differs(self) -> bool:
+        return self.verdict in (DIFFERS_SHOWN, DIFFERS_UNKNOWN)
+
 
 def load_reference(paper: str, reference_dir: Path = REFERENCE_DIR) -> pd.DataFrame:
-    """The transcribed published numbers of ``paper``; ``value`` kept as the printed string."""
+    """The transcribed published numbers of ``paper``; ``value`` kept as the printed string.
+
+    Columns: paper, artefact, quantity, value, unit, note, and (optional) ``role`` (one of
+    :data:`ROLES`, default ``result``) and ``tolerance`` (see :func:`parse_tolerance`)."""
     path = Path(reference_dir) / f"{paper}.csv"
-    ref = pd.read_csv(path, dtype={"value": str}, keep_default_na=False)
+    ref = pd.read_csv(path, dtype=str, keep_default_na=False)
     missing = {"paper", "artefact", "quantity", "value", "unit", "note"} - set(ref.columns)
     if missing:
         raise ValueError(f"{path}: missing columns {sorted(missing)}")
+    for col, default in (("role", "result"), ("tolerance", "")):
+        if col not in ref.columns:
+            ref[col] = default
+        ref[col] = ref[col].replace("", default)
+    bad = sorted(set(ref["role"]) - set(ROLES))
+    if bad:
+        raise ValueError(f"{path}: unknown role(s) {bad}; one of {ROLES}")
     return ref
+
+
+def reference_row(ref: pd.DataFrame, artefact: str, quantity: str) -> pd.Series:
+    rows = ref[(ref["artefact"] == artefact) & (ref["quantity"] == quantity)]
+    if len(rows) != 1:
+        raise KeyError(f"reference has {len(rows)} rows for ({artefact!r}, {quantity!r}), expected 1")
+    return rows.iloc[0]
 
 
 def printed_value(ref: pd.DataFrame, artefact: str, quantity: str) -> str:
     """The printed value of one reference entry (exactly one must exist)."""
-    rows = ref[(ref["artefact"] == artefact) & (ref["quantity"] == quantity)]
-    if len(rows) != 1:
-        raise KeyError(f"reference has {len(rows)} rows for ({artefact!r}, {quantity!r}), expected 1")
-    return str(rows["value"].iloc[0])
+    return str(reference_row(ref, artefact, quantity)["value"])
+
+
+def resolve(claim: Claim, ref: pd.DataFrame) -> Claim:
+    """The claim judged with the tolerance its reference row declares.
+
+    The printed value must be the reference row's (nothing typed in code); the tolerance is the
+    reference CSV's, never the code's; an ``input`` row's claims are set-up echoes (verdict input)."""
+    row = reference_row(ref, claim.artefact, claim.quantity)
+    if str(row["value"]) != claim.printed:
+        raise ValueError(f"{claim.paper} {claim.artefact}/{claim.quantity}: claim prints {claim.printed!r}, "
+                         f"the reference {row['value']!r}")
+    kind, tol, margin = parse_tolerance(row["tolerance"], claim.printed)
+    out = replace(claim, kind=kind, tol=tol, margin=margin, tolerance=row["tolerance"])
+    if row["role"] == "input":
+        object.__setattr__(out, "verdict", INPUT)
+    elif row["role"] == "not comparable" and out.verdict != NOT_COMPARABLE:
+        out = replace(out, comparable=False, reason=(out.reason + "; " if out.reason else "") + row["note"])
+    return out
+
+
+def row_verdicts(claims: list[Claim], ref: pd.DataFrame) -> pd.DataFrame:
+    """One row per reference row: its verdict (the strongest of its resolved claims, or its role's)
+    and the claim that decided it (``None`` for inputs and lost numbers without a claim)."""
+    by_row: dict[tuple[str, str], list[Claim]] = {}
+    for c in claims:
+        by_row.setdefault((c.artefact, c.quantity), []).append(c)
+    rows = []
+    for _, r in ref.iterrows():
+        cs = by_row.get((r["artefact"], r["quantity"]), [])
+        best = min(cs, key=lambda c: VERDICTS.index(c.verdict)) if cs else None
+        if r["role"] == "input":
+            verdict = INPUT
+        elif r["role"] == "not comparable" and best is None:
+            verdict = NOT_COMPARABLE
+        else:
+            verdict = best.verdict if best is not None else NOT_JUDGED
+        rows.append({"artefact": r["artefact"], "quantity": r["quantity"], "verdict": verdict, "claim": best,
+                     "ref": r})
+    return pd.DataFrame(rows)
 
 
 def _fmt(x: float) -> str:
@@ -116,17 +255,23 @@ def _fmt(x: float) -> str:
     return f"{x:.6g}"
 
 
+def _paper_cell(c: Claim) -> str:
+    return {"upper": "≤ ", "lower": "≥ ", "order": "~"}.get(c.kind, "") + c.printed
+
+
 def claims_table(claims: list[Claim]) -> pd.DataFrame:
     return pd.DataFrame(
         {
             "artefact": [c.artefact for c in claims],
             "quantity": [c.quantity for c in claims],
             "variant": [c.variant for c in claims],
-            "paper": [{"upper": "≤ ", "lower": "≥ ", "order": "~"}.get(c.kind, "") + c.printed for c in claims],
+            "paper": [_paper_cell(c) for c in claims],
             "ours": [_fmt(c.ours) for c in claims],
             "difference": [_fmt(c.diff) for c in claims],
             "unit": [c.unit for c in claims],
             "verdict": [c.verdict for c in claims],
-            "reason": [c.reason for c in claims],
+            "reason": [("; ".join(x for x in (f"{'fitted/assumed' if c.basis else ''}{': ' + c.basis if c.basis else ''}",
+                                                c.reason, f"evidence: {c.evidence}" if c.evidence else "") if x))
+                       for c in claims],
         }
     )

@@ -2,7 +2,9 @@
 
 Bad input (a wrong number of values, an unreachable pose, an unknown solver, a malformed config)
 exits with status 2 and one line on stderr, never a traceback. SI units by default; ``--units
-paper`` reads and prints the units the paper uses.
+paper`` reads and prints the units the paper uses. ``ik`` and ``fk`` take many poses or joint
+vectors from a file (``--input``, CSV or .npy, one per row) and write them to one (``--output``);
+``fk --all`` lists every real solution where the mechanism has an all-solutions method.
 """
 
 from __future__ import annotations
@@ -125,22 +127,179 @@ def _units(mech, kind: str, paper: bool) -> tuple[str, ...]:
     return getattr(mech, f"paper_{kind}_units" if paper else f"{kind}_units")
 
 
+def _unit(u: str) -> str:
+    """A unit as printed after a value: nothing for a dimensionless one (``"1"``)."""
+    return "" if u == "1" else f" {u}"
+
+
 def _fmt_vector(names, values, units) -> str:
-    """``name = value unit`` per entry; values in a form the options read back (``-2.1e-17`` too)."""
-    return "  ".join(f"{n} = {v:.10g} {u}" for n, v, u in zip(names, values, units))
+    """``name = value unit`` per entry (no unit where dimensionless); values in a form the options
+    read back (``-2.1e-17`` too)."""
+    return "  ".join(f"{n} = {v:.10g}{_unit(u)}" for n, v, u in zip(names, values, units))
+
+
+def _units_note(mech, command: str, paper: bool) -> None:
+    """``--units paper`` where the paper prints SI: say so (once, on stderr) instead of silently
+    printing the same numbers."""
+    if paper and mech.paper_pose_units == mech.pose_units and mech.paper_joint_units == mech.joint_units:
+        units = ", ".join(sorted(set(mech.pose_units + mech.joint_units) - {"1"})) or "dimensionless"
+        print(f"parakin {command}: note: the paper prints {mech.name} poses and joints in SI units ({units}), "
+              "so --units paper is the same as --units si", file=sys.stderr)
+
+
+#: file formats of --input and --output
+FILE_FORMATS = (".csv", ".npy")
+#: most rows one --input file may hold
+MAX_ROWS = 10_000_000
+
+
+def _format_of(path: str, option: str) -> str:
+    suffix = Path(path).suffix.lower()
+    if suffix not in FILE_FORMATS:
+        raise ValueError(f"{option} {path}: the file name must end in {' or '.join(FILE_FORMATS)}")
+    return suffix
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _header_name(token: str) -> tuple[str, str | None]:
+    """``"x [mm]"`` -> ``("x", "mm")``; ``"x"`` -> ``("x", None)``."""
+    m = re.fullmatch(r"\s*([^\[\]]*?)\s*(?:\[\s*([^\]]*?)\s*\])?\s*", token)
+    return (m.group(1), m.group(2)) if m else (token.strip(), None)
+
+
+def read_rows(path: str, names: Sequence[str], units: Sequence[str], option: str = "--input") -> np.ndarray:
+    """The ``(N, n)`` values of a CSV or .npy file, one pose or joint vector per row.
+
+    A CSV may start with a header; where it names every one of ``names`` (e.g. ``x [m]`` or ``x``,
+    in any order, other columns ignored: what ``--output`` writes reads back) those columns are
+    taken, and a unit in brackets must be the one ``--units`` reads. Without a header the file
+    has exactly ``n`` columns in the order of ``names``. Lines starting with ``#`` are comments.
+    """
+    n = len(names)
+    fmt = _format_of(path, option)
+    if fmt == ".npy":
+        try:
+            a = np.load(path, allow_pickle=False)
+        except ValueError as exc:
+            raise ValueError(f"{option} {path}: not a numeric .npy array ({_one_line(exc)})") from None
+        if a.dtype.kind not in "iuf" or a.ndim not in (1, 2) or a.shape[-1] != n:
+            raise ValueError(f"{option} {path}: a .npy file must hold a numeric array of shape (N, {n}) "
+                             f"({', '.join(names)}), got {a.dtype} {a.shape}")
+        a = np.atleast_2d(a.astype(float))
+    else:
+        with open(path, newline="") as fh:
+            lines = [(k + 1, line.strip()) for k, line in enumerate(fh) if line.strip() and not line.lstrip().startswith("#")]
+        if not lines:
+            raise ValueError(f"{option} {path}: the file holds no rows")
+        if len(lines) > MAX_ROWS + 1:
+            raise ValueError(f"{option} {path}: more than {MAX_ROWS} rows")
+        cells = [(k, [c.strip() for c in line.split(",")]) for k, line in lines]
+        columns = list(range(n))
+        if not any(_is_number(c) for c in cells[0][1]):  # a header (no cell of it is a number)
+            header = [_header_name(c) for c in cells[0][1]]
+            found = {name: (i, unit) for i, (name, unit) in enumerate(header)}
+            if all(name in found for name in names):
+                columns = [found[name][0] for name in names]
+                for name, want in zip(names, units):
+                    unit = found[name][1]
+                    if unit not in (None, "", want) and not (unit == "-" and want == "1"):
+                        raise ValueError(f"{option} {path}: column {name!r} is in {unit} but these --units read "
+                                         f"{name} in {want}")
+            elif len(header) != n:
+                raise ValueError(f"{option} {path}: the header {cells[0][1]} names neither the columns "
+                                 f"{list(names)} nor {n} columns")
+            cells = cells[1:]
+            if not cells:
+                raise ValueError(f"{option} {path}: the file holds a header and no rows")
+        rows = []
+        for k, row in cells:
+            if len(row) < max(columns) + 1 or (columns == list(range(n)) and len(row) != n):
+                raise ValueError(f"{option} {path}, line {k}: {len(row)} values, expected {n} "
+                                 f"({', '.join(names)})")
+            try:
+                rows.append([float(row[c]) for c in columns])
+            except ValueError:
+                raise ValueError(f"{option} {path}, line {k}: {row} are not all numbers") from None
+        a = np.asarray(rows, dtype=float).reshape(-1, n)
+    if len(a) == 0:
+        raise ValueError(f"{option} {path}: the file holds no rows")
+    bad = ~np.all(np.isfinite(a), axis=-1)
+    if np.any(bad):
+        raise ValueError(f"{option} {path}: row {int(np.argmax(bad)) + 1} is not finite "
+                         f"({np.array2string(a[int(np.argmax(bad))], precision=6)})")
+    return a
+
+
+def write_rows(path: str, names: Sequence[str], units: Sequence[str], values: np.ndarray,
+               extra: dict[str, Sequence] | None = None, lead: dict[str, Sequence] | None = None) -> None:
+    """Write ``values (N, n)`` to a CSV (header ``name [unit]``, then ``extra`` columns; ``lead``
+    columns first) or ``.npy`` (the values only, any shape). Written to a temporary file first."""
+    fmt = _format_of(path, "--output")
+    target = Path(path)
+    tmp = target.with_name(f".{target.name}.tmp")
+    try:
+        if fmt == ".npy":
+            with open(tmp, "wb") as fh:
+                np.save(fh, np.asarray(values, dtype=float))
+        else:
+            header = [*(lead or {}), *(f"{n} [{u}]" if u != "1" else n for n, u in zip(names, units)), *(extra or {})]
+            v = np.atleast_2d(values)
+            with open(tmp, "w", newline="") as fh:
+                fh.write(",".join(header) + "\n")
+                for i in range(len(v)):
+                    cells = [str(c[i]) for c in (lead or {}).values()]
+                    cells += ["" if not math.isfinite(x) else repr(float(x)) for x in v[i]]
+                    cells += [_cell(c[i]) for c in (extra or {}).values()]
+                    fh.write(",".join(cells) + "\n")
+        tmp.replace(target)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def _cell(value) -> str:
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, (float, np.floating)):
+        return "" if not math.isfinite(value) else repr(float(value))
+    text = str(value)
+    return f'"{text}"' if "," in text else text
+
+
+def _inputs(args, what: str, names, units, n) -> np.ndarray:
+    """The values of ``--pose``/``--joints`` (one vector or a batch) or of ``--input FILE``."""
+    given = getattr(args, what)
+    if args.input is not None:
+        if given is not None:
+            raise ValueError(f"give --{what} or --input, not both")
+        return read_rows(args.input, names, units)
+    if given is None:
+        raise ValueError(f"give --{what} VALUES or --input FILE (CSV or .npy, one row each)")
+    return _batch(given, n, f"--{what}", names)
 
 
 def cmd_ik(args) -> int:
     mech = _mechanism(args.mechanism, args.param)
-    pu, ju = _units(mech, "pose", args.units == "paper"), _units(mech, "joint", args.units == "paper")
-    given = _batch(args.pose, mech.n_pose, "--pose", mech.pose_names)
+    paper = args.units == "paper"
+    pu, ju = _units(mech, "pose", paper), _units(mech, "joint", paper)
+    _units_note(mech, "ik", paper)
+    given = _inputs(args, "pose", mech.pose_names, pu, mech.n_pose)
     pose = _finite(to_si(given, pu), "--pose in SI units", given)
     with np.errstate(all="ignore"):
         joints = _finite(from_si(mech.ik(pose), ju), "the inverse kinematics", given)
+    if args.output:
+        write_rows(args.output, mech.joint_names, ju, np.atleast_2d(joints))
+        print(f"parakin ik: {len(np.atleast_2d(joints))} joint vector(s) written to {args.output}", file=sys.stderr)
     if args.json:
         print(_dumps({"mechanism": mech.name, "parameters": mech.parameters(), "pose": given.tolist(),
                       "pose_units": pu, "joints": joints.tolist(), "joint_units": ju}))
-    else:
+    elif not args.output:
         for q in np.atleast_2d(joints):
             print(_fmt_vector(mech.joint_names, q, ju))
     return 0
@@ -150,9 +309,15 @@ def cmd_fk(args) -> int:
     from parakin.solvers import METHODS, solve_fk
 
     mech = _mechanism(args.mechanism, args.param)
-    pu, ju = _units(mech, "pose", args.units == "paper"), _units(mech, "joint", args.units == "paper")
-    given = _batch(args.joints, mech.n_joints, "--joints", mech.joint_names)
+    paper = args.units == "paper"
+    pu, ju = _units(mech, "pose", paper), _units(mech, "joint", paper)
+    _units_note(mech, "fk", paper)
+    given = _inputs(args, "joints", mech.joint_names, ju, mech.n_joints)
     joints = _finite(to_si(given, ju), "--joints in SI units", given)
+    if args.all:
+        if args.solver is not None or args.x0 is not None:
+            raise ValueError("--all lists every solution of the all-solutions method: it takes no --solver or --x0")
+        return _fk_all(args, mech, given, joints, pu, ju)
     with np.errstate(all="ignore"):
         mech.check_joints(joints)  # unreachable joints: the mechanism's own error, whatever the solver
     method = args.solver or ("closed-form" if mech.fk is not None else "newton")
@@ -164,18 +329,123 @@ def cmd_fk(args) -> int:
                    joint_tol=args.joint_tol, **options)
     with np.errstate(all="ignore"):
         pose = _finite(from_si(res.x, pu), "the solution in --units " + args.units, given)
+    if args.output:
+        flat = np.atleast_2d(pose)
+        extra = {"success": np.atleast_1d(res.success), "status": [_status_name(v) for v in np.atleast_1d(res.status)],
+                 "nit": np.atleast_1d(res.nit), "residual": np.atleast_1d(res.residual).astype(float),
+                 "joint_error_m": np.atleast_1d(res.joint_error).astype(float)}
+        write_rows(args.output, mech.pose_names, pu, flat, extra=extra)
+        print(f"parakin fk: {len(flat)} pose(s) written to {args.output} ({int(np.sum(res.success))} converged)",
+              file=sys.stderr)
     if args.json:
         out = {"mechanism": mech.name, "parameters": mech.parameters(), "joints": given.tolist(),
                "joint_units": ju, "pose_units": pu, **res.to_dict()}
         out["x"] = pose.tolist()
         print(_dumps(out))
-    else:
+    elif not args.output:
         for x in np.atleast_2d(pose):
             print(_fmt_vector(mech.pose_names, x, pu))
     if not np.all(res.success):
         print(f"parakin fk: error: {res.message} ({_why(res, args.tol)})", file=sys.stderr)
         return EXIT_NOT_CONVERGED
     return 0
+
+
+def all_solutions_of(mech, joints: np.ndarray) -> list[list[tuple[str, np.ndarray, bool]]]:
+    """Every real FK solution of each row of ``joints (N, m)`` (SI), with its assembly label and
+    whether it is the working one (what ``fk`` returns: the papers' assembly, nearest home).
+
+    2-UPS/(S+SPR)R: both branches of eq (14) (rho > 0 the paper's; a rho < 0 pose belongs to the
+    mirror assembly, ``UPS2(branch=-1)``); Stewart platforms: above or below the base (Z > 0)."""
+    if hasattr(mech, "fk_all_branches"):
+        sets = [(b, sols) for b, sols in mech.fk_all_branches(joints).items()]
+    elif hasattr(mech, "fk_all"):
+        sets = [(None, mech.fk_all(joints))]
+    else:
+        raise ValueError(f"{mech.name} has no all-solutions method; --all works on "
+                         f"{', '.join(all_solution_mechanisms())}")
+    try:
+        with np.errstate(all="ignore"):
+            working = np.atleast_2d(mech.fk(joints))
+    except ParakinError:  # some row has no working solution: mark none of that batch
+        working = np.full((len(joints), mech.n_pose), np.nan)
+    z = mech.pose_names.index("Z") if "Z" in mech.pose_names else None
+    out = []
+    for i in range(len(joints)):
+        rows = []
+        for branch, sols in sets:
+            for x in sols[i]:
+                if not np.all(np.isfinite(x)):
+                    continue
+                parts = []
+                if branch is not None:
+                    parts.append(f"branch {branch:+d} ({'rho > 0, the paper' if branch > 0 else 'rho < 0, mirror'})")
+                if z is not None:
+                    parts.append("above the base" if x[z] > 0 else "below the base")
+                own = branch is None or branch == getattr(mech, "branch", branch)
+                near = own and bool(np.all(np.isfinite(working[i]))) and float(
+                    np.max(np.abs(mech.pose_difference(x, working[i])))) < 1e-7
+                if near:
+                    parts.append("working (what fk returns)")
+                rows.append((", ".join(parts), x, near))
+        out.append(rows)
+    return out
+
+
+def all_solution_mechanisms() -> list[str]:
+    return sorted(n for n, cls in mechanisms.REGISTRY.items() if hasattr(cls, "fk_all"))
+
+
+def _fk_all(args, mech, given, joints, pu, ju) -> int:
+    with np.errstate(all="ignore"):
+        found = all_solutions_of(mech, np.atleast_2d(joints))
+    for rows in found:
+        for _, x, _ in rows:
+            _finite(from_si(x, pu), "a solution in --units " + args.units, given)
+    counts = [len(rows) for rows in found]
+    if args.output:
+        if Path(args.output).suffix.lower() == ".npy":
+            k = max(counts + [1])
+            a = np.full((len(found), k, mech.n_pose), np.nan)
+            for i, rows in enumerate(found):
+                for j, (_, x, _) in enumerate(rows):
+                    a[i, j] = from_si(x, pu)
+            write_rows(args.output, mech.pose_names, pu, a)
+        else:
+            flat = [(i + 1, j + 1, label, work, from_si(x, pu)) for i, rows in enumerate(found)
+                    for j, (label, x, work) in enumerate(rows)]
+            values = np.array([f[4] for f in flat]).reshape(-1, mech.n_pose)
+            write_rows(args.output, mech.pose_names, pu, values,
+                       lead={"input": [f[0] for f in flat], "solution": [f[1] for f in flat]},
+                       extra={"working": [f[3] for f in flat], "assembly": [f[2] for f in flat]})
+        print(f"parakin fk: {sum(counts)} real solution(s) of {len(found)} input(s) written to {args.output}",
+              file=sys.stderr)
+    if args.json:
+        print(_dumps({"mechanism": mech.name, "parameters": mech.parameters(), "joints": np.atleast_2d(given).tolist(),
+                      "joint_units": ju, "pose_units": pu, "n_real": counts,
+                      "solutions": [[{"assembly": label, "working": work, "x": from_si(x, pu).tolist()}
+                                     for label, x, work in rows] for rows in found]}))
+    elif not args.output:
+        q = np.atleast_2d(given)
+        for i, rows in enumerate(found):
+            print(f"{_fmt_vector(mech.joint_names, q[i], ju)}: {len(rows)} real solution(s)")
+            for j, (label, x, _) in enumerate(rows):
+                print(f"  #{j + 1}  {_fmt_vector(mech.pose_names, from_si(x, pu), pu)}  [{label or 'real'}]")
+    none = [i for i, c in enumerate(counts) if c == 0]
+    if none:
+        print(f"parakin fk: error: no real solution for {len(none)} input(s), the first: "
+              f"{np.array2string(np.atleast_2d(given)[none[0]], precision=6)} (cannot be assembled)", file=sys.stderr)
+        return EXIT_NOT_CONVERGED
+    return 0
+
+
+def _status_name(value) -> str:
+    from parakin.solvers import Status
+
+    try:
+        return Status(int(value)).name
+    except ValueError:
+        return str(int(value))
 
 
 def _why(res, tol: float) -> str:
@@ -254,11 +524,20 @@ def cmd_readme(args) -> int:
 
     readme = Path(args.readme) if args.readme else ROOT / "README.md"
     bench = Path(args.benchmarks) if args.benchmarks else ROOT / "figures" / "benchmarks.md"
+    from parakin.report import readme_status, status_block, sync_status
+
+    report_csv = bench.with_name("report.csv")  # the status table: from report.csv and the registry
     if args.check:
         same = readme_block(readme.read_text()) == readme_block(bench.read_text())
         print(f"{readme}: benchmark block {'matches' if same else 'differs from'} {bench}")
+        if report_csv.exists():
+            status = readme_status(readme.read_text()) == status_block(report_csv)
+            print(f"{readme}: status block {'matches' if status else 'differs from'} {report_csv}")
+            same = same and status
         return 0 if same else EXIT_NOT_CONVERGED
     print(sync_readme(readme, bench))
+    if report_csv.exists():
+        print(sync_status(readme, report_csv))
     return 0
 
 
@@ -339,6 +618,52 @@ def _version() -> str:
         return "unknown"
 
 
+#: what each solver is, for ``parakin fk --help`` (others: the first line of their docstring)
+SOLVER_HELP = {
+    "newton": "Newton-Raphson",
+    "broyden": "Broyden's good method (quasi-Newton)",
+    "broyden-ls": "Broyden on a redundant (least-squares) system, e.g. the 12-leg drive modes",
+    "bfgs": "BFGS on |residual|^2 / 2",
+    "lm": "Levenberg-Marquardt",
+    "gauss-newton": "Gauss-Newton (least squares, redundant systems)",
+    "scipy-root": "scipy.optimize.root (hybr), pose by pose",
+    "pso": "particle swarm (Li 2020, Li 2017); --maxiter iterations",
+    "hybrid": "trained network + quasi-Newton (Zhao 2017; 3p4s, --network)",
+    "closed-form": "the mechanism's own fk: closed form (3p4s, stewart12) or its working assembly (2ups, stewart36, stewart66)",
+    "all-solutions": "every real solution, then the one nearest --x0 (2ups, stewart36, stewart66; --all lists them)",
+}
+
+
+def _solver_help() -> str:
+    from parakin.solvers import METHODS
+
+    width = max(map(len, METHODS))
+    lines = ["solvers (--solver NAME):"]
+    for name in sorted(METHODS):
+        text = SOLVER_HELP.get(name) or " ".join((METHODS[name].__doc__ or "").split(".")[0].replace("`", "").split())
+        lines.append(f"  {name:<{width}}  {text}")
+    return "\n".join(lines)
+
+
+def _mechanism_help(what: str) -> str:
+    """Names and units of each mechanism's poses and joints (SI; the paper's where they differ)."""
+    lines = ["mechanisms (pose | joints, SI units; --units paper: the paper's):"]
+    for name in sorted(mechanisms.REGISTRY):
+        cls = mechanisms.REGISTRY[name]
+
+        def fmt(names, units, paper):
+            if len(names) > 3 and len(set(units)) == 1 and len(set(paper)) == 1:  # l1..l12 [m]
+                si = f"{names[0]}..{names[-1]}" + (f" [{units[0]}]" if units[0] != "1" else "")
+                return si + (f" (paper: {paper[0]})" if paper[0] != units[0] else "")
+            si = " ".join(f"{n}{'[' + u + ']' if u != '1' else ''}" for n, u in zip(names, units))
+            if tuple(paper) != tuple(units):
+                si += " (paper: " + " ".join(u if u != "1" else "-" for u in paper) + ")"
+            return si
+        lines.append(f"  {name:<10} {fmt(cls.pose_names, cls.pose_units, cls.paper_pose_units)} | "
+                     f"{fmt(cls.joint_names, cls.joint_units, cls.paper_joint_units)}")
+    return "\n".join(lines)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="parakin", description=__doc__.splitlines()[0])
     parser.add_argument("--version", action="version", version=f"parakin {_version()}")
@@ -352,15 +677,32 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--units", choices=["si", "paper"], default="si", help="units of input and output")
         p.add_argument("--json", action="store_true", help="print a JSON object")
 
-    p = sub.add_parser("ik", help="inverse kinematics: joints of a pose")
+    def file_args(p, what):
+        p.add_argument("--input", default=None, metavar="FILE",
+                       help=f"read many {what}s from FILE (.csv, optional header 'name [unit]', or .npy), one per row")
+        p.add_argument("--output", default=None, metavar="FILE",
+                       help="write the results to FILE (.csv with a header, or .npy) instead of printing them")
+
+    p = sub.add_parser("ik", help="inverse kinematics: joints of a pose", epilog=_mechanism_help("pose"),
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     mech_args(p)
-    p.add_argument("--pose", type=finite_float, nargs="+", required=True, help="pose value(s), n per pose")
+    p.add_argument("--pose", type=finite_float, nargs="+", default=None,
+                   help="pose value(s), n per pose (several poses: n values each, one after the other)")
+    file_args(p, "pose")
     p.set_defaults(func=cmd_ik)
 
-    p = sub.add_parser("fk", help="forward kinematics: pose of joint values")
+    p = sub.add_parser("fk", help="forward kinematics: pose of joint values",
+                       epilog=_solver_help() + "\n\n" + _mechanism_help("joints"),
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     mech_args(p)
-    p.add_argument("--joints", type=finite_float, nargs="+", required=True, help="joint value(s), m per pose")
-    p.add_argument("--solver", default=None, help="solver name (default: closed-form where one exists, else newton)")
+    p.add_argument("--joints", type=finite_float, nargs="+", default=None,
+                   help="joint value(s), m per pose (several inputs: m values each, one after the other)")
+    file_args(p, "joint vector")
+    p.add_argument("--all", action="store_true",
+                   help="list every real solution with its assembly label (mechanisms with an all-solutions "
+                        f"method: {', '.join(all_solution_mechanisms())})")
+    p.add_argument("--solver", default=None, metavar="NAME",
+                   help="solver (default: closed-form where one exists, else newton); the list is below")
     p.add_argument("--x0", type=finite_float, nargs="+", default=None,
                    help="initial pose (default: the mechanism's home)")
     p.add_argument("--tol", type=nonnegative_float, default=1e-10, help="residual tolerance (default 1e-10)")

@@ -127,9 +127,15 @@ def _grid(key: str, start: float, stop: float, step: float) -> list[str]:
     return []
 
 
-def validate(config: dict, schema_path: Path = SCHEMA_PATH) -> dict:
-    """Validate ``config``; raise ConfigError naming the key, the value and the allowed range."""
+def validate(config: dict, schema_path: Path = SCHEMA_PATH, *, partial: bool = False) -> dict:
+    """Validate ``config``; raise ConfigError naming the key, the value and the allowed range.
+
+    ``partial``: ``config`` holds only some sections (what one pipeline rule receives,
+    :func:`parakin.registry.prune_config`); the keys it has obey the same rules, the sections it
+    lacks are not required."""
     schema = yaml.safe_load(Path(schema_path).read_text())
+    if partial:
+        schema = _relax_required(schema, config)
     validator = jsonschema.Draft202012Validator(schema)
     errors = sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.absolute_path)))
     problems = [_describe(e) for e in _one_per_key(errors)] + _nonfinite(config)
@@ -194,11 +200,5 @@ def _relax_required(schema: Any, config: Any) -> Any:
 
 
 def validate_sections(config: dict, schema_path: Path = SCHEMA_PATH) -> dict:
-    """Validate a config pruned to some sections (what one pipeline rule receives): every key it has
-    must obey the schema; the sections it lacks are not required."""
-    schema = _relax_required(yaml.safe_load(Path(schema_path).read_text()), config)
-    validator = jsonschema.Draft202012Validator(schema)
-    errors = sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.absolute_path)))
-    if errors:
-        raise ConfigError("; ".join(_describe(e) for e in errors))
-    return config
+    """:func:`validate` of a config pruned to some sections."""
+    return validate(config, schema_path, partial=True)

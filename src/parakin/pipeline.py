@@ -53,6 +53,7 @@ def check(results: Path, record: Path, out: Path, names: list[str] | None = None
 #: files the pipeline writes outside any artefact: (file name, what makes it)
 SPECIAL = {
     "REPORT.md": ("parakin.report.build_report", "report"),
+    "report.csv": ("parakin.report.write_report", "report"),
     "reproduction_check.md": ("parakin.check.write_check", "reproduction_check"),
     "reproduction_check.csv": ("parakin.check.write_check", "reproduction_check"),
 }
@@ -109,7 +110,7 @@ def which(paths: list[str], list_all: bool = False) -> str:
 def record(results: Path, record_dir: Path, names: list[str] | None = None) -> list[Path]:
     """Copy every registered output (and REPORT.md) of a finished run into the record."""
     copied = []
-    files = [(a.study_folder, f) for a in artefacts(names).values() for f in a.outputs] + [("", "REPORT.md")]
+    files = [(a.study_folder, f) for a in artefacts(names).values() for f in a.outputs] + [("", "REPORT.md"), ("", "report.csv")]
     missing = [str(Path(results) / d / f) for d, f in files if not (Path(results) / d / f).exists()]
     if missing:
         raise FileNotFoundError(f"the run in {results} is incomplete ({len(missing)} files missing, e.g. "

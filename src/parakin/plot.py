@@ -19,6 +19,7 @@ the library never changes the user's backend and leaks no open figures.
 from __future__ import annotations
 
 import contextlib
+import re
 import os
 from collections.abc import Iterator, Mapping
 from pathlib import Path
@@ -172,8 +173,47 @@ def new_figure(
     return fig, ax
 
 
-def save_figure(fig: Figure, path: str | os.PathLike[str], *, close: bool = True) -> Path:
+def figure_tag(path: str | os.PathLike[str]) -> str | None:
+    """What a figure file is, from its name: ``fig05_...`` -> ``"Fig. 5"`` (the paper's figure
+    number), ``extra_...`` -> ``"Beyond the paper"``; None for anything else."""
+    stem = Path(path).stem
+    m = re.match(r"fig(\d+)", stem)
+    if m:
+        return f"Fig. {int(m.group(1))}"
+    return "Beyond the paper" if stem.startswith("extra_") else None
+
+
+def tag_figure(fig: Figure, tag: str | None) -> None:
+    """Make sure the figure's title says ``tag`` (its paper figure number, or "Beyond the paper"):
+    unless a title already does, prefix the suptitle, else the title of a lone axes, else add a
+    suptitle."""
+    if not tag:
+        return
+    if tag.startswith("Fig. "):
+        pattern = re.compile(rf"\bFigs?\.?\s*(\d+\s*[-–,]\s*)*{tag[5:]}\b", re.IGNORECASE)
+    else:
+        pattern = re.compile(r"beyond the paper|not in the paper|our addition", re.IGNORECASE)
+    sup = getattr(fig, "_suptitle", None)
+    titles = [ax.title for ax in fig.axes] + [getattr(ax, "_left_title", None) for ax in fig.axes]
+    texts = [t for t in [sup, *titles] if t is not None and t.get_text()]
+    if any(pattern.search(t.get_text()) for t in texts):
+        return
+    if sup is not None and sup.get_text():
+        sup.set_text(f"{tag}: {sup.get_text()}")
+        return
+    with_title = [ax for ax in fig.axes if ax.get_title()]
+    if len(with_title) == 1 and len([ax for ax in fig.axes if ax.get_visible() and ax.get_label() != "<colorbar>"]) == 1:
+        ax = with_title[0]
+        ax.set_title(f"{tag}: {ax.get_title()}")
+        return
+    fig.suptitle(tag, fontsize="medium")
+
+
+def save_figure(fig: Figure, path: str | os.PathLike[str], *, close: bool = True, tag: bool = True) -> Path:
     """Write ``fig`` to ``path`` (PNG unless the suffix says otherwise) atomically; return the path.
+
+    With ``tag``, a figure named after a paper figure (``fig05_*``) or beyond the paper
+    (``extra_*``) gets that in its title when no title says it yet (:func:`tag_figure`).
 
     The figure is rendered under :data:`STYLE` by Agg into a temporary file in the destination
     folder (created if missing), which then replaces ``path`` in one ``os.replace``: readers never
@@ -182,6 +222,8 @@ def save_figure(fig: Figure, path: str | os.PathLike[str], *, close: bool = True
     byte-identical files. The figure is closed afterwards unless ``close=False``.
     """
     path = Path(path)
+    if tag:
+        tag_figure(fig, figure_tag(path))
     fmt = path.suffix.lstrip(".").lower() or "png"
     kwargs: dict[str, Any] = {"format": fmt, "dpi": DPI}
     if fmt == "png":

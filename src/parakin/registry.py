@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
 
-__all__ = ["Tolerance", "Artefact", "artefact", "REGISTRY", "load", "find", "which", "prune_config",
+__all__ = ["Tolerance", "Artefact", "artefact", "figure", "REGISTRY", "load", "of_module", "find", "which", "prune_config",
            "EXACT", "ROUNDING", "ITERATIVE", "DESCRIPTIVE", "TIMING"]
 
 
@@ -109,6 +109,16 @@ class Artefact:
     tolerance: Tolerance = ROUNDING
     folder: str | None = None
     reference: bool = True
+    #: cores the job may use (Snakemake ``threads:``; BLAS/torch thread count of the job)
+    threads: int = 1
+    #: Snakemake ``resources:`` of the job as ``(name, value)`` pairs, e.g. ``(("runtime", 60),)``
+    #: (minutes) and ``mem_mb``: what a cluster scheduler (profiles/slurm) reserves for it
+    resources: tuple[tuple[str, int | str], ...] = ()
+    #: one-line caption of the artefact in the Snakemake report (default: its docstring's first sentence)
+    caption: str = ""
+    #: figures drawn from one saved table: (png, csv, draw(frame, path)); a test redraws each
+    #: from the committed CSV and compares it with the committed PNG (see :func:`figure`)
+    draws: tuple[tuple[str, str, Callable], ...] = ()
 
     @property
     def key(self) -> str:
@@ -137,6 +147,15 @@ class Artefact:
         fn = inspect.unwrap(self.make)
         return f"{inspect.getsourcefile(fn)}:{inspect.getsourcelines(fn)[1]}"
 
+    @property
+    def description(self) -> str:
+        """The caption of the report: :attr:`caption`, else the first sentence of the docstring."""
+        if self.caption:
+            return self.caption
+        doc = " ".join((inspect.getdoc(inspect.unwrap(self.make)) or self.key).split())
+        end = doc.find(". ")
+        return doc if end < 0 else doc[: end + 1]
+
     def sources(self) -> list[str]:
         """The parakin source files this artefact runs: its module and everything it imports."""
         return sorted(str(p) for p in _closure(self.module))
@@ -148,17 +167,24 @@ REGISTRY: dict[str, Artefact] = {}
 
 def artefact(study: str, name: str, *, outputs: Sequence[str], generated: Sequence[str] = (),
              needs: Sequence[str] = (), config: Sequence[str] = (), tolerance: Tolerance = ROUNDING,
-             folder: str | None = None, reference: bool = True) -> Callable:
+             folder: str | None = None, reference: bool = True, threads: int = 1,
+             resources: dict[str, int | str] | None = None, caption: str = "",
+             draws: Sequence[tuple[str, str, Callable]] = ()) -> Callable:
     """Declare the decorated ``make(config, outdir) -> list[Path]`` as one artefact.
 
     ``outputs`` are file names in the study's figures folder, ``generated`` in its generated-data
     folder; ``needs`` are ``"study:name"`` keys of upstream artefacts (their outputs become this
     artefact's inputs); ``config`` the dotted config sections it reads (with ``seed`` always);
-    ``reference``: whether it reads ``data/reference/<study>.csv``.
+    ``reference``: whether it reads ``data/reference/<study>.csv``; ``threads`` and ``resources``
+    (e.g. ``{"runtime": 60, "mem_mb": 4000}``, minutes and MB) what its Snakemake job reserves (a
+    long job says so: the SLURM profile schedules by them); ``caption``: its one line in the report.
     """
     def register(make: Callable) -> Callable:
+        if not (isinstance(threads, int) and threads >= 1):
+            raise ValueError(f"artefact {study}:{name}: threads = {threads!r} must be an integer >= 1")
         item = Artefact(study, name, make, tuple(outputs), tuple(generated), tuple(needs), tuple(config),
-                        tolerance, folder, reference)
+                        tolerance, folder, reference, threads, tuple(sorted((resources or {}).items())), caption,
+                        tuple(draws))
         old = REGISTRY.get(item.key)
         if old is not None and (old.module, old.make.__qualname__) != (item.module, make.__qualname__):
             raise ValueError(f"artefact {item.key} declared twice: {old.location} and {item.location}")
@@ -166,6 +192,29 @@ def artefact(study: str, name: str, *, outputs: Sequence[str], generated: Sequen
         make.artefact = item
         return make
     return register
+
+
+def figure(study: str, name: str, stem: str, data: Callable, draw: Callable, **declaration) -> Callable:
+    """Declare a figure computed apart from its drawing: ``data(config) -> DataFrame`` and
+    ``draw(frame, path)``. The artefact writes ``stem.csv`` (the numbers) and ``stem.png`` drawn
+    from that CSV as written, so the committed figure can always be redrawn from the committed CSV.
+    ``declaration``: the other arguments of :func:`artefact`."""
+    def make(config: dict, outdir: Path) -> list[Path]:
+        import pandas as pd
+
+        from parakin.io import atomic_writer, write_csv
+
+        csv = write_csv(data(config), Path(outdir) / f"{stem}.csv")
+        frame = pd.read_csv(csv)
+        png = atomic_writer(Path(outdir) / f"{stem}.png", lambda path: draw(frame, path))
+        return [png, csv]
+
+    make.__name__ = make.__qualname__ = name
+    make.__module__ = data.__module__
+    make.__doc__ = data.__doc__
+    make.__wrapped__ = data  # `parakin which` points at the data function
+    outputs = [f"{stem}.png", f"{stem}.csv", *declaration.pop("outputs", ())]
+    return artefact(study, name, outputs=outputs, draws=[(f"{stem}.png", f"{stem}.csv", draw)], **declaration)(make)
 
 
 def load(studies: Iterable[str], *, complete: bool = True) -> dict[str, Artefact]:
@@ -178,6 +227,12 @@ def load(studies: Iterable[str], *, complete: bool = True) -> dict[str, Artefact
     if complete and unknown:
         raise ValueError(f"artefacts need undeclared upstream artefact(s) {sorted(set(sum(map(list, unknown), [])))}")
     return picked
+
+
+def of_module(module) -> dict[str, Callable]:
+    """``{name: make}`` of the artefacts declared in ``module`` (a module object or dotted name)."""
+    name = module if isinstance(module, str) else module.__name__
+    return {a.name: a.make for a in REGISTRY.values() if a.module == name}
 
 
 def find(artefacts: dict[str, Artefact], study: str, name: str) -> Artefact:

@@ -1,7 +1,9 @@
 # One rule per registered artefact. Inputs: the source files it runs (its module and every parakin
 # module that imports), its paper's reference CSV and the outputs of the artefacts it needs.
 # Params: only the config sections it declares and the seed, so editing one section reruns only
-# the artefacts that read it.
+# the artefacts that read it. threads/resources: what the artefact declares (the long jobs:
+# training, GA, NSGA-II, PSO, the solver atlas); every figure and table goes into the report
+# (snakemake --report) with its one-line caption from the registry.
 
 for _item in ARTEFACTS.values():
 
@@ -13,7 +15,7 @@ for _item in ARTEFACTS.values():
             reference=reference(_item),
             upstream=upstream(_item),
         output:
-            outputs(_item),
+            report_outputs(_item),
         log:
             f"{LOGS}/{_item.study}/{_item.name}.log",
         params:
@@ -21,7 +23,14 @@ for _item in ARTEFACTS.values():
             study=_item.study,
             name=_item.name,
             module=_item.module,
-            outdir=shlex.quote(str(Path(FIG) / _item.study_folder)),
+            outdir=outdir_of(_item),
+            caption=verbatim(rst_escape(_item.description)),
+        threads: _item.threads
+        resources:
+            **resources_of(_item),
+        conda:
+            ENV
         shell:
+            "OMP_NUM_THREADS={threads} OPENBLAS_NUM_THREADS={threads} MKL_NUM_THREADS={threads} "
             "parakin reproduce {params.study} {params.name} --module {params.module} "
-            "--outdir {params.outdir} --config-json {params.cfg} 2>&1 | tee {log:q}"
+            "--outdir {params.outdir:q} --config-json {params.cfg} 2>&1 | tee {log:q}"

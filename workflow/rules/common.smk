@@ -1,14 +1,18 @@
-# Shared set-up: validate the merged config against its schema, load the artefact registry.
+# Shared set-up: validate the merged config (one place: parakin.config.validate, i.e. the schema
+# config/schema.yaml plus the orderings a schema cannot express; one short line per bad key), load
+# the artefact registry.
 import json
 import shlex
-
-from snakemake.utils import validate
+import sys
 
 from parakin import registry
 from parakin.config import validate as validate_config
+from parakin.errors import ConfigError
 
-validate(config, schema="../../config/schema.yaml")
-validate_config(config)  # the checks JSON Schema cannot express (e.g. lower bound < upper bound)
+try:
+    validate_config(config)
+except ConfigError as error:
+    sys.exit(f"config error: {error}")
 
 FIG = config["figures_dir"]
 GEN = config["generated_dir"]
@@ -32,6 +36,46 @@ def upstream(item):
 def reference(item):
     path = f"{REFERENCE}/{item.study}.csv"
     return [path] if item.reference and Path(path).exists() else []
+
+
+#: the software of every rule (used with --sdm conda; otherwise the active environment)
+ENV = "../envs/parakin.yaml"
+#: what every job reserves unless its artefact declares more (runtime in minutes; profiles/slurm)
+DEFAULT_RESOURCES = {"runtime": 15, "mem_mb": 1000}
+#: figures and tables shown in the report (snakemake --report); data files stay out of it
+SHOWN = (".png", ".svg", ".pdf", ".csv")
+
+
+def resources_of(item):
+    return {**DEFAULT_RESOURCES, **dict(item.resources)}
+
+
+def rst_escape(text):
+    """``text`` as literal reStructuredText (the report's captions are rst)."""
+    return "".join(f"\\{c}" if c in "\\`*_|[]<>" else c for c in text)
+
+
+def verbatim(text):
+    """A param that is ``text`` as it is (a plain string param is formatted: braces would be wildcards)."""
+    return lambda wildcards: text
+
+
+def report_outputs(item):
+    """The artefact's outputs, figures and tables marked for the report with its caption."""
+    paper = item.study if item.study_folder else "beyond the papers"
+    return [report(path, caption="../report/artefact.rst", category=paper, subcategory=item.name,
+                   labels={"artefact": item.name, "file": Path(path).name})
+            if path.endswith(SHOWN) and path.startswith(FIG) else path
+            for path in outputs(item)]
+
+
+def outdir_of(item):
+    """The artefact's output folder, derived from its first output (a param that is a path prefix
+    must come from the output, so that a remote or cluster run rewrites it with the file)."""
+    if not item.outputs:
+        return lambda wildcards: str(Path(FIG) / item.study_folder)
+    depth = len(Path(item.outputs[0]).parts)
+    return lambda wildcards, output: str(Path(output[0]).parents[depth - 1])
 
 
 ALL_OUTPUTS = [path for item in ARTEFACTS.values() for path in outputs(item)]

@@ -9,13 +9,15 @@ rule report:
         ALL_OUTPUTS,
         expand("{ref}/{paper}.csv", ref=REFERENCE, paper=sorted({a.study for a in ARTEFACTS.values() if reference(a)})),
     output:
-        REPORT,
+        report(REPORT, caption="../report/claims.rst", category="REPORT.md (claim by claim)"),
     log:
         f"{LOGS}/report.log",
     params:
-        figures=shlex.quote(FIG),
+        figures=lambda wildcards, output: str(Path(output[0]).parent),
+    conda:
+        ENV
     shell:
-        "parakin report --figures {params.figures} --out {output:q} 2>&1 | tee {log:q}"
+        "parakin report --figures {params.figures:q} --out {output:q} 2>&1 | tee {log:q}"
 
 
 if RECORD:
@@ -25,14 +27,17 @@ if RECORD:
             ALL_OUTPUTS,
             REPORT,
         output:
-            CHECK,
+            report(CHECK[0], caption="../report/check.rst", category="reproduction check"),
+            CHECK[1],
         log:
             f"{LOGS}/reproduction_check.log",
         params:
-            results=shlex.quote(FIG),
-            record=shlex.quote(RECORD),
-            out=shlex.quote(f"{RESULTS}/reproduction_check"),
+            results=lambda wildcards, input: str(Path(input[-1]).parent),
+            record=RECORD,
+            out=lambda wildcards, output: str(Path(output[0]).with_suffix("")),
             studies=" ".join(config["studies"]),
+        conda:
+            ENV
         shell:
-            "parakin check --results {params.results} --record {params.record} --out {params.out} "
+            "parakin check --results {params.results:q} --record {params.record:q} --out {params.out:q} "
             "--studies {params.studies} 2>&1 | tee {log:q}"

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from parakin.errors import ShapeError, SingularityError, UnreachableError
+from parakin.kernels import Kernel
 
 Array = NDArray[np.float64]
 
@@ -209,6 +210,14 @@ class Mechanism(ABC):
 
     #: Closed-form forward kinematics, where one exists (``None`` otherwise).
     fk: Any = None
+
+    def kernel(self) -> Kernel | None:
+        """The compiled single-pose kernels of this mechanism (:mod:`parakin.kernels`), or ``None``
+        (the default): numeric FK then runs the generic numpy solvers on the methods above.
+        A kernel must compute exactly what ``residual``, ``jacobian_pose``, ``ik``, ``in_domain``
+        and ``on_assembly`` compute, so subclasses that override one of them return ``None``
+        unless they provide their own."""
+        return None
 
     def replace(self, **changes: Any) -> "Mechanism":
         """A copy with some parameters changed (``dataclasses.replace``)."""

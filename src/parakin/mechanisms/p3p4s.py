@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from parakin.errors import SingularityError, UnreachableError
+from parakin.kernels import Kernel
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
 __all__ = ["P3P4S"]
@@ -284,6 +285,16 @@ class P3P4S(Mechanism):
         self.fk(joints)
 
     # ------------------------------------------------------------------ closed-form FK
+    def kernel(self) -> Kernel | None:
+        """Compiled kernels (:mod:`parakin.kernels.p3p4s`); None for a subclass."""
+        if type(self) is not P3P4S:
+            return None
+        return Kernel("parakin.kernels.p3p4s", self._kernel_params, 3, 3)
+
+    @cached_property
+    def _kernel_params(self) -> Array:
+        return np.concatenate([[self.delta, self.L], self.e.ravel(), self.m.ravel()])
+
     def fk(self, joints: ArrayLike, branch: Literal["upper", "lower"] = "upper") -> Array:
         """Closed-form forward kinematics: the intersection of three spheres (our addition).
 

@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from parakin.errors import UnreachableError
+from parakin.kernels import Kernel
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
 __all__ = ["Stewart12", "DriveMode", "ActiveLegs", "CONVENTIONS", "NESTED_PASSIVE", "rotation_matrix"]
@@ -332,6 +333,18 @@ class Stewart12(Mechanism):
         s = np.einsum("...i,...i->...", m, m)
         u = q @ f["uq"].T + s[..., None] * f["us"] + f["u0"]
         return m, u.reshape(*u.shape[:-1], 2, 3)
+
+    def kernel(self) -> Kernel | None:
+        """Compiled kernels (:mod:`parakin.kernels.stewart12`) of the default Euler-parameter
+        convention; None for the other conventions and for subclasses."""
+        if type(self) is not Stewart12 or self.convention != "euler_parameters":
+            return None
+        return Kernel("parakin.kernels.stewart12", self._kernel_params, 6, 12)
+
+    @cached_property
+    def _kernel_params(self) -> Array:
+        p = self.platform_points_local[list(self.leg_joint)]
+        return np.concatenate([p.ravel(), self.base_points.ravel()])
 
     def fk(self, joints: ArrayLike, check: bool = True) -> Array:
         """Closed-form FK: the pose (..., 6) from all 12 leg lengths (m), batched.

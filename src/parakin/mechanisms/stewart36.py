@@ -31,6 +31,7 @@ from numpy.typing import ArrayLike
 
 from parakin.errors import UnreachableError
 from parakin.geometry import euler_zyx, euler_zyx_from_matrix
+from parakin.kernels import Kernel
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
 __all__ = ["Stewart36", "TABLE3_ROW1"]
@@ -353,6 +354,16 @@ class Stewart36(Mechanism):
                                    f"{describe_first(none, none.shape)}")
         best = np.argmin(np.where(ok, dist, np.inf), axis=-1)
         return np.take_along_axis(sols, best[..., None, None], axis=-2)[..., 0, :]
+
+    def kernel(self) -> Kernel | None:
+        """Compiled kernels (:mod:`parakin.kernels.stewart36`); None for a subclass."""
+        if type(self) is not Stewart36:
+            return None
+        return Kernel("parakin.kernels.stewart36", self._kernel_params, 6, 6)
+
+    @cached_property
+    def _kernel_params(self) -> Array:
+        return np.concatenate([self.top_points[LEG_TOP].ravel(), self.base_points.ravel()])
 
     def mirror(self, pose: ArrayLike) -> Array:
         """Reflection about the base plane: ``(alpha, -beta, -gamma, X, Y, -Z)`` (same leg lengths)."""

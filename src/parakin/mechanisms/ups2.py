@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike
 
 from parakin.errors import UnreachableError
 from parakin.geometry import rot_x, rot_y
+from parakin.kernels import Kernel
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
 __all__ = ["UPS2"]
@@ -373,6 +374,16 @@ class UPS2(Mechanism):
         """:meth:`fk_all` on both assembly branches of eq (14): ``{+1: (..., 8, 3), -1: (..., 8, 3)}``.
         A pose of branch -1 is interpreted by ``UPS2(..., branch=-1)``."""
         return {b: dataclasses.replace(self, branch=b).fk_all(joints) for b in (1, -1)}
+
+    def kernel(self) -> Kernel | None:
+        """Compiled kernels (:mod:`parakin.kernels.ups2`); None for a subclass."""
+        if type(self) is not UPS2:
+            return None
+        return Kernel("parakin.kernels.ups2", self._kernel_params, 3, 3)
+
+    @cached_property
+    def _kernel_params(self) -> Array:
+        return np.concatenate([[self.a, self.k, self.c, self.h, float(self.branch)], self.home_lengths])
 
     def fk(self, joints: ArrayLike) -> Array:
         """The working-branch FK solution: the real solution with |beta|, |gamma| < 90 deg closest

@@ -13,13 +13,12 @@ from types import ModuleType
 import pandas as pd
 
 from parakin.claims import Claim
-from parakin.registry import REGISTRY
+from parakin.registry import of_module
 
 
 def combine(sections: Sequence[ModuleType]) -> tuple[dict[str, Callable], Callable, Callable]:
     """``(ARTEFACTS, claims, summary)`` of a paper made of ``sections`` (in the paper's order)."""
-    names = {s.__name__ for s in sections}
-    artefacts: dict[str, Callable] = {a.name: a.make for a in REGISTRY.values() if a.module in names}
+    artefacts: dict[str, Callable] = {name: make for s in sections for name, make in of_module(s).items()}
 
     def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
         """Claims of the paper that the pipeline outputs in ``figdir`` cover so far."""

@@ -16,6 +16,12 @@ later modules add theirs with :func:`register`. A registered method is called as
 :func:`solve_fk` does the validation, broadcasting, reshaping and timing around it, and decides
 what a success is: the method's stopping rule *and* a valid answer (:mod:`parakin.solvers.verify`:
 in the mechanism's domain, on its assembly, ``ik(x)`` within ``joint_tol`` of the joints).
+
+Where the mechanism has compiled kernels (``mech.kernel()``), ``"newton"``, ``"lm"``,
+``"broyden"`` and ``"bfgs"`` run as compiled loops (:mod:`parakin.kernels`: the same iterations,
+counters and status codes, results equal to the numpy solvers' to rounding), in parallel over the
+cores for large batches; a callback, or an option the compiled loop does not take, selects the
+numpy solver.
 """
 
 from __future__ import annotations
@@ -27,6 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from parakin import kernels
 from parakin.errors import ShapeError
 from parakin.mechanisms.base import Array, Mechanism
 from parakin.solvers.baseline import scipy_root
@@ -57,6 +64,9 @@ register("broyden-ls")(broyden_ls)
 register("pso")(_pso)
 register("closed-form")(closed_form)
 register("all-solutions")(all_solutions)
+
+#: methods with a compiled loop (:mod:`parakin.kernels`), used for mechanisms that have kernels
+_COMPILED = {"newton": newton, "lm": levenberg_marquardt, "broyden": broyden, "bfgs": bfgs}
 
 
 def _rows(values: ArrayLike, size: int, what: str) -> Array:
@@ -157,6 +167,10 @@ def solve_fk(
         ) from None
     start = time.perf_counter()
     _check_settings(tol, maxiter, joint_tol)
+    if fn is _COMPILED.get(method) and "callback" not in options:  # one pose, compiled: one call
+        one = kernels.solve_one(mech, method, joints, x0, tol, int(maxiter), options, joint_tol, start)
+        if one is not None:
+            return one
     batch, flat_q, flat_x = flatten_problem(mech, joints, x0, tol, maxiter)
     jtol = default_joint_tol(tol, options) if joint_tol is None else float(joint_tol)
     bad = ~(np.all(np.isfinite(flat_q), axis=-1) & np.all(np.isfinite(flat_x), axis=-1))
@@ -172,7 +186,11 @@ def solve_fk(
     if bad.size and bad.all():
         result = _mark_bad_rows(mech, _nothing(mech, flat_q, flat_x, method), bad, int(maxiter))
     else:
-        result = fn(mech, flat_q, flat_x, tol=tol, maxiter=int(maxiter), **options)
+        result = None
+        if fn is _COMPILED.get(method):  # the built-in method, not one registered over it
+            result = kernels.solve(mech, method, flat_q, flat_x, tol, int(maxiter), options)
+        if result is None:  # no kernel, or a callback / option the compiled loop does not take
+            result = fn(mech, flat_q, flat_x, tol=tol, maxiter=int(maxiter), **options)
         result = verify(mech, flat_q, result, jtol, int(maxiter))
         if bad.any():
             result = _mark_bad_rows(mech, result, bad, int(maxiter))

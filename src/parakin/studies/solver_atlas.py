@@ -13,6 +13,7 @@ NAME``), written to the top of the figures folder:
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -22,7 +23,7 @@ import pandas as pd
 from parakin.atlas import BASELINE, SCENARIOS, AtlasCase, run_atlas, standard_solvers
 from parakin.config import rng, seed_for
 from parakin.io import atomic_write_text, markdown_table, write_table
-from parakin.mechanisms import P3P4S
+from parakin.mechanisms import P3P4S, Stewart66
 from parakin.mechanisms.base import Array, Mechanism
 from parakin.registry import TIMING, Tolerance, artefact
 
@@ -81,6 +82,8 @@ def atlas_cases(config: dict, *, network: bool = True) -> list[AtlasCase]:
         "stewart12": ActiveLegs(mech=ye_stewart12.common.mech(config),
                                 active=tuple(k for k in range(1, 13) if k not in passive)),
         "stewart36": li2017_stewart36.common.mech(config),
+        # beyond the papers: the general 6-6 platform (Dietmaier's, 40 real assemblies)
+        "stewart66": Stewart66(),
     }
     net = None
     if network:
@@ -96,6 +99,9 @@ def atlas_cases(config: dict, *, network: bool = True) -> list[AtlasCase]:
         solvers = standard_solvers(mech, pso_swarm=cfg["pso"]["swarm"], pso_maxiter=cfg["pso"]["maxiter"],
                                    pso_rows=cfg["pso"]["rows"], box=box, network=net if key == "3p4s" else None,
                                    seed=seed_for(config, f"atlas.pso.{key}") % 2**31)
+        if key == "stewart66":  # 40 homotopy paths per input (~5 ms): as many rows as PSO gets
+            solvers = tuple(dataclasses.replace(s, max_rows=cfg["pso"]["rows"]) if s.method == "all-solutions" else s
+                            for s in solvers)
         cases.append(AtlasCase(key, mech, box, solvers))
     return cases
 
@@ -128,12 +134,25 @@ def gpu_note() -> str:
 
 
 def compute_atlas(config: dict) -> pd.DataFrame:
+    from parakin.atlas import SCENARIOS
+    from parakin.progress import Progress
+
     cfg = config[KEY]["solver_atlas"]
-    return run_atlas(
-        atlas_cases(config), lambda stream: rng(config, stream), n=cfg["n"], n_single=cfg["n_single"],
+    cases = atlas_cases(config)
+    done = Progress("atlas", len(cases) * len(SCENARIOS), "mechanism x scenario blocks", step=1 / 16)
+
+    def progress(what: str) -> None:  # called as a block starts: report the blocks finished before it
+        if done.done:
+            done.tick()
+        print(f"  atlas: {what} ...", file=sys.stderr, flush=True)
+
+    table = run_atlas(
+        cases, lambda stream: rng(config, stream), n=cfg["n"], n_single=cfg["n_single"],
         n_batch=cfg["n_batch"], repeats=cfg["repeats"], start_spread=cfg["start_spread"],
         joint_noise=cfg["joint_noise"], pool_factor=cfg["pool_factor"], tol=cfg["tol"], maxiter=cfg["maxiter"],
-        success_tol=cfg["success_tol"], gpu=_gpu, progress=lambda s: print(f"  atlas: {s}", file=sys.stderr))
+        success_tol=cfg["success_tol"], gpu=_gpu, progress=progress)
+    done.tick()
+    return table
 
 
 def _pct(v: float) -> str:
@@ -185,7 +204,8 @@ def recommend(df: pd.DataFrame, margin: float = 0.005) -> pd.DataFrame:
 
 @artefact(KEY, "solver_atlas", outputs=["extra_solver_atlas.csv", "extra_solver_atlas.md", "extra_solver_atlas.png"],
           folder="", reference=False, needs=["zhao2017_3p4s:train"], tolerance=ATLAS,
-          config=["extra.solver_atlas", "li2020_2ups", "ye_stewart12", "li2017_stewart36"])
+          config=["extra.solver_atlas", "li2020_2ups", "ye_stewart12", "li2017_stewart36"],
+          threads=2, resources={"runtime": 90, "mem_mb": 4000})
 def solver_atlas(config: dict, outdir: Path) -> list[Path]:
     """Every FK solver x every mechanism x four scenarios (issue: the comparison no paper has)."""
     cfg = config[KEY]["solver_atlas"]

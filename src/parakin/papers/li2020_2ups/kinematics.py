@@ -210,7 +210,7 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                          variant="max |alpha| over random assemblies of an independent loop-closure model",
                          tol=1e-9, reason="also symbolic: B2B3.e_y = -sqrt2 b sin(alpha) cos(beta) = 0 gives alpha = 0 "
                          "(pi = flipped platform); but X = rho sin(beta), Z = rho cos(beta) are parasitic translations"))
-        out += _equation_claims(df)
+        out += _equation_claims(df, ref)
     return out
 
 
@@ -219,32 +219,33 @@ TRUE = "1"  #: a symbolic identity checked by sympy: 1 = holds, 0 = fails
 ZERO = "0"  #: a numeric residual that the printed equation implies to be 0
 
 
-def _equation_claims(df: pd.DataFrame) -> list[Claim]:
+def _equation_claims(df: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
     """Claims C2, C4, C5 of docs/li2020_2ups.md#s6: eqs (1), (5), (7), (14), (9)-(11), (15)-(17) as printed, read from
     extra_concomitant.csv (sympy identities encoded 1 = holds, numeric residuals encoded as 0)."""
     enc = "encoding: printed 1 = the paper's equation; ours 1 = sympy proves the identity, 0 = it fails"
     v = df["value"]
     out = [
-        Claim(KEY, "eq7", "B2B3_identity", TRUE, float(v["B2B3 = R (B3' - B2') equals eq (7)"]), "1",
+        Claim(KEY, "eq7", "B2B3_identity", printed_value(ref, "eq7", "B2B3_identity"), float(v["B2B3 = R (B3' - B2') equals eq (7)"]), "1",
               variant="sympy: R(alpha, beta, gamma) (eq 1) applied to B3' - B2' (eq 5) minus eq (7)", tol=0.0,
               reason=enc + " (the extracted 'S_beta' is read as sin(beta))"),
-        Claim(KEY, "eq14", "P_identity", TRUE, float(v["eq (14) satisfies (6) and (12)"]), "1",
+        Claim(KEY, "eq14", "P_identity", printed_value(ref, "eq14", "P_identity"), float(v["eq (14) satisfies (6) and (12)"]), "1",
               variant="sympy: P = (sin b sqrt(c^2 - Y^2), Y, cos b sqrt(c^2 - Y^2)) satisfies (6) and (12)", tol=0.0,
               reason=enc),
-        Claim(KEY, "eq14", "X_residual", ZERO, float(v["max |X - rho sin beta| (m)"]) * 1e3, "mm",
+        Claim(KEY, "eq14", "X_residual", printed_value(ref, "eq14", "X_residual"), float(v["max |X - rho sin beta| (m)"]) * 1e3, "mm",
               variant="max |X - sin(b) sqrt(c^2 - Y^2)| over an independent loop-closure model", tol=1e-9,
               reason="numeric residual of eq (14), tolerance 1e-9 mm (round-off)"),
-        Claim(KEY, "eq14", "Z_residual", ZERO, float(v["max |Z - rho cos beta| (m)"]) * 1e3, "mm",
+        Claim(KEY, "eq14", "Z_residual", printed_value(ref, "eq14", "Z_residual"), float(v["max |Z - rho cos beta| (m)"]) * 1e3, "mm",
               variant="max |Z - cos(b) sqrt(c^2 - Y^2)| over an independent loop-closure model", tol=1e-9,
               reason="numeric residual of eq (14), tolerance 1e-9 mm (round-off)"),
     ]
     for j in (1, 2, 3):
-        out.append(Claim(KEY, "eq9-11", f"l{j}_identity", TRUE, float(v[f"|l{j}|^2 vector form = closed form"]), "1",
+        out.append(Claim(KEY, "eq9-11", f"l{j}_identity", printed_value(ref, "eq9-11", f"l{j}_identity"), float(v[f"|l{j}|^2 vector form = closed form"]), "1",
                          variant=f"sympy: |l{j}|^2 of the vector form (eqs 9-11, 14) = our scalar closed form",
                          tol=0.0, reason=enc))
     diff = df.loc["printed (16)^2 - vector |l2|^2"]
-    out.append(Claim(KEY, "eq16", "printed_equals_vector_form", TRUE, 1.0 - float(diff["value"]), "1",
+    out.append(Claim(KEY, "eq16", "printed_equals_vector_form", printed_value(ref, "eq16", "printed_equals_vector_form"), 1.0 - float(diff["value"]), "1",
                      variant="sympy: printed scalar (16)^2 - vector |l2|^2 (1 = identical)", tol=0.0,
+                     evidence=f"{KEY}/extra_concomitant.md",
                      reason=f"typo in the printed (16): the difference is {diff['detail']}; we code (9)-(11) + (14), "
                             "which the paper's own vector derivation gives"))
     return out

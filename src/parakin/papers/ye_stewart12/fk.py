@@ -13,7 +13,7 @@ from parakin.config import rng
 from parakin.io import write_csv, write_table
 from parakin.papers.ye_stewart12.common import KEY, mech, passive_sets, test_pose
 from parakin.plot import draw_mechanism, save_figure, skeleton_table
-from parakin.claims import Claim
+from parakin.claims import Claim, printed_value
 from parakin.registry import DESCRIPTIVE, EXACT, TIMING
 from parakin.papers.ye_stewart12.common import artefact
 

@@ -22,7 +22,7 @@ from parakin.mechanisms.stewart12 import NESTED_PASSIVE, ActiveLegs, DriveMode
 from parakin.papers.ye_stewart12.common import (
     KEY, METHODS_USED, MODE_NAMES, mech, passive_caption, passive_sets, run_mode, state_at, steps, test_pose,
 )
-from parakin.plot import new_figure, save_figure
+from parakin.plot import new_figure, save_figure, use_style
 from parakin.claims import Claim, printed_value
 from parakin.solvers import solve_fk
 from parakin.registry import DESCRIPTIVE, ITERATIVE, Tolerance
@@ -286,9 +286,10 @@ def basin(config: dict, outdir: Path) -> list[Path]:
                 rows.append({"R": r, "method": key, "deviation_rms_pct": lv, "p_converge": o.mean(),
                              "median_iterations": float(np.nanmedian(it)) if o.any() else np.nan})
     df = pd.DataFrame(rows)
-    fig, _ = new_figure((7.0, 3.0))
+    fig, _ = new_figure((7.0, 3.4))
     fig.clf()
-    axs = fig.subplots(1, 2, sharey=True)
+    with use_style():
+        axs = fig.subplots(1, 2, sharey=True)
     for ax, key, name in zip(axs, ("nr", "broyden"), ("N-R (Gauss-Newton)", "Broyden")):
         for r in range(5, -1, -1):
             s_ = df[(df["method"] == key) & (df["R"] == r)]
@@ -298,7 +299,10 @@ def basin(config: dict, outdir: Path) -> list[Path]:
         ax.set_title(name, fontsize=9)
     axs[0].set_ylabel("convergence probability")
     axs[0].legend(fontsize=7, ncol=2)
-    fig.suptitle(f"Random per-leg initial deviations, {trials} trials per level; " + passive_caption(config), fontsize=7)
+    import textwrap
+
+    fig.suptitle(f"Beyond the paper: N-R and Broyden from random per-leg initial deviations, {trials} trials per level\n"
+                 + textwrap.fill(passive_caption(config), 110), fontsize=7)
     return [save_figure(fig, outdir / "extra_basin.png"), write_csv(df, outdir / "extra_basin.csv")]
 
 
@@ -475,7 +479,8 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     if p.exists():
         t = pd.read_csv(p)
         why = ("C14: eq. (33) and Fig. 9 lost; P = (max-min)/mean of d_max over the structures, nested passive sets "
-               "(ASSUMED)")
+               "(ASSUMED); Broyden for R > 0 is the direct rank-1 update with pseudo-inverse steps, not the paper's "
+               "inverse update (docs/ye_stewart12.md#s5.6)")
         for _, r in t.iloc[:-1].iterrows():
             for key in ("nr", "broyden"):
                 out.append(Claim(KEY, "table6", f"R{int(r['R'])}.{key}", printed_value(ref, "table6", f"R{int(r['R'])}.{key}"),
@@ -490,7 +495,9 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
             row = t[t["R"] == r].iloc[0]
             for key in ("nr", "broyden"):
                 out.append(Claim(KEY, "text_s4.2", f"width.R{r}.{key}", printed_value(ref, "text_s4.2", f"width.R{r}.{key}"),
-                                 float(row[f"{key}_width_pct"]), "%", reason="C12: max - min of d_max over the structures"))
+                                 float(row[f"{key}_width_pct"]), "%", reason="C12: max - min of d_max over the structures"
+                                 + ("; Broyden for R > 0 is not the paper's inverse update (docs/ye_stewart12.md#s5.6)"
+                                    if key == "broyden" and r > 0 else "")))
         best = int(t.iloc[:-1].assign(s=lambda x: x["nr_P"] + x["broyden_P"]).sort_values("s")["R"].iloc[0])
         out.append(Claim(KEY, "conclusion", "best_R.realtime_robust", printed_value(ref, "conclusion", "best_R.realtime_robust"),
                          float(best), "1", tol=0.0, reason="C16: the mode with the smallest P (N-R + Broyden)"))

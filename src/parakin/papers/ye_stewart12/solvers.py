@@ -142,15 +142,26 @@ def _match_step(df: pd.DataFrame, key: str) -> float:
     return float(bad[-1] + 1) if bad.size else 0.0
 
 
+#: round-off floor of a passive length (~25 mm, rounding ~100 ulp): N-R's final error is below it on
+#: every machine, so the accuracy factor N-R vs Broyden is stated against it (a machine-independent
+#: lower bound) instead of against N-R's round-off residual
+ROUNDOFF_MM = 1e-12
+
+
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     out: list[Claim] = []
     p = figdir / "table4_summary.csv"
     if p.exists():
         t = pd.read_csv(p).iloc[0]
+        floor = max(float(t["nr_max_error_mm"]), ROUNDOFF_MM)
         out.append(Claim(KEY, "text_s3.3", "accuracy_factor", printed_value(ref, "text_s3.3", "accuracy_factor"),
-                         float(t["accuracy_factor"]), "1", kind="lower",
-                         reason=(f"C4: max passive-length error Broyden {t['broyden_max_error_mm']:.2g} mm / N-R "
-                                 f"{t['nr_max_error_mm']:.2g} mm at d = {t['deviation_pct']:g} %; N-R ends at rounding")))
+                         float(t["broyden_max_error_mm"]) / floor, "1", kind="lower",
+                         variant=f"Broyden error / max(N-R error, {ROUNDOFF_MM:g} mm round-off floor)",
+                         reason=(f"C4: max passive-length error Broyden {t['broyden_max_error_mm']:.2g} mm, N-R "
+                                 f"{t['nr_max_error_mm']:.2g} mm at d = {t['deviation_pct']:g} %. N-R ends at round-off, "
+                                 f"which differs between machines (the raw ratio here is {t['accuracy_factor']:.3g}), "
+                                 "so the ratio is taken against a round-off floor: a lower bound that holds on any "
+                                 "machine")))
     p = figdir / "table5.csv"
     if p.exists():
         t = pd.read_csv(p)

@@ -25,7 +25,7 @@ from parakin.mechanisms import p3p4s_dynamics as dyn
 from parakin.errors import ConfigError
 from parakin.io import write_csv, write_table
 from parakin.mechanisms import P3P4S
-from parakin.claims import Claim
+from parakin.claims import Claim, printed_value
 
 from parakin.papers.zhao2017_3p4s.common import KEY
 from parakin.registry import ROUNDING
@@ -607,9 +607,9 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     out: list[Claim] = []
     why = "paper: ADAMS, 'exactly equal', no number printed; ours: "
 
-    def claim(artefact, quantity, value, variant, tol, reason):
-        out.append(Claim(KEY, artefact, quantity, "0", 100 * value, "% of peak", variant, tol=100 * tol,
-                         reason=reason))
+    def claim(artefact, quantity, value, variant, tol, reason, evidence=""):
+        out.append(Claim(KEY, artefact, quantity, printed_value(ref, artefact, quantity), 100 * value, "% of peak",
+                         variant, tol=100 * tol, reason=reason, evidence=evidence))
 
     if (figdir / "fig07_velocity_check.csv").exists():
         df = pd.read_csv(figdir / "fig07_velocity_check.csv")
@@ -624,7 +624,8 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                   why + label)
         claim("fig08", "max |qddot(eq 13) - simulation|",
               _max_rel(df, "diff{i}_printed_h_m_s2", "qddot{i}_eq13_m_s2"), "eq 13 as printed (H without 1/l)",
-              TOL_FD, "the printed H lacks 1/l (docs/zhao2017_3p4s.md#g8); vs IK finite differences and MuJoCo")
+              TOL_FD, "the printed H lacks 1/l (docs/zhao2017_3p4s.md#g8); vs IK finite differences and MuJoCo",
+              evidence=f"{KEY}/extra_dynamics_slips.md")
     if (figdir / "fig10_mujoco_forces.csv").exists():
         df = pd.read_csv(figdir / "fig10_mujoco_forces.csv")
         for model, what in (("equivalent", "one equivalent rod"), ("parallelogram", "two side rods")):
@@ -634,7 +635,7 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
         claim("fig10", "max |f(eq 23) - simulation|", _max_rel(df, "diff{i}_printed_N", "f{i}_ours_N"),
               "eqs 13, 21, 23 as printed vs MuJoCo", TOL_MUJOCO_FORCE,
               "printed slips: eq 13 H without 1/l, eq 21 gravity-moment term, eq 23 without factor 2 "
-              "(extra_dynamics_slips.md)")
+              "(extra_dynamics_slips.md)", evidence=f"{KEY}/extra_dynamics_slips.md")
     return out
 
 

@@ -92,7 +92,8 @@ def samples(config: dict, outdir: Path) -> list[Path]:
 @artefact("train", outputs=["extra_bp_accuracy.csv", "extra_bp_accuracy.md", "extra_bp_training.csv",
                             "extra_bp_training.png"],
           generated=["bp_network.npz", "bp_training_log.csv", "bp_training_summary.json"],
-          needs=["zhao2017_3p4s:samples"], config=["zhao2017_3p4s.fk"], tolerance=TRAINING)
+          needs=["zhao2017_3p4s:samples"], config=["zhao2017_3p4s.fk"], tolerance=TRAINING,
+          threads=2, resources={"runtime": 30, "mem_mb": 2000})
 def train(config: dict, outdir: Path) -> list[Path]:
     """The paper's BP network (3 strokes -> 10 tanh -> 3 coordinates) trained by
     Levenberg-Marquardt with MATLAB trainlm's rules; weights and log to the generated folder,
@@ -102,9 +103,13 @@ def train(config: dict, outdir: Path) -> list[Path]:
     cfg = config[KEY]["fk"]
     data = np.load(generated(config) / "bp_samples.npz")
 
+    every = max(1, int(cfg["max_epochs"]) // 10)  # a line per ~10 % of the epoch budget
+
     def progress(epoch: int, train_mse: float, val_mse: float) -> None:
-        if epoch % 10 == 0:
-            print(f"  LM epoch {epoch:4d}: train mse {train_mse:.3e}, val mse {val_mse:.3e}", file=sys.stderr)
+        if epoch % every == 0 or epoch == 1:
+            print(f"  train: LM epoch {epoch:4d}/{cfg['max_epochs']} ({100 * epoch // int(cfg['max_epochs'])} % of the "
+                  f"budget; stops earlier on validation): train mse {train_mse:.3e}, val mse {val_mse:.3e}",
+                  file=sys.stderr, flush=True)
 
     def fit(strokes, poses, stream: str, report=None):
         return train_lm(strokes, poses, hidden=cfg["hidden"], seed=seed_for(config, stream),
@@ -292,22 +297,55 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
         tab = pd.read_csv(t2)
         for r in tab.itertuples():
             out.append(Claim(KEY, "table2", f"case{r.case}.e3", printed_value(ref, "table2", f"case{r.case}.e3"),
-                             r.e3, "m", "hybrid (Broyden)", kind="upper",
-                             reason="bound: our E_3 is at most the paper's"))
+                             r.e3, "m", "hybrid (Broyden)",
+                             reason="ours converges far below the paper's E_3 in as many iterations; why the paper's "
+                                    "last iterate stayed at ~5e-8 (its solver is not printed) is not shown"))
             out.append(Claim(KEY, "table2", f"case{r.case}.iterations",
                              printed_value(ref, "table2", f"case{r.case}.iterations"), r.iterations, "1",
-                             "hybrid (Broyden)", kind="upper", reason="bound: at most 3 quasi-Newton iterations"))
-        out.append(Claim(KEY, "text_s1.1", "fk_accuracy", printed_value(ref, "text_s1.1", "fk_accuracy"),
-                         float(tab["e3"].max()), "m", "max E_3 over Table 2", kind="upper"))
-        out.append(Claim(KEY, "text_s1.1", "fk_iterations", printed_value(ref, "text_s1.1", "fk_iterations"),
-                         float(tab["iterations"].max()), "1", "max over Table 2", kind="upper"))
-        out.append(Claim(KEY, "text_s1.1", "fk_time_max", printed_value(ref, "text_s1.1", "fk_time_max"),
-                         float(tab["time_ms"].max()), "ms", "max median single-solve time, this machine", kind="upper"))
+                             "hybrid (Broyden)", reason="iteration counts within one (a step at the threshold)"))
+            for ax in "xyz":
+                q = f"case{r.case}.solved.{ax}_p"
+                out.append(Claim(KEY, "table2", q, printed_value(ref, "table2", q), float(getattr(r, f"solved_{ax}")),
+                                 "m", "hybrid (Broyden)", evidence=f"{KEY}/table2.md",
+                                 reason="tolerance = the paper's eps 1e-7: a solve stopped there fixes the position to "
+                                        "about eps; a larger difference contradicts the row's own printed E_3 (see the "
+                                        "reference note)"))
+        for art in ("text_s1.1", "abstract"):
+            out.append(Claim(KEY, art, "fk_accuracy", printed_value(ref, art, "fk_accuracy"),
+                             float(tab["e3"].max()), "m", "max E_3 over Table 2"))
+            out.append(Claim(KEY, art, "fk_iterations", printed_value(ref, art, "fk_iterations"),
+                             float(tab["iterations"].max()), "1", "max over Table 2"))
+            out.append(Claim(KEY, art, "fk_time_max", printed_value(ref, art, "fk_time_max"),
+                             float(tab["time_ms"].max()), "ms", "max median single-solve time, this machine",
+                             reason="a wall-clock time: load on a shared machine only lengthens it, and the bound "
+                                    "must be met 10 times over (declared margin)"))
     acc = figdir / "extra_bp_accuracy.csv"
     if acc.exists():
         a = pd.read_csv(acc).iloc[0]
         out.append(Claim(KEY, "text_s1.1", "network_accuracy", printed_value(ref, "text_s1.1", "network_accuracy"),
-                         float(a["test_rms_m"]), "m", "test-set RMS error", kind="order"))
+                         float(a["test_rms_m"]), "m", "test-set RMS error",
+                         reason=f"training stopped at its epoch limit ({a['stop_reason']}, best epoch {int(a['best_epoch'])} "
+                                f"of {int(a['epochs'])}: still improving); smaller sampling boxes give smaller errors "
+                                "(extra_bp_accuracy.md) but neither the region nor convergence is shown to be the cause"))
+    bench = figdir / "fk_benchmark.csv"
+    if bench.exists():
+        b = pd.read_csv(bench).set_index("method")
+        h, qn = b.loc["hybrid"], b.loc["broyden"]
+        h = h.iloc[0] if isinstance(h, pd.DataFrame) else h
+        out.append(Claim(KEY, "conclusion", "hybrid.iteration_ratio_vs_quasi_newton",
+                         printed_value(ref, "conclusion", "hybrid.iteration_ratio_vs_quasi_newton"),
+                         float(qn["median_nit"] / h["median_nit"]), "1",
+                         f"median iterations: Broyden from home {qn['median_nit']:g} / hybrid {h['median_nit']:g}",
+                         reason="iteration counts, not wall-clock: the network's guess saves quasi-Newton iterations"))
+        worst = b[(b["start"] == "home") & b.index.isin(["broyden", "bfgs"])]
+        fail = 1.0 - float(worst["success_rate"].min())
+        out.append(Claim(KEY, "conclusion", "quasi_newton.failure_rate_from_home",
+                         printed_value(ref, "conclusion", "quasi_newton.failure_rate_from_home"), fail, "1",
+                         f"largest failure rate of quasi-Newton from the home pose ({', '.join(worst.index)}; "
+                         f"{int(worst['n_accuracy'].min())} reachable inputs each)",
+                         evidence=f"{KEY}/fk_benchmark.md",
+                         reason="every quasi-Newton start from home converges on this mechanism's workspace: the "
+                                "hybrid's lower start sensitivity has nothing to improve on"))
     return out
 
 

@@ -270,9 +270,10 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
             q = f"case{r['case']}.{r['joint']}"
             out.append(Claim(KEY, "table1", q, r["paper"], r["stated"], "m", "stated geometry",
                              reason="" if abs(r["stated_diff"]) <= HALF_DIGIT else
-                             "stated parameters do not give Table 1; see best-fit rows"))
+                             "stated parameters do not give Table 1; a geometry near the optimised design does",
+                             evidence=f"{KEY}/extra_table1_fit.md"))
             out.append(Claim(KEY, "table1", q, r["paper"], r["fit"], "m", fit_label,
-                             reason="geometry fitted to these 15 numbers (2 parameters)"))
+                             basis="(delta, phi) fitted to these 15 numbers", evidence=f"{KEY}/extra_table1_fit.md"))
     return out
 
 

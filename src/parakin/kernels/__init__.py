@@ -1,0 +1,242 @@
+"""Compiled forward kinematics: numba kernels of one pose and solver loops over them.
+
+A mechanism opts in by returning a :class:`Kernel` from ``Mechanism.kernel()``: the name of a
+module of five ``numba.njit`` functions for **one** pose (``residual(p, x, q, out)``,
+``jacobian(p, x, q, out)``, ``ik(p, x, out) -> bool``, ``in_domain(p, x) -> bool``,
+``on_assembly(p, x, q) -> bool``) and the parameter vector ``p`` they read. :func:`build` turns
+that module into compiled Newton, Levenberg-Marquardt, Broyden and BFGS loops (the template
+``_loops.py``, written with the kernel module's name into the kernel cache and compiled with
+``cache=True``, so the compile cost is paid once per machine, not per process), each in a serial
+and a ``prange``-parallel driver that run the same per-row code (identical results).
+
+:func:`solve` is what :func:`parakin.solvers.solve_fk` calls first: it returns ``None`` (use the
+generic numpy path) for a mechanism without a kernel, a method without a compiled loop, an
+option the loop does not take, a callback, or where numba is not installed. Numba is imported
+only here, lazily.
+
+Cache: ``$PARAKIN_KERNEL_CACHE`` or ``$XDG_CACHE_HOME/parakin/kernels`` (default
+``~/.cache/parakin/kernels``). Set ``PARAKIN_KERNELS=0`` to switch the compiled path off.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import importlib
+import importlib.util
+import inspect
+import os
+import sys
+import tempfile
+import time
+from functools import cache, lru_cache
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Kernel", "build", "cache_dir", "enabled", "solve", "verify_hooks", "PARALLEL_MIN_ROWS", "METHODS"]
+
+#: rows from which a batch runs on every core (below: the serial driver, no thread start-up)
+PARALLEL_MIN_ROWS = 64
+
+#: method -> option names (and defaults) its compiled loop takes; others go to the numpy path
+METHODS: dict[str, dict[str, float]] = {
+    "newton": {"xtol": 0.0},
+    "lm": {"xtol": 0.0, "gtol": 0.0, "tau": 1e-9},
+    "broyden": {"xtol": 0.0},
+    "bfgs": {"xtol": 0.0, "gtol": 0.0, "c1": 1e-4, "shrink": 0.5, "maxls": 30, "reg": 1e-10},
+}
+_OPTION_ORDER = ("tol", "maxiter", "xtol", "gtol", "tau", "c1", "shrink", "maxls", "reg")
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Kernel:
+    """A mechanism's compiled kernels: the module of its ``njit`` functions, its parameters."""
+
+    module: str  #: importable module with residual, jacobian, ik, in_domain, on_assembly
+    params: np.ndarray  #: float64 parameter vector passed as ``p`` to every kernel
+    n_pose: int
+    n_joints: int
+
+
+def enabled() -> bool:
+    """False where numba is missing or ``PARAKIN_KERNELS=0``."""
+    if os.environ.get("PARAKIN_KERNELS", "1") == "0":
+        return False
+    return _have_numba()
+
+
+@lru_cache(maxsize=1)
+def _have_numba() -> bool:
+    return importlib.util.find_spec("numba") is not None
+
+
+def cache_dir() -> Path:
+    """Where the generated solver modules (and numba's cache of them) live."""
+    env = os.environ.get("PARAKIN_KERNEL_CACHE")
+    if env:
+        return Path(env)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "parakin" / "kernels"
+
+
+def _source_of(module: str) -> str:
+    mod = importlib.import_module(module)
+    return inspect.getsource(mod)
+
+
+@cache
+def build(module: str, n_joints: int, n_pose: int) -> ModuleType:
+    """The compiled solver loops over the kernels of ``module`` (generated once, then imported).
+
+    The generated file's name carries a hash of the template, the kernel module's source and the
+    numba version, so numba's on-disk cache never serves loops compiled against an older kernel
+    (numba itself only watches the file a function is defined in)."""
+    import numba
+
+    template = (Path(__file__).parent / "_loops.py").read_text()
+    batch = []
+    for name in (*METHODS, "verify"):
+        args = "p, Q, X, flags, err" if name == "verify" else "p, Q, X0, opts, X, info, res"
+        body = ("err[i] = verify_row(p, Q[i], X[i], flags[i])" if name == "verify"
+                else f"res[i] = {name}_row(p, Q[i], X0[i], opts, X[i], info[i])")
+        if name != "verify":  # one pose, solved and checked in one call (the single-call path)
+            batch.append(f"@njit(**_O)\ndef {name}_one(p, q, x0, opts, x, info, flags, out):\n"
+                         f"    out[0] = {name}_row(p, q, x0, opts, x, info)\n"
+                         "    out[1] = verify_row(p, q, x, flags)\n")
+        for kind, loop, extra in (("serial", "range", ""), ("parallel", "prange", "parallel=True, ")):
+            batch.append(f"@njit({extra}**_O)\ndef {name}_{kind}({args}):\n"
+                         f"    for i in {loop}(Q.shape[0]):\n        {body}\n")
+    text = (template.replace("__KERNEL_MODULE__", module).replace("__M__", str(int(n_joints)))
+            .replace("__N__", str(int(n_pose))) + "\n\n" + "\n\n".join(batch))
+    digest = hashlib.sha256((text + _source_of(module) + numba.__version__).encode()).hexdigest()[:16]
+    name = f"parakin_loops_{module.replace('.', '_')}_{digest}"
+    folder = cache_dir()
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{name}.py"
+    if not path.exists():  # atomic: concurrent processes may build the same file
+        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".tmp")
+        with os.fdopen(fd, "w") as fh:
+            fh.write(f"# generated by parakin.kernels.build from {module}; do not edit\n" + text)
+        os.replace(tmp, path)
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, path)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _kernel(mech: Any) -> Kernel | None:
+    get = getattr(mech, "kernel", None)
+    if get is None or not enabled():
+        return None
+    return get()
+
+
+def _loops(kernel: Kernel) -> ModuleType:
+    return build(kernel.module, kernel.n_joints, kernel.n_pose)
+
+
+def solve(mech: Any, method: str, joints: np.ndarray, x0: np.ndarray, tol: float, maxiter: int,
+          options: dict[str, Any], *, parallel: bool | None = None):
+    """The compiled solve of the flat batch (``joints (N, m)``, ``x0 (N, n)``) as an
+    :class:`~parakin.solvers.result.FKResult` (not yet verified), or ``None`` where the compiled
+    path does not apply. ``parallel``: None = by batch size (:data:`PARALLEL_MIN_ROWS`)."""
+    if method not in METHODS or options.get("callback") is not None:
+        return None
+    allowed = METHODS[method]
+    if any(k not in allowed and k != "callback" for k in options):
+        return None
+    kernel = _kernel(mech)
+    if kernel is None:
+        return None
+    from parakin.solvers.result import FKResult, summarize
+
+    start = time.perf_counter()
+    values = {**allowed, **{k: v for k, v in options.items() if k != "callback"}, "tol": tol, "maxiter": maxiter}
+    try:
+        opts = np.array([float(values.get(k, 0.0)) for k in _OPTION_ORDER])
+    except (TypeError, ValueError):  # let the numpy solver report a bad option
+        return None
+    if method == "bfgs" and not float(values["maxls"]).is_integer():
+        return None
+    loops = _loops(kernel)
+    n = len(joints)
+    q = np.ascontiguousarray(joints, dtype=float)
+    x0 = np.ascontiguousarray(x0, dtype=float)
+    x = np.empty_like(x0)
+    info = np.zeros((n, 4), dtype=np.int64)
+    res = np.empty(n)
+    use_par = n >= PARALLEL_MIN_ROWS if parallel is None else parallel
+    getattr(loops, f"{method}_{'parallel' if use_par else 'serial'}")(kernel.params, q, x0, opts, x, info, res)
+    status = info[:, 0].copy()
+    return FKResult(x=x, success=status >= 0, status=status, nit=info[:, 1].copy(), nfev=info[:, 2].copy(),
+                    njev=info[:, 3].copy(), residual=res, wall_time=time.perf_counter() - start, method=method,
+                    message=summarize(status, maxiter))
+
+
+_INFO = np.zeros(4, dtype=np.int64)
+
+
+def solve_one(mech: Any, method: str, joints: Any, x0: Any, tol: float, maxiter: int, options: dict[str, Any],
+              joint_tol: float | None, start: float):
+    """The single-call path of :func:`parakin.solvers.solve_fk`: one joint vector (1-D) from one
+    start (1-D or None = home), solved and verified in one compiled call, the status then decided
+    by :func:`parakin.solvers.verify.judge_one` (the rules of :func:`~parakin.solvers.verify.verify`).
+    Returns the 0-d :class:`~parakin.solvers.result.FKResult` or ``None`` where this path does
+    not apply (then the general path runs). ``start``: the caller's ``perf_counter`` at entry."""
+    if method not in METHODS or not (isinstance(joints, (np.ndarray, list, tuple))):
+        return None
+    allowed = METHODS[method]
+    if any(k not in allowed for k in options):
+        return None
+    kernel = _kernel(mech)
+    if kernel is None:
+        return None
+    try:
+        q = np.asarray(joints, dtype=float)
+        x0 = mech.home() if x0 is None else np.asarray(x0, dtype=float)
+        values = {**allowed, **options, "tol": tol, "maxiter": maxiter}
+        opts = np.array([float(values.get(k, 0.0)) for k in _OPTION_ORDER])
+    except (TypeError, ValueError, OverflowError):
+        return None
+    if (q.shape != (kernel.n_joints,) or x0.shape != (kernel.n_pose,) or not np.isfinite(q).all()
+            or not np.isfinite(x0).all() or (method == "bfgs" and not float(values["maxls"]).is_integer())):
+        return None
+    from parakin.solvers.result import FKResult, summarize
+    from parakin.solvers.verify import default_joint_tol, judge_one
+
+    loops = _loops(kernel)
+    x = np.empty(kernel.n_pose)
+    info = _INFO.copy()
+    flags = np.zeros(2, dtype=np.int64)
+    out = np.empty(2)
+    getattr(loops, f"{method}_one")(kernel.params, q, x0, opts, x, info, flags, out)
+    jtol = default_joint_tol(tol, options) if joint_tol is None else float(joint_tol)
+    status = judge_one(int(info[0]), bool(flags[0]), bool(flags[1]), float(out[1]), jtol)
+    message = "converged" if status >= 0 else summarize(np.array([status]), maxiter)
+    return FKResult(x=x, success=np.array(status >= 0), status=np.array(status, dtype=np.int64),
+                    nit=np.array(info[1]), nfev=np.array(info[2]), njev=np.array(info[3]),
+                    residual=np.array(out[0]), wall_time=time.perf_counter() - start, method=method, message=message,
+                    joint_error=np.array(out[1]))
+
+
+def verify_hooks(mech: Any, joints: np.ndarray, x: np.ndarray, *, parallel: bool | None = None):
+    """``(in_domain, joint_error, on_assembly)`` of the flat rows by the compiled kernels, or
+    ``None`` without a kernel: what :func:`parakin.solvers.verify.verify` otherwise asks the
+    mechanism's numpy methods. ``joint_error`` is inf outside the domain, ``on_assembly`` False."""
+    kernel = _kernel(mech)
+    if kernel is None:
+        return None
+    loops = _loops(kernel)
+    n = len(joints)
+    flags = np.zeros((n, 2), dtype=np.int64)
+    err = np.empty(n)
+    use_par = n >= PARALLEL_MIN_ROWS if parallel is None else parallel
+    fn = loops.verify_parallel if use_par else loops.verify_serial
+    fn(kernel.params, np.ascontiguousarray(joints, dtype=float), np.ascontiguousarray(x, dtype=float), flags, err)
+    return flags[:, 0] == 1, err, flags[:, 1] == 1

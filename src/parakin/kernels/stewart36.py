@@ -1,0 +1,86 @@
+"""Compiled single-pose kernels of the 3-6 Stewart platform (:class:`parakin.mechanisms.Stewart36`).
+
+The same equations as ``Stewart36.residual`` / ``jacobian_pose`` / ``ik`` / ``in_domain`` /
+``on_assembly``, one pose at a time, no allocation. ``p`` (see ``Stewart36.kernel``) holds the
+platform point of each leg in the moving frame (``p[0:18]``, 6 x 3) and the base points
+(``p[18:36]``, 6 x 3).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+_OPTS = dict(cache=True, error_model="numpy", nogil=True)
+
+
+@njit(**_OPTS)
+def _rotation(x):
+    """The nine entries of ``T = Rz(alpha) Ry(beta) Rx(gamma)``, row by row."""
+    ca, sa = math.cos(x[0]), math.sin(x[0])
+    cb, sb = math.cos(x[1]), math.sin(x[1])
+    cc, sc = math.cos(x[2]), math.sin(x[2])
+    return (ca * cb, ca * sb * sc - sa * cc, ca * sb * cc + sa * sc,
+            sa * cb, sa * sb * sc + ca * cc, sa * sb * cc - ca * sc,
+            -sb, cb * sc, cb * cc)
+
+
+@njit(**_OPTS)
+def _leg(p, x, t, i):
+    """``w = T a_i`` and the leg vector ``v = O_A + w - B_i`` of leg ``i`` (six scalars)."""
+    a0, a1, a2 = p[3 * i], p[3 * i + 1], p[3 * i + 2]
+    w0 = t[0] * a0 + t[1] * a1 + t[2] * a2
+    w1 = t[3] * a0 + t[4] * a1 + t[5] * a2
+    w2 = t[6] * a0 + t[7] * a1 + t[8] * a2
+    return w0, w1, w2, x[3] + w0 - p[18 + 3 * i], x[4] + w1 - p[19 + 3 * i], x[5] + w2 - p[20 + 3 * i]
+
+
+@njit(**_OPTS)
+def residual(p, x, q, out):
+    """``f_i = |T A_p(i) + O_A - B_i|^2 - L_i^2``."""
+    t = _rotation(x)
+    for i in range(6):
+        w0, w1, w2, v0, v1, v2 = _leg(p, x, t, i)
+        out[i] = v0 * v0 + v1 * v1 + v2 * v2 - q[i] * q[i]
+
+
+@njit(**_OPTS)
+def jacobian(p, x, q, out):
+    """``d f / d pose`` (6, 6), as ``Stewart36.jacobian_pose``: ``2 v_i`` for X, Y, Z and
+    ``2 u_q . (w_i x v_i)`` for the angles (``u_alpha = z``, ``u_beta = Rz(alpha) y``, ``u_gamma = T x``)."""
+    t = _rotation(x)
+    ca, sa = math.cos(x[0]), math.sin(x[0])
+    for i in range(6):
+        w0, w1, w2, v0, v1, v2 = _leg(p, x, t, i)
+        c0 = w1 * v2 - w2 * v1
+        c1 = w2 * v0 - w0 * v2
+        c2 = w0 * v1 - w1 * v0
+        out[i, 0] = 2 * c2
+        out[i, 1] = 2 * (ca * c1 - sa * c0)
+        out[i, 2] = 2 * (t[0] * c0 + t[3] * c1 + t[6] * c2)
+        out[i, 3] = 2 * v0
+        out[i, 4] = 2 * v1
+        out[i, 5] = 2 * v2
+
+
+@njit(**_OPTS)
+def ik(p, x, out):
+    """Leg lengths; every pose has one (returns True)."""
+    t = _rotation(x)
+    for i in range(6):
+        w0, w1, w2, v0, v1, v2 = _leg(p, x, t, i)
+        out[i] = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    return True
+
+
+@njit(**_OPTS)
+def in_domain(p, x):
+    """Every finite pose (the caller checks finiteness)."""
+    return True
+
+
+@njit(**_OPTS)
+def on_assembly(p, x, q):
+    """Above the base, ``Z > 0``."""
+    return x[5] > 0

@@ -1,0 +1,482 @@
+"""The general 6-6 Gough-Stewart platform: any six base and six platform anchor points, and all 40
+forward-kinematics solutions, batched and certified.
+
+Geometry: ``base`` B (6, 3) in the fixed frame, ``platform`` P (6, 3) in the moving frame; leg i is
+the S-P-S chain joining ``B[i]`` and ``P[i]``. Joints: the six leg lengths ``L_1 .. L_6`` (m).
+
+Pose ``(alpha, beta, gamma, X, Y, Z)`` (rad, rad, rad, m, m, m), the convention of
+:class:`parakin.mechanisms.stewart36.Stewart36`: the platform point ``p`` sits at
+``T p + O`` in the fixed frame with ``T = Rz(alpha) Ry(beta) Rx(gamma)`` (Z-Y-X Euler) and
+``O = (X, Y, Z)`` the origin of the moving frame. Residual (squared form, as for the 3-6):
+``f_i = |T P_i + O - B_i|^2 - L_i^2``.
+
+Default geometry: Dietmaier's platform (Dietmaier 1998, "The Stewart-Gough platform of general
+geometry can have 40 real postures", Advances in Robot Kinematics, pp. 7-16), whose leg lengths
+:data:`DIETMAIER_LENGTHS` have all 40 forward solutions real. Numbers as printed (6 decimals;
+transcribed from the CuikSuite documentation of its ``Dietmeier`` example, which cites the paper),
+read as metres.
+
+:meth:`Stewart66.fk_all`: parameter homotopy in Study (soma) coordinates from one generic complex
+start system whose 40 solutions are stored in ``data/stewart66_start.npz`` (made by monodromy,
+:func:`parakin.mechanisms.stewart66_homotopy.generate_start`), every path tracked in one batched
+numpy predictor-corrector, each endpoint refined by Newton and certified by Smale's alpha test
+(approximate zero of a distinct, nonsingular solution); real ones checked by the IK. See
+``docs/stewart66.md``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from functools import cached_property
+from importlib import resources
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from parakin.errors import UnreachableError
+from parakin.geometry import euler_zyx, euler_zyx_from_matrix
+import parakin.mechanisms.stewart66_homotopy as hc
+from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
+
+__all__ = ["Stewart66", "DIETMAIER_BASE", "DIETMAIER_PLATFORM", "DIETMAIER_LENGTHS", "FKAll", "load_start"]
+
+#: Dietmaier (1998) base points A1..A6 (rows), as printed
+DIETMAIER_BASE = ((0.0, 0.0, 0.0), (1.107915, 0.0, 0.0), (0.549094, 0.756063, 0.0),
+                  (0.735077, -0.223935, 0.525991), (0.514188, -0.526063, -0.368418),
+                  (0.590473, 0.094733, -0.205018))
+#: Dietmaier (1998) platform points B1..B6 (rows), as printed
+DIETMAIER_PLATFORM = ((0.0, 0.0, 0.0), (0.542805, 0.0, 0.0), (0.956919, -0.528915, 0.0),
+                      (0.665885, -0.353482, 1.402538), (0.478359, 1.158742, 0.107672),
+                      (-0.137087, -0.235121, 0.353913))
+#: Dietmaier (1998) leg lengths with 40 real forward solutions
+DIETMAIER_LENGTHS = (1.0, 0.645275, 1.086284, 1.503439, 1.281933, 0.771071)
+
+#: seed of the random complex leg constants of each geometry's own start system (a module constant)
+FIBER_SEED = 66
+#: retries (with a fresh random bend of the parameter path) of inputs not complete after the first pass
+RETRIES = 3
+#: step control of the once-per-geometry tracking from the stored generic start (cautious)
+START_TRACK: dict[str, float] = {"h0": 0.02, "tau": 5e-4, "hmin": 1e-13, "max_steps": 3000}
+#: step control of the per-input tracking (see :func:`parakin.mechanisms.stewart66_homotopy.track`)
+TRACK_OPTIONS: dict[str, float] = {"h0": 0.2, "hmax": 1.0, "tau": 0.1, "hmin": 1e-13, "max_steps": 1500}
+
+
+def load_start() -> dict[str, np.ndarray]:
+    """The stored generic start system (``base``, ``platform``, ``c``, ``patch``, ``solutions``)."""
+    with resources.files("parakin.mechanisms").joinpath("data/stewart66_start.npz").open("rb") as fh:
+        with np.load(fh) as z:
+            return {k: z[k] for k in z.files}
+
+
+def _as_points(value: Any, what: str) -> tuple[tuple[float, float, float], ...]:
+    a = np.asarray(value, dtype=float)
+    if a.shape != (6, 3):
+        raise ValueError(f"{what} must be six 3-D points, shape (6, 3), got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        bad = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
+        raise ValueError(f"{what}[{bad[0]}] has a non-finite coordinate {a[bad]!r}")
+    return tuple(tuple(float(v) for v in row) for row in a)
+
+
+def _coincident(a: np.ndarray, tol: float) -> list[tuple[int, int]]:
+    d = np.linalg.norm(a[:, None] - a[None], axis=-1)
+    return [(i, j) for i in range(6) for j in range(i + 1, 6) if d[i, j] <= tol]
+
+
+@dataclass(frozen=True)
+class FKAll:
+    """Everything :meth:`Stewart66.fk_all` finds for a batch of inputs (batch shape ``S``).
+
+    ``poses`` (S, 40, 6): the real solutions as poses, NaN-padded, sorted by Z descending;
+    ``study`` (S, 40, 8) complex: every solution found, Study parameters ``(e, g)`` scaled to
+    ``e . e = 1`` (NaN-padded); ``rotation`` (S, 40, 3, 3) and ``translation`` (S, 40, 3): the same
+    solutions as (complex) rotation and origin ``O`` of the moving frame; ``is_real`` (S, 40);
+    ``alpha`` (S, 40): Smale's alpha of each solution (certified where ``< ALPHA0``);
+    ``n_found`` (S,): certified distinct solutions; ``n_expected``: the root count of this geometry
+    (40 unless it is special); ``complete`` (S,): ``n_found == n_expected``; ``n_real`` (S,);
+    ``ik_error`` (S,): max ``|IK(pose) - L|`` over the real solutions; ``steps`` (S,): predictor-
+    corrector steps over all paths; ``retries`` (S,): extra passes the input needed."""
+
+    poses: Array
+    study: np.ndarray
+    rotation: np.ndarray
+    translation: np.ndarray
+    is_real: np.ndarray
+    alpha: Array
+    n_found: np.ndarray
+    n_expected: int
+    complete: np.ndarray
+    n_real: np.ndarray
+    ik_error: Array
+    steps: np.ndarray
+    retries: np.ndarray
+
+
+@dataclass(frozen=True)
+class Stewart66(Mechanism):
+    """General 6-6 Gough-Stewart platform (SI units): ``base`` and ``platform`` are (6, 3) point sets
+    (stored as tuples, so the mechanism stays hashable and its parameters print as JSON).
+
+    Raises ValueError for non-finite or malformed anchors, coincident anchors (a 3-6, 6-3 or 3-3
+    layout: pass ``allow_coincident=True`` to study it anyway; :class:`Stewart36` is the dedicated
+    solver of the 3-6) and architecturally singular layouts (the Jacobian singular at every pose,
+    e.g. six collinear anchors)."""
+
+    base: Any = DIETMAIER_BASE
+    platform: Any = DIETMAIER_PLATFORM
+    allow_coincident: bool = False
+
+    name: ClassVar[str] = "stewart66"
+    pose_names: ClassVar[tuple[str, ...]] = ("alpha", "beta", "gamma", "X", "Y", "Z")
+    joint_names: ClassVar[tuple[str, ...]] = ("L1", "L2", "L3", "L4", "L5", "L6")
+    pose_units: ClassVar[tuple[str, ...]] = ("rad", "rad", "rad", "m", "m", "m")
+    joint_units: ClassVar[tuple[str, ...]] = ("m",) * 6
+    paper_pose_units: ClassVar[tuple[str, ...]] = ("deg", "deg", "deg", "m", "m", "m")
+    paper_joint_units: ClassVar[tuple[str, ...]] = ("m",) * 6
+
+    def __post_init__(self) -> None:
+        b = _as_points(self.base, "base")
+        p = _as_points(self.platform, "platform")
+        object.__setattr__(self, "base", b)
+        object.__setattr__(self, "platform", p)
+        ba, pa = np.array(b), np.array(p)
+        size = max(np.ptp(ba, axis=0).max(), np.ptp(pa, axis=0).max())
+        if not size > 0:
+            raise ValueError("base and platform anchors are all one point: no mechanism")
+        tol = 1e-9 * size
+        cb, cp = _coincident(ba, tol), _coincident(pa, tol)
+        if (cb or cp) and not self.allow_coincident:
+            kind = {(3, 0): "3-6", (0, 3): "6-3", (3, 3): "3-3"}.get((len(cp), len(cb)), "degenerate")
+            where = "; ".join(f"{what} points {', '.join(f'{i + 1}={j + 1}' for i, j in pairs)}"
+                              for what, pairs in (("platform", cp), ("base", cb)) if pairs)
+            raise ValueError(f"coincident anchors ({where}): a {kind} layout, not a general 6-6 platform; "
+                             "use Stewart36 for the 3-6, or pass allow_coincident=True (fk_all then finds "
+                             "the fewer solutions of that layout)")
+        # architecture singularity: the 6x6 Jacobian singular at random poses
+        rng = np.random.default_rng(0)
+        poses = np.concatenate([rng.uniform(-1, 1, (3, 3)), rng.normal(size=(3, 3)) * size], -1)
+        with np.errstate(all="ignore"):
+            cond = np.linalg.cond(self.jacobian_pose(poses))
+        if np.all(~np.isfinite(cond) | (cond > 1e11)):
+            raise ValueError(f"architecturally singular layout: the Jacobian is singular at every pose tried "
+                             f"(condition numbers {np.round(cond, 1).tolist()}), e.g. collinear or "
+                             "similar planar anchor sets")
+
+    # ------------------------------------------------------------------ geometry
+    @cached_property
+    def base_points(self) -> Array:
+        """B (6, 3), fixed frame."""
+        return np.array(self.base, dtype=float)
+
+    @cached_property
+    def platform_points(self) -> Array:
+        """P (6, 3), moving frame."""
+        return np.array(self.platform, dtype=float)
+
+    @cached_property
+    def size(self) -> float:
+        """Characteristic length: RMS distance of the anchors from their centroids (the FK's unit)."""
+        b = self.base_points - self.base_points.mean(0)
+        p = self.platform_points - self.platform_points.mean(0)
+        return float(np.sqrt((np.sum(b * b) + np.sum(p * p)) / 12))
+
+    def home(self) -> Array:
+        """Platform parallel to the base frame, its anchor centroid one ``size`` above the base's."""
+        o = self.base_points.mean(0) - self.platform_points.mean(0) + np.array([0.0, 0.0, 1.5 * self.size])
+        return np.concatenate([np.zeros(3), o])
+
+    def pose_bounds(self) -> tuple[Array, Array]:
+        """Angles ``[-pi, pi] x [-pi/2, pi/2] x [-pi, pi]``; origin within ``3 size`` of :meth:`home`'s."""
+        o = self.home()[3:]
+        s = 3 * self.size
+        return (np.concatenate([[-np.pi, -np.pi / 2, -np.pi], o - s]), np.concatenate([[np.pi, np.pi / 2, np.pi], o + s]))
+
+    # ------------------------------------------------------------------ kinematics
+    def rotation(self, pose: ArrayLike) -> Array:
+        x = as_batch(pose, 6, "pose")
+        return euler_zyx(x[..., 0], x[..., 1], x[..., 2])
+
+    def platform_world(self, pose: ArrayLike) -> Array:
+        """Platform anchors in the fixed frame, (..., 6, 3)."""
+        x = as_batch(pose, 6, "pose")
+        return x[..., None, 3:] + self.platform_points @ np.swapaxes(self.rotation(x), -1, -2)
+
+    def leg_vectors(self, pose: ArrayLike) -> Array:
+        return self.platform_world(pose) - self.base_points
+
+    def ik(self, pose: ArrayLike) -> Array:
+        """Leg lengths ``|T P_i + O - B_i|`` (..., 6); every pose has an IK."""
+        v = self.leg_vectors(pose)
+        return np.sqrt(np.einsum("...ij,...ij->...i", v, v))
+
+    def residual(self, pose: ArrayLike, joints: ArrayLike) -> Array:
+        """``f_i = |T P_i + O - B_i|^2 - L_i^2``."""
+        q = as_batch(joints, 6, "joints")
+        v = self.leg_vectors(pose)
+        return np.einsum("...ij,...ij->...i", v, v) - q * q
+
+    def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
+        """Analytic ``d f / d pose`` (..., 6, 6): ``2 v_i`` for X, Y, Z; for angle q,
+        ``2 v_i . (u_q x w_i) = 2 u_q . (w_i x v_i)`` with ``w_i = T P_i``, ``v_i`` the leg vector and
+        ``u_alpha = z``, ``u_beta = Rz(alpha) y``, ``u_gamma = T x`` (the z-y'-x'' joint axes)."""
+        x = as_batch(pose, 6, "pose")
+        r = euler_zyx(x[..., 0], x[..., 1], x[..., 2])
+        w = self.platform_points @ np.swapaxes(r, -1, -2)
+        v = x[..., None, 3:] + w - self.base_points
+        c = np.cross(w, v)
+        ca, sa = np.cos(x[..., 0])[..., None], np.sin(x[..., 0])[..., None]
+        tx = r[..., :, 0]
+        cols = (c[..., 2], ca * c[..., 1] - sa * c[..., 0], np.einsum("...j,...ij->...i", tx, c))
+        return 2 * np.concatenate([np.stack(cols, axis=-1), v], axis=-1)
+
+    def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike) -> Array:
+        """``d f / d L = -2 diag(L)``."""
+        q = as_batch(joints, 6, "joints")
+        return -2 * q[..., :, None] * np.eye(6)
+
+    def check_joints(self, joints: ArrayLike) -> None:
+        """Raise UnreachableError where a leg length is not > 0 (no cheap exact test of assembly
+        exists for the 6-6; :meth:`fk_all` reports inputs without a real solution)."""
+        q = as_batch(joints, 6, "joints")
+        neg = q <= 0
+        if np.any(neg):
+            idx = tuple(np.argwhere(neg)[0])
+            raise UnreachableError(f"leg length L{idx[-1] + 1} = {float(q[idx]):g} must be > 0"
+                                   f"{describe_first(np.any(neg, -1), q.shape[:-1])}")
+
+    def skeleton(self, pose: ArrayLike) -> Skeleton:
+        x = as_batch(pose, 6, "pose")
+        if x.ndim != 1:
+            raise ValueError(f"skeleton() draws one pose, got a batch of shape {x.shape[:-1]}")
+        top = self.platform_world(x)
+        pts = {f"B_{k + 1}": self.base_points[k] for k in range(6)}
+        pts.update({f"P_{k + 1}": top[k] for k in range(6)})
+        segs = [("actuator", np.stack([top[i], self.base_points[i]])) for i in range(6)]
+        return Skeleton(points=pts, segments=segs,
+                        polygons=[("base", self.base_points.copy()), ("platform", top.copy())],
+                        frames={"O": (np.zeros(3), np.eye(3)), "o": (x[3:].copy(), self.rotation(x))})
+
+    # ------------------------------------------------------------------ all forward solutions
+    @cached_property
+    def _scaled(self) -> tuple[Array, Array, Array, Array, float]:
+        """Centred, scaled anchors (b, p), the centroids and the scale: the FK works in units of
+        :attr:`size` with both anchor sets centred (translation ``t = O + T Pc - Bc``)."""
+        bc, pc = self.base_points.mean(0), self.platform_points.mean(0)
+        s = self.size
+        return (self.base_points - bc) / s, (self.platform_points - pc) / s, bc, pc, s
+
+    @cached_property
+    def fk_start(self) -> dict[str, Any]:
+        """This geometry's own start system: the stored generic start moved (general parameter
+        homotopy, 40 paths) to this geometry with random complex leg constants ``c``. Its certified
+        distinct finite endpoints are the root count of the geometry (40 unless special)."""
+        st = load_start()
+        b, p, *_ = self._scaled
+        rng = np.random.default_rng(FIBER_SEED)
+        c1 = (rng.normal(size=6) + 1j * rng.normal(size=6)) * 0.5 + (np.sum(b * b, -1) + np.sum(p * p, -1) - 2.0)
+        m = len(st["solutions"])
+        q1 = hc.quadrics(b, p, c1)
+        best = np.zeros((0, 8), dtype=complex)
+        patch = st["patch"]
+        for attempt in range(6):
+            start = (st["base"], st["platform"], st["c"])
+            target = (b, p, c1)
+            if attempt:  # a different path: a new random patch and a random complex detour
+                rng_a = np.random.default_rng(FIBER_SEED + attempt)
+                patch = (rng_a.normal(size=8) + 1j * rng_a.normal(size=8)) / 4
+                best = best / (best @ patch)[:, None]
+                x0 = st["solutions"] / (st["solutions"] @ patch)[:, None]
+                mid = hc.random_problem(rng_a)
+                hom = hc.GeneralHomotopy(patch, start, mid)
+                xm, okm, _ = hc.track(hom, x0, **START_TRACK)
+                hom = hc.GeneralHomotopy(patch, mid, target)
+                x, ok, _ = hc.track(hom, xm, **START_TRACK)
+                ok &= okm
+            else:
+                hom = hc.GeneralHomotopy(patch, start, target)
+                x, ok, _ = hc.track(hom, st["solutions"], **START_TRACK)
+            x = np.concatenate([best, x[ok]])
+            q = np.broadcast_to(q1, (len(x), 7, 8, 8))
+            x, beta, jn = hc.newton_refine(q, patch, x, iters=4)
+            alpha = hc.certify(q, beta, jn)
+            finite = np.abs(np.sum(x[:, :4] ** 2, -1)) > 1e-10 * np.sum(np.abs(x[:, :4]) ** 2, -1)
+            keep = hc.distinct(x[None], beta[None], ((alpha < hc.ALPHA0) & finite)[None])[0]
+            best = x[keep]
+            if len(best) == m:
+                break
+        return {"c": c1, "patch": patch, "solutions": best, "q0": hc.quadrics(b, p, np.zeros(6))}
+
+    @property
+    def root_count(self) -> int:
+        """Number of isolated complex forward solutions found for this geometry (40 for a general one)."""
+        return len(self.fk_start["solutions"])
+
+    @property
+    def expected_count(self) -> int:
+        """What a complete answer has: 40 (the generic count) unless coincident anchors were allowed,
+        then the count of that layout found by :attr:`fk_start` (16 for the 3-6). A general geometry
+        whose start system found fewer than 40 reports every input incomplete rather than hide it."""
+        b, p = self.base_points, self.platform_points
+        tol = 1e-9 * max(np.ptp(b, axis=0).max(), np.ptp(p, axis=0).max())
+        special = self.allow_coincident and bool(_coincident(b, tol) or _coincident(p, tol))
+        return self.root_count if special else 40
+
+    def _target_c(self, q: Array) -> Array:
+        b, p, *_ = self._scaled
+        s = self._scaled[4]
+        return np.sum(b * b, -1) + np.sum(p * p, -1) - (q / s) ** 2
+
+    def _solve_fiber(self, c1: Array, bend_seed: int | None):
+        """Track all start solutions to every target ``c1`` (n, 6); refine, certify; per-input arrays."""
+        st = self.fk_start
+        m = len(st["solutions"])
+        n = len(c1)
+        x0 = np.broadcast_to(st["solutions"], (n, m, 8)).reshape(-1, 8)
+        c0 = np.broadcast_to(st["c"], (n * m, 6))
+        cc = np.repeat(c1, m, axis=0).astype(complex)
+        bend = None
+        patch = st["patch"]
+        if bend_seed is not None:  # a bent path, in another random patch
+            rng = np.random.default_rng(bend_seed)
+            d = rng.normal(size=(n, 1, 6)) + 1j * rng.normal(size=(n, 1, 6))
+            bend = np.broadcast_to(d * (1 + np.abs(c1 - st["c"]))[:, None, :], (n, m, 6)).reshape(-1, 6)
+            patch = (rng.normal(size=8) + 1j * rng.normal(size=8)) / 4
+            x0 = x0 / (x0 @ patch)[:, None]
+        hom = hc.FiberHomotopy(st["q0"], patch, c0, cc, bend)
+        x, ok, steps = hc.track(hom, x0, **TRACK_OPTIONS)
+        if bend_seed is not None:
+            with np.errstate(all="ignore"):
+                x = x / (x @ st["patch"])[:, None]  # back to the common patch
+            x = np.where(np.isfinite(x), x, 0)
+        q = np.broadcast_to(self._quadrics_for(c1)[:, None], (n, m, 7, 8, 8)).reshape(-1, 7, 8, 8)
+        x, beta, jn = hc.newton_refine(q, st["patch"], x, iters=3)
+        alpha = hc.certify(q, beta, jn)
+        return (x.reshape(n, m, 8), beta.reshape(n, m), alpha.reshape(n, m), ok.reshape(n, m),
+                steps.reshape(n, m).sum(-1))
+
+    def _quadrics_for(self, c1: Array) -> np.ndarray:
+        q = np.broadcast_to(self.fk_start["q0"], (len(c1), 7, 8, 8)).copy()
+        q[:, 1:, :4, :4] += c1[:, :, None, None] * np.eye(4)
+        return q
+
+    def fk_all(self, joints: ArrayLike, *, return_info: bool = False, retries: int = RETRIES):
+        """Every forward solution of leg lengths ``joints`` (..., 6).
+
+        Returns the real ones as poses, (..., 40, 6) NaN-padded, sorted by Z descending (the shape
+        the generic ``"all-solutions"`` solver expects); with ``return_info=True`` an :class:`FKAll`
+        with every complex solution, the certificates and the per-input counts instead.
+
+        Method: each input's leg constants ``c_i = |p_i|^2 + |b_i|^2 - L_i^2`` are reached from this
+        geometry's start system (:attr:`fk_start`) by a straight complex segment; all (inputs x 40)
+        paths are tracked at once (:func:`parakin.mechanisms.stewart66_homotopy.track`), refined by
+        Newton and certified (alpha < ALPHA0 and pairwise disjoint 2 beta balls). Inputs with fewer
+        than :attr:`root_count` certified distinct solutions are tracked again along a randomly bent
+        path (up to ``retries`` times) and the new certified solutions merged in. Solutions with
+        ``e . e`` numerically 0 are not assemblies and are dropped (and counted as not found).
+        Real solutions (real up to the patch scale) are turned into poses and kept where
+        ``max |IK(pose) - L| <= 1e-8 size``."""
+        q = as_batch(joints, 6, "joints")
+        self.check_joints(q)
+        batch = q.shape[:-1]
+        qf = q.reshape(-1, 6)
+        n = len(qf)
+        m = self.root_count
+        c1 = self._target_c(qf)
+        x, beta, alpha, ok, steps = self._solve_fiber(c1, None)
+        keep = self._keep(x, beta, alpha)
+        retried = np.zeros(n, dtype=np.int64)
+        for r in range(retries):
+            bad = np.flatnonzero(keep.sum(-1) < m)
+            if not bad.size:
+                break
+            retried[bad] += 1
+            x2, b2, a2, _, s2 = self._solve_fiber(c1[bad], bend_seed=1000 + r)
+            steps[bad] += s2
+            xx = np.concatenate([np.where(keep[bad, :, None], x[bad], np.nan), x2], 1)
+            bb = np.concatenate([np.where(keep[bad], beta[bad], np.inf), b2], 1)
+            aa = np.concatenate([np.where(keep[bad], alpha[bad], np.inf), a2], 1)
+            kk = self._keep(xx, bb, aa)
+            order = np.argsort(~kk, axis=1, kind="stable")[:, :m]
+            x[bad] = np.take_along_axis(xx, order[..., None], 1)
+            beta[bad] = np.take_along_axis(bb, order, 1)
+            alpha[bad] = np.take_along_axis(aa, order, 1)
+            keep[bad] = np.take_along_axis(kk, order, 1)
+        info = self._package(qf, x, alpha, keep, steps, retried)
+        if return_info:
+            return FKAll(**{k: (v.reshape(batch + v.shape[1:]) if isinstance(v, np.ndarray) else v)
+                            for k, v in dataclasses.asdict(info).items()})
+        return info.poses.reshape(batch + info.poses.shape[1:])
+
+    @staticmethod
+    def _keep(x, beta, alpha):
+        e = x[..., :4]
+        with np.errstate(invalid="ignore"):
+            finite = np.abs(np.sum(e * e, -1)) > 1e-10 * np.sum(np.abs(e) ** 2, -1)
+        return hc.distinct(x, beta, (alpha < hc.ALPHA0) & finite)
+
+    def _package(self, qf, x, alpha, keep, steps, retried) -> FKAll:
+        n, m, _ = x.shape
+        b, p, bc, pc, s = self._scaled
+        big = 40
+        xs = np.where(keep[..., None], x, np.nan)
+        with np.errstate(all="ignore"):
+            xs = xs / np.sqrt(np.sum(xs[..., :4] ** 2, -1))[..., None]  # e . e = 1
+            k = np.argmax(np.nan_to_num(np.abs(xs)), axis=-1)
+            piv = np.take_along_axis(xs, k[..., None], -1)
+            y = xs * (np.abs(piv) / piv)  # real representative where real
+            imag = np.linalg.norm(y.imag, axis=-1) / np.linalg.norm(y, axis=-1)
+        real = keep & (imag < 1e-7)
+        with np.errstate(all="ignore"):
+            rot, trn = hc.study_to_rt(np.nan_to_num(xs))
+            # moving-frame origin O = t + Bc - T Pc, in metres
+            origin = trn * s + bc - np.einsum("...ij,j->...i", rot, pc)
+        rot = np.where(keep[..., None, None], rot, np.nan)
+        origin = np.where(keep[..., None], origin, np.nan)
+        yr = np.nan_to_num(y.real)
+        with np.errstate(all="ignore"):
+            rr, tr = hc.study_to_rt(yr)
+            angles = euler_zyx_from_matrix(rr)
+            o = tr * s + bc - np.einsum("...ij,j->...i", rr, pc)
+        poses = np.concatenate([angles, o], -1)
+        poses = np.where(real[..., None], poses, np.nan)
+        with np.errstate(invalid="ignore"):
+            err = np.abs(self.ik(np.nan_to_num(poses)) - qf[:, None, :]).max(-1)
+        good = real & (err <= 1e-8 * max(1.0, s))
+        poses = np.where(good[..., None], poses, np.nan)
+        key = np.where(good, -np.nan_to_num(poses[..., 5]), np.inf)
+        order = np.argsort(key, axis=-1, kind="stable")
+        poses = np.take_along_axis(poses, order[..., None], 1)
+        out = np.full((n, big, 6), np.nan)
+        out[:, :m] = poses
+
+        def pad(a, fill):
+            o_ = np.full((n, big) + a.shape[2:], fill, dtype=a.dtype)
+            o_[:, :m] = a
+            return o_
+
+        nf = keep.sum(-1)
+        ik_err = np.where(good.any(-1), np.where(good, err, -np.inf).max(-1), np.nan)
+        return FKAll(poses=out, study=pad(xs, np.nan), rotation=pad(rot, np.nan), translation=pad(origin, np.nan),
+                     is_real=pad(good, False), alpha=pad(np.where(keep, alpha, np.nan), np.nan),
+                     n_found=nf, n_expected=self.expected_count, complete=nf == self.expected_count,
+                     n_real=good.sum(-1), ik_error=ik_err,
+                     steps=steps, retries=retried)
+
+    def fk(self, joints: ArrayLike, near: ArrayLike | None = None) -> Array:
+        """One forward solution: the certified real solution nearest ``near`` (default :meth:`home`;
+        distance in units of the :meth:`pose_bounds` box, angles modulo 2 pi), (..., 6). Raises
+        UnreachableError where an input has no real solution."""
+        sols = self.fk_all(joints)
+        ref = self.home() if near is None else as_batch(near, 6, "near")
+        lo, hi = self.pose_bounds()
+        with np.errstate(invalid="ignore"):
+            d = self.pose_difference(sols, np.asarray(ref)[..., None, :]) / (hi - lo)
+            dist = np.sqrt(np.sum(d * d, -1))
+        ok = np.isfinite(dist)
+        none = ~np.any(ok, -1)
+        if np.any(none):
+            raise UnreachableError(f"leg lengths have no real forward solution{describe_first(none, none.shape)}")
+        best = np.argmin(np.where(ok, dist, np.inf), -1)
+        return np.take_along_axis(sols, best[..., None, None], -2)[..., 0, :]

@@ -1,0 +1,157 @@
+"""Compiled kernels (parakin.kernels): the same equations and the same solves as the numpy path.
+
+Compiles once per machine: the loops are cached on disk (``cache=True``), so only the first run
+of this file pays numba's compile time. ``PARAKIN_KERNELS=0`` selects the numpy solvers for the
+reference runs.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+import pytest
+
+from parakin import kernels
+from parakin.mechanisms import P3P4S, UPS2, Stewart12, Stewart36
+from parakin.mechanisms.stewart12 import DriveMode
+from parakin.solvers import Status, solve_fk
+
+pytest.importorskip("numba")
+
+MECHS = {"3p4s": P3P4S(), "3p4s-opt": P3P4S.zhao2017_optimised(), "2ups": UPS2(), "2ups-mirror": UPS2(branch=-1),
+         "stewart12": Stewart12(), "stewart36": Stewart36(), "stewart36-b2": Stewart36(b=2.0)}
+METHODS = ["newton", "lm", "broyden", "bfgs"]
+
+
+def _poses(mech, n: int, seed: int, spread: float = 1.0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    lo, hi = mech.pose_bounds()
+    home = mech.home()
+    x = home + spread * (rng.uniform(lo, hi, size=(3 * n, mech.n_pose)) - home)
+    return x[mech.in_domain(x)][:n]
+
+
+def _numpy_path(monkeypatch):
+    monkeypatch.setenv("PARAKIN_KERNELS", "0")
+
+
+@pytest.mark.parametrize("key", list(MECHS))
+def test_kernels_equal_numpy_methods(key):
+    """residual, jacobian_pose, ik, in_domain, on_assembly: one pose at a time, to rounding."""
+    mech = MECHS[key]
+    k = mech.kernel()
+    mod = importlib.import_module(k.module)
+    rng = np.random.default_rng(5)
+    lo, hi = mech.pose_bounds()
+    x = rng.uniform(lo - 0.5 * (hi - lo), hi + 0.5 * (hi - lo), size=(300, mech.n_pose))  # also outside the domain
+    inside = mech.in_domain(x)
+    q = np.where(inside[:, None], 0.0, 0.1) + rng.uniform(0.0, 1.0, (len(x), mech.n_joints))
+    q[inside] = mech.ik(x[inside]) + 1e-3 * rng.standard_normal((inside.sum(), mech.n_joints))
+    r = np.empty(mech.n_joints)
+    jac = np.empty((mech.n_joints, mech.n_pose))
+    out = np.empty(mech.n_joints)
+    for xi, qi, ok in zip(x, q, inside):
+        assert bool(mod.in_domain(k.params, xi)) == ok
+        if not ok:
+            assert not mod.ik(k.params, xi, out) or key.startswith("stewart36")
+            continue
+        mod.residual(k.params, xi, qi, r)
+        mod.jacobian(k.params, xi, qi, jac)
+        assert mod.ik(k.params, xi, out)
+        np.testing.assert_allclose(r, mech.residual(xi, qi), rtol=1e-12, atol=1e-13 * (1 + qi @ qi))  # |v|^2 - L^2 cancels
+        np.testing.assert_allclose(jac, mech.jacobian_pose(xi, qi), rtol=1e-10, atol=1e-13)
+        np.testing.assert_allclose(out, mech.ik(xi), rtol=1e-13, atol=1e-14)
+        assert bool(mod.on_assembly(k.params, xi, qi)) == bool(mech.on_assembly(xi, qi))
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("key", list(MECHS))
+def test_compiled_solves_equal_numpy(key, method, monkeypatch):
+    """Same statuses, counters and verification, poses equal to rounding (near starts: no chaos)."""
+    mech = MECHS[key]
+    truth = _poses(mech, 150, seed=11)
+    joints = mech.ik(truth)
+    x0 = truth + 0.02 * (mech.home() - truth) + 1e-3
+    x0 = np.where(mech.in_domain(x0)[:, None], x0, truth)
+    got = solve_fk(mech, joints, x0, method=method, maxiter=200)
+    _numpy_path(monkeypatch)
+    ref = solve_fk(mech, joints, x0, method=method, maxiter=200)
+    np.testing.assert_array_equal(got.status, ref.status)
+    np.testing.assert_array_equal(got.success, ref.success)
+    # counters equal, except where a rounding-level difference decides the last iteration (a
+    # residual at tol, BFGS's long runs of 40+ iterations): a step or two on at most 2 % of rows
+    for f in ("nit", "nfev", "njev"):
+        a, b = getattr(got, f), getattr(ref, f)
+        differ = a != b
+        assert differ.mean() <= 0.02 and np.all(np.abs(a - b)[differ] <= 2 * (1 + (method == "bfgs") * 30)), f
+        if method != "bfgs":
+            assert differ.mean() <= 0.01, f
+    # poses equal to rounding where both took the same path (BFGS's slow final approach near a
+    # singular pose may stop one iteration apart, 1e-7 away: within what tol allows there)
+    same = got.success & (got.nit == ref.nit)
+    np.testing.assert_allclose(got.x[same], ref.x[same], rtol=0, atol=1e-9)
+    assert np.all(got.joint_error <= 1e-8) == np.all(ref.joint_error <= 1e-8)
+    assert got.message == ref.message
+    assert got.success.mean() > 0.9
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_serial_and_parallel_identical(method):
+    mech = Stewart36()
+    truth = _poses(mech, 300, seed=3, spread=0.2)
+    joints = mech.ik(truth)
+    x0 = np.tile(mech.home(), (len(joints), 1))
+    a = kernels.solve(mech, method, joints, x0, 1e-10, 50, {}, parallel=False)
+    b = kernels.solve(mech, method, joints, x0, 1e-10, 50, {}, parallel=True)
+    for f in ("x", "status", "nit", "nfev", "njev", "residual"):
+        np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
+    ha = kernels.verify_hooks(mech, joints, a.x, parallel=False)
+    hb = kernels.verify_hooks(mech, joints, a.x, parallel=True)
+    for u, v in zip(ha, hb):
+        np.testing.assert_array_equal(u, v)
+
+
+def test_options_and_verification_apply(monkeypatch):
+    """xtol / gtol / tau / maxiter reach the compiled loops; success still needs the IK check."""
+    mech = Stewart36()
+    truth = _poses(mech, 100, seed=8, spread=0.3)
+    joints = mech.ik(truth)
+    cases = [("newton", {"xtol": 1e-6}), ("lm", {"gtol": 1e-3, "tau": 1e-3}), ("bfgs", {"maxls": 5, "c1": 1e-3}),
+             ("broyden", {"maxiter": 3})]
+    x0 = truth + 0.01
+    for method, opts in cases:
+        got = solve_fk(mech, joints, x0, method=method, tol=1e-12, **opts)
+        with monkeypatch.context() as m:
+            _numpy_path(m)
+            ref = solve_fk(mech, joints, x0, method=method, tol=1e-12, **opts)
+        np.testing.assert_array_equal(got.status, ref.status)
+        np.testing.assert_array_equal(got.nit, ref.nit)
+    # a mirror solution (Z < 0) converges but is on the wrong assembly
+    below = mech.mirror(truth[:5])
+    res = solve_fk(mech, joints[:5], below, method="newton")
+    assert np.all(res.status == Status.WRONG_ASSEMBLY)
+
+
+def test_generic_path_still_used():
+    """No kernel: subclasses, other conventions, a callback, an unknown option, bad rows."""
+    assert Stewart12(convention="cayley").kernel() is None
+    mode = DriveMode(Stewart12())
+    assert mode.kernel() is None
+    calls = []
+    mech = Stewart36()
+    q = mech.ik(mech.home() + 0.01)
+    res = solve_fk(mech, q, method="newton", callback=lambda k, x, r: calls.append(k))
+    assert res.success and calls
+    with pytest.raises(TypeError):
+        solve_fk(mech, q, method="newton", bogus=1)
+    bad = np.array([q, np.full(6, np.nan)])
+    res = solve_fk(mech, bad, method="lm")
+    assert res.success.tolist() == [True, False] and res.status[1] == Status.BAD_INPUT
+
+
+def test_build_is_cached():
+    k = Stewart36().kernel()
+    a = kernels.build(k.module, k.n_joints, k.n_pose)
+    assert kernels.build(k.module, k.n_joints, k.n_pose) is a
+    assert str(kernels.cache_dir()) in a.__file__
