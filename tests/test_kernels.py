@@ -155,3 +155,66 @@ def test_build_is_cached():
     a = kernels.build(k.module, k.n_joints, k.n_pose)
     assert kernels.build(k.module, k.n_joints, k.n_pose) is a
     assert str(kernels.cache_dir()) in a.__file__
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_single_call_path_equals_batched(method, monkeypatch):
+    """One joint vector per call (the single-call path: solve and verification in one compiled
+    call) gives exactly the batched compiled rows, and the numpy path's statuses."""
+    for key in ("3p4s", "2ups", "stewart12", "stewart36"):
+        mech = MECHS[key]
+        truth = _poses(mech, 12, seed=4, spread=0.3)
+        joints = mech.ik(truth)
+        batch = solve_fk(mech, joints, method=method)
+        for i in range(len(joints)):
+            one = solve_fk(mech, joints[i], method=method)
+            assert one.shape == () and one.x.shape == (mech.n_pose,)
+            np.testing.assert_array_equal(one.x, batch.x[i])
+            for f in ("status", "success", "nit", "nfev", "njev", "residual", "joint_error"):
+                assert getattr(one, f) == getattr(batch, f)[i], f
+            assert one.message == ("converged" if one.success else one.message)
+        with monkeypatch.context() as m:
+            _numpy_path(m)
+            ref = solve_fk(mech, joints[0], method=method)
+        assert ref.status == solve_fk(mech, joints[0], method=method).status
+
+
+def test_single_call_verification_rules():
+    """judge_one is verify's rule for one pose: every combination of the three checks."""
+    from parakin.solvers.result import FKResult
+    from parakin.solvers.verify import judge_one
+
+    mech = Stewart36()
+    combos = [(s, d, a, e) for s in (0, 1, -1) for d in (True, False) for a in (True, False) for e in (0.0, 1.0)]
+    for s, d, a, e in combos:
+        got = judge_one(s, d, a, e, 0.5)
+        # the batched rule, written out as verify() applies it
+        want = s
+        if s >= 0:
+            want = Status.OUT_OF_DOMAIN if not d else Status.WRONG_ASSEMBLY if not a else Status.WRONG_ANSWER if e > 0.5 else s
+        assert got == want
+    # and the single-call path reports WRONG_ASSEMBLY like the batched one (mirror start converges below the base)
+    q = mech.ik(mech.home())
+    one = solve_fk(mech, q, mech.mirror(mech.home()), method="newton")
+    many = solve_fk(mech, q[None], mech.mirror(mech.home())[None], method="newton")
+    assert one.status == many.status[0] == Status.WRONG_ASSEMBLY
+    assert isinstance(one, FKResult)
+
+
+def test_threads_get_the_serial_driver_and_same_results():
+    """Calls from other threads run the serial driver (numba's workqueue layer is not re-entrant)."""
+    import threading
+
+    mech = P3P4S()
+    joints = mech.ik(_poses(mech, 500, seed=9))
+    ref = solve_fk(mech, joints, method="lm")
+    out: list = []
+    threads = [threading.Thread(target=lambda: out.append(solve_fk(mech, joints, method="lm"))) for _ in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(out) == 3
+    for res in out:
+        np.testing.assert_array_equal(res.x, ref.x)
+        np.testing.assert_array_equal(res.status, ref.status)

@@ -262,8 +262,8 @@ def test_save_figure_atomic_png(tmp_path: Path, skeleton: Skeleton) -> None:
     # saving the same figure again, and drawing it afresh, give the same bytes
     save_figure(fig, target)
     assert target.read_bytes() == first
-    save_figure(draw_mechanism(skeleton).figure, tmp_path / "again.png")
-    assert (tmp_path / "again.png").read_bytes() == first
+    save_figure(draw_mechanism(skeleton).figure, tmp_path / "again" / "fig01_mechanism.png")  # same tag "Fig. 1"
+    assert (tmp_path / "again" / "fig01_mechanism.png").read_bytes() == first
 
 
 def test_save_figure_failure_leaves_nothing(
@@ -295,3 +295,23 @@ def test_figure_p3p4s_home():
     """The 3-P(4S) at the paper's home pose, as Fig. 2 of zhao2017_3p4s is redrawn."""
     mech = P3P4S()
     return draw_mechanism(mech, mech.home()).figure
+
+
+def test_figures_carry_their_paper_figure_number(tmp_path: Path) -> None:
+    """save_figure puts 'Fig. N' (from a fig<N>_ file name) or 'Beyond the paper' (extra_) in the
+    title unless a title already says it (issue 18: every figure titled with its number)."""
+    from parakin.plot import figure_tag, new_figure
+
+    assert figure_tag("fig05_cm_velocity.png") == "Fig. 5" and figure_tag("extra_basin.png") == "Beyond the paper"
+    assert figure_tag("sketch.png") is None
+    fig, ax = new_figure()
+    ax.set_title("CM velocity")
+    save_figure(fig, tmp_path / "fig05_cm_velocity.png", close=False)
+    assert ax.get_title() == "Fig. 5: CM velocity"
+    fig, ax = new_figure()
+    ax.set_title("Fig. 5, surrogate")
+    save_figure(fig, tmp_path / "fig05_x.png", close=False)
+    assert ax.get_title() == "Fig. 5, surrogate"
+    fig, ax = new_figure()
+    save_figure(fig, tmp_path / "extra_thing.png", close=False)
+    assert fig._suptitle is not None and fig._suptitle.get_text() == "Beyond the paper"

@@ -156,6 +156,8 @@ def write_check(artefacts: dict[str, Artefact], results: Path, record: Path, out
     files = check_all(artefacts.values(), results, record)
     per = summarise(files, artefacts)
     line = summary_line(per)
+    # what needs a reader's attention first: missing, differs, then the rest in registry order
+    per = per.iloc[sorted(range(len(per)), key=lambda i: -STATUSES.index(per["status"].iloc[i]))]
     csv = write_csv(files, Path(out).with_suffix(".csv"))
     text = (f"# Reproduction check\n\n{line}.\n\nThis run's outputs (`{results}`) against the committed "
             f"record (`{record}`), each artefact within the tolerance declared beside its code "

@@ -15,8 +15,8 @@ import json
 import math
 import re
 import sys
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
@@ -288,7 +288,6 @@ def cmd_ik(args) -> int:
     mech = _mechanism(args.mechanism, args.param)
     paper = args.units == "paper"
     pu, ju = _units(mech, "pose", paper), _units(mech, "joint", paper)
-    _units_note(mech, "ik", paper)
     given = _inputs(args, "pose", mech.pose_names, pu, mech.n_pose)
     pose = _finite(to_si(given, pu), "--pose in SI units", given)
     with np.errstate(all="ignore"):
@@ -302,6 +301,7 @@ def cmd_ik(args) -> int:
     elif not args.output:
         for q in np.atleast_2d(joints):
             print(_fmt_vector(mech.joint_names, q, ju))
+    _units_note(mech, "ik", paper)
     return 0
 
 
@@ -311,7 +311,6 @@ def cmd_fk(args) -> int:
     mech = _mechanism(args.mechanism, args.param)
     paper = args.units == "paper"
     pu, ju = _units(mech, "pose", paper), _units(mech, "joint", paper)
-    _units_note(mech, "fk", paper)
     given = _inputs(args, "joints", mech.joint_names, ju, mech.n_joints)
     joints = _finite(to_si(given, ju), "--joints in SI units", given)
     if args.all:
@@ -348,6 +347,7 @@ def cmd_fk(args) -> int:
     if not np.all(res.success):
         print(f"parakin fk: error: {res.message} ({_why(res, args.tol)})", file=sys.stderr)
         return EXIT_NOT_CONVERGED
+    _units_note(mech, "fk", paper)
     return 0
 
 
@@ -436,6 +436,7 @@ def _fk_all(args, mech, given, joints, pu, ju) -> int:
         print(f"parakin fk: error: no real solution for {len(none)} input(s), the first: "
               f"{np.array2string(np.atleast_2d(given)[none[0]], precision=6)} (cannot be assembled)", file=sys.stderr)
         return EXIT_NOT_CONVERGED
+    _units_note(mech, "fk", args.units == "paper")
     return 0
 
 
@@ -480,9 +481,9 @@ def cmd_bench(args) -> int:
     the summary ``benchmarks.md`` (what the pipeline's ``extra_benchmarks`` rule writes)."""
     import pandas as pd
 
-    from parakin.studies import solver_atlas as extras
     from parakin.config import DEFAULT_CONFIG, QUICK_CONFIG, load_config
     from parakin.papers import PAPERS
+    from parakin.studies import solver_atlas as extras
 
     config = load_config([DEFAULT_CONFIG, QUICK_CONFIG] if args.quick else [DEFAULT_CONFIG])
     root = Path(args.outdir) if args.outdir else Path(config["figures_dir"])

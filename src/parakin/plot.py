@@ -19,8 +19,8 @@ the library never changes the user's backend and leaks no open figures.
 from __future__ import annotations
 
 import contextlib
-import re
 import os
+import re
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any

@@ -20,6 +20,7 @@ from __future__ import annotations
 import ast
 import importlib
 import inspect
+import re
 import sys
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
@@ -153,13 +154,17 @@ class Artefact:
         if self.caption:
             return self.caption
         doc = " ".join((inspect.getdoc(inspect.unwrap(self.make)) or self.key).split())
-        end = doc.find(". ")
-        return doc if end < 0 else doc[: end + 1]
+        end = _SENTENCE_END.search(doc)
+        return doc if end is None else doc[: end.start() + 1]
 
     def sources(self) -> list[str]:
         """The parakin source files this artefact runs: its module and everything it imports."""
         return sorted(str(p) for p in _closure(self.module))
 
+
+#: the end of a docstring's first sentence: a full stop and a space, not after "Fig.", "eq.", "e.g." ...
+_SENTENCE_END = re.compile(r"(?<!\bFig)(?<!\bFigs)(?<!\beq)(?<!\beqs)(?<!\bEq)(?<!\bvs)(?<!\be\.g)(?<!\bi\.e)"
+                           r"(?<!\bal)(?<!\bcf)(?<!\bSec)(?<!\bNo)\.\s")
 
 #: "study:name" -> Artefact, in declaration order (filled by the study modules' decorators)
 REGISTRY: dict[str, Artefact] = {}

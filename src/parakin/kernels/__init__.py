@@ -28,6 +28,7 @@ import inspect
 import os
 import sys
 import tempfile
+import threading
 import time
 from functools import cache, lru_cache
 from pathlib import Path
@@ -59,6 +60,7 @@ class Kernel:
     params: np.ndarray  #: float64 parameter vector passed as ``p`` to every kernel
     n_pose: int
     n_joints: int
+    home: np.ndarray | None = None  #: the mechanism's home pose (the default start), if given
 
 
 def enabled() -> bool:
@@ -96,6 +98,8 @@ def build(module: str, n_joints: int, n_pose: int) -> ModuleType:
     (numba itself only watches the file a function is defined in)."""
     import numba
 
+    if "NUMBA_THREADING_LAYER" not in os.environ:  # fork-safe (the pipeline forks worker processes);
+        numba.config.THREADING_LAYER = "workqueue"  # GNU OpenMP is not. No effect once a layer is running.
     template = (Path(__file__).parent / "_loops.py").read_text()
     batch = []
     for name in (*METHODS, "verify"):
@@ -103,9 +107,10 @@ def build(module: str, n_joints: int, n_pose: int) -> ModuleType:
         body = ("err[i] = verify_row(p, Q[i], X[i], flags[i])" if name == "verify"
                 else f"res[i] = {name}_row(p, Q[i], X0[i], opts, X[i], info[i])")
         if name != "verify":  # one pose, solved and checked in one call (the single-call path)
-            batch.append(f"@njit(**_O)\ndef {name}_one(p, q, x0, opts, x, info, flags, out):\n"
+            batch.append(f"@njit(**_O)\ndef {name}_one(p, q, x0, opts, x, info, out):\n"
+                         "    if not (_finite(q) and _finite(x0)):\n        info[0] = 999\n        return\n"
                          f"    out[0] = {name}_row(p, q, x0, opts, x, info)\n"
-                         "    out[1] = verify_row(p, q, x, flags)\n")
+                         "    out[1] = verify_row(p, q, x, info[4:])\n")
         for kind, loop, extra in (("serial", "range", ""), ("parallel", "prange", "parallel=True, ")):
             batch.append(f"@njit({extra}**_O)\ndef {name}_{kind}({args}):\n"
                          f"    for i in {loop}(Q.shape[0]):\n        {body}\n")
@@ -134,11 +139,23 @@ def _kernel(mech: Any) -> Kernel | None:
     get = getattr(mech, "kernel", None)
     if get is None or not enabled():
         return None
-    return get()
+    k = get()
+    if k is not None and k.home is None:
+        k = dataclasses.replace(k, home=np.asarray(mech.home(), dtype=float))
+    return k
 
 
 def _loops(kernel: Kernel) -> ModuleType:
     return build(kernel.module, kernel.n_joints, kernel.n_pose)
+
+
+def _parallel(n: int, parallel: bool | None) -> bool:
+    """Whether a batch of ``n`` rows runs on the prange driver: large batches, from the main thread
+    only (numba's ``workqueue`` layer, chosen in :func:`build` because it is fork-safe, must not be
+    entered from two threads at once; other threads get the serial driver, same results)."""
+    if parallel is None:
+        parallel = n >= PARALLEL_MIN_ROWS
+    return parallel and threading.current_thread() is threading.main_thread()
 
 
 def solve(mech: Any, method: str, joints: np.ndarray, x0: np.ndarray, tol: float, maxiter: int,
@@ -171,7 +188,7 @@ def solve(mech: Any, method: str, joints: np.ndarray, x0: np.ndarray, tol: float
     x = np.empty_like(x0)
     info = np.zeros((n, 4), dtype=np.int64)
     res = np.empty(n)
-    use_par = n >= PARALLEL_MIN_ROWS if parallel is None else parallel
+    use_par = _parallel(n, parallel)
     getattr(loops, f"{method}_{'parallel' if use_par else 'serial'}")(kernel.params, q, x0, opts, x, info, res)
     status = info[:, 0].copy()
     return FKResult(x=x, success=status >= 0, status=status, nit=info[:, 1].copy(), nfev=info[:, 2].copy(),
@@ -179,7 +196,28 @@ def solve(mech: Any, method: str, joints: np.ndarray, x0: np.ndarray, tol: float
                     message=summarize(status, maxiter))
 
 
-_INFO = np.zeros(4, dtype=np.int64)
+_OPTS: dict[tuple, np.ndarray] = {}  # (method, tol, maxiter, options) -> options vector (single-call path)
+_ONE: dict[tuple[str, str], Any] = {}  # (kernel module, method) -> compiled single-pose solve
+
+
+def _options(method: str, tol: float, maxiter: int, options: dict[str, Any]) -> np.ndarray | None:
+    try:
+        key = (method, tol, maxiter, *sorted(options.items()))
+        return _OPTS[key]
+    except TypeError:  # an unhashable option value
+        key = None
+    except KeyError:
+        pass
+    values = {**METHODS[method], **options, "tol": tol, "maxiter": maxiter}
+    try:
+        opts = np.array([float(values.get(k, 0.0)) for k in _OPTION_ORDER])
+    except (TypeError, ValueError, OverflowError):
+        return None
+    if method == "bfgs" and not float(values["maxls"]).is_integer():
+        return None
+    if key is not None and len(_OPTS) < 1000:
+        _OPTS[key] = opts
+    return opts
 
 
 def solve_one(mech: Any, method: str, joints: Any, x0: Any, tol: float, maxiter: int, options: dict[str, Any],
@@ -197,32 +235,35 @@ def solve_one(mech: Any, method: str, joints: Any, x0: Any, tol: float, maxiter:
     kernel = _kernel(mech)
     if kernel is None:
         return None
+    opts = _options(method, tol, maxiter, options)
+    if opts is None:
+        return None
     try:
         q = np.asarray(joints, dtype=float)
-        x0 = mech.home() if x0 is None else np.asarray(x0, dtype=float)
-        values = {**allowed, **options, "tol": tol, "maxiter": maxiter}
-        opts = np.array([float(values.get(k, 0.0)) for k in _OPTION_ORDER])
+        x0 = kernel.home if x0 is None else np.asarray(x0, dtype=float)
     except (TypeError, ValueError, OverflowError):
         return None
-    if (q.shape != (kernel.n_joints,) or x0.shape != (kernel.n_pose,) or not np.isfinite(q).all()
-            or not np.isfinite(x0).all() or (method == "bfgs" and not float(values["maxls"]).is_integer())):
+    if q.shape != (kernel.n_joints,) or x0.shape != (kernel.n_pose,):
+        return None
+    fn = _ONE.get((kernel.module, method))
+    if fn is None:
+        fn = _ONE[kernel.module, method] = getattr(_loops(kernel), f"{method}_one")
+    x = np.empty(kernel.n_pose)
+    info = np.zeros(6, dtype=np.int64)  # status, nit, nfev, njev, in domain, on assembly
+    out = np.empty(2)  # residual, joint error
+    fn(kernel.params, q, x0, opts, x, info, out)
+    if info[0] == 999:  # non-finite joints or start: the general path marks the row
         return None
     from parakin.solvers.result import FKResult, summarize
     from parakin.solvers.verify import default_joint_tol, judge_one
 
-    loops = _loops(kernel)
-    x = np.empty(kernel.n_pose)
-    info = _INFO.copy()
-    flags = np.zeros(2, dtype=np.int64)
-    out = np.empty(2)
-    getattr(loops, f"{method}_one")(kernel.params, q, x0, opts, x, info, flags, out)
     jtol = default_joint_tol(tol, options) if joint_tol is None else float(joint_tol)
-    status = judge_one(int(info[0]), bool(flags[0]), bool(flags[1]), float(out[1]), jtol)
+    status = judge_one(int(info[0]), bool(info[4]), bool(info[5]), float(out[1]), jtol)
     message = "converged" if status >= 0 else summarize(np.array([status]), maxiter)
     return FKResult(x=x, success=np.array(status >= 0), status=np.array(status, dtype=np.int64),
-                    nit=np.array(info[1]), nfev=np.array(info[2]), njev=np.array(info[3]),
-                    residual=np.array(out[0]), wall_time=time.perf_counter() - start, method=method, message=message,
-                    joint_error=np.array(out[1]))
+                    nit=info[1, ...].copy(), nfev=info[2, ...].copy(), njev=info[3, ...].copy(),
+                    residual=out[0, ...].copy(), wall_time=time.perf_counter() - start, method=method,
+                    message=message, joint_error=out[1, ...].copy())
 
 
 def verify_hooks(mech: Any, joints: np.ndarray, x: np.ndarray, *, parallel: bool | None = None):
@@ -236,7 +277,7 @@ def verify_hooks(mech: Any, joints: np.ndarray, x: np.ndarray, *, parallel: bool
     n = len(joints)
     flags = np.zeros((n, 2), dtype=np.int64)
     err = np.empty(n)
-    use_par = n >= PARALLEL_MIN_ROWS if parallel is None else parallel
+    use_par = _parallel(n, parallel)
     fn = loops.verify_parallel if use_par else loops.verify_serial
     fn(kernel.params, np.ascontiguousarray(joints, dtype=float), np.ascontiguousarray(x, dtype=float), flags, err)
     return flags[:, 0] == 1, err, flags[:, 1] == 1

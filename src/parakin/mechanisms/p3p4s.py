@@ -289,9 +289,12 @@ class P3P4S(Mechanism):
         """Compiled kernels (:mod:`parakin.kernels.p3p4s`); None for a subclass."""
         if type(self) is not P3P4S:
             return None
-        return Kernel("parakin.kernels.p3p4s", self._kernel_params, 3, 3)
+        return self._kernel
 
     @cached_property
+    def _kernel(self) -> Kernel:
+        return Kernel("parakin.kernels.p3p4s", self._kernel_params(), 3, 3, self.home())
+
     def _kernel_params(self) -> Array:
         return np.concatenate([[self.delta, self.L], self.e.ravel(), self.m.ravel()])
 

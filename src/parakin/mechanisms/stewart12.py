@@ -339,9 +339,12 @@ class Stewart12(Mechanism):
         convention; None for the other conventions and for subclasses."""
         if type(self) is not Stewart12 or self.convention != "euler_parameters":
             return None
-        return Kernel("parakin.kernels.stewart12", self._kernel_params, 6, 12)
+        return self._kernel
 
     @cached_property
+    def _kernel(self) -> Kernel:
+        return Kernel("parakin.kernels.stewart12", self._kernel_params(), 6, 12, self.home())
+
     def _kernel_params(self) -> Array:
         p = self.platform_points_local[list(self.leg_joint)]
         return np.concatenate([p.ravel(), self.base_points.ravel()])

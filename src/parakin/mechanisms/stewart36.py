@@ -359,9 +359,12 @@ class Stewart36(Mechanism):
         """Compiled kernels (:mod:`parakin.kernels.stewart36`); None for a subclass."""
         if type(self) is not Stewart36:
             return None
-        return Kernel("parakin.kernels.stewart36", self._kernel_params, 6, 6)
+        return self._kernel
 
     @cached_property
+    def _kernel(self) -> Kernel:
+        return Kernel("parakin.kernels.stewart36", self._kernel_params(), 6, 6, self.home())
+
     def _kernel_params(self) -> Array:
         return np.concatenate([self.top_points[LEG_TOP].ravel(), self.base_points.ravel()])
 

@@ -379,9 +379,12 @@ class UPS2(Mechanism):
         """Compiled kernels (:mod:`parakin.kernels.ups2`); None for a subclass."""
         if type(self) is not UPS2:
             return None
-        return Kernel("parakin.kernels.ups2", self._kernel_params, 3, 3)
+        return self._kernel
 
     @cached_property
+    def _kernel(self) -> Kernel:
+        return Kernel("parakin.kernels.ups2", self._kernel_params(), 3, 3, self.home())
+
     def _kernel_params(self) -> Array:
         return np.concatenate([[self.a, self.k, self.c, self.h, float(self.branch)], self.home_lengths])
 

@@ -23,6 +23,13 @@ its last finite iterate.
 
 torch is an optional dependency (``pip install parakin[nn]``): without it this module still
 imports, :func:`gpu_available` is False and the solver raises ImportError.
+
+Why the torch ports stay beside the compiled kernels (:mod:`parakin.kernels`, numba): they are the
+GPU path of the solver atlas (``torch.func`` Jacobians, ``solve_ex`` on CUDA). On the CPU the
+numba loops are faster (issue 17: the Stewart36 Newton kernel solves a pose in about 2 us, the
+batched numpy/torch paths need 5-25 us), but numba's CUDA target needs a CUDA toolkit and
+kernels written for it, which no machine of this project could build or test; the ports are
+checked against the numpy mechanisms by ``tests/test_torch_newton.py``.
 """
 
 from __future__ import annotations

@@ -139,11 +139,13 @@ def compute_atlas(config: dict) -> pd.DataFrame:
 
     cfg = config[KEY]["solver_atlas"]
     cases = atlas_cases(config)
-    done = Progress("atlas", len(cases) * len(SCENARIOS), "mechanism x scenario blocks", step=1 / 16)
+    done = Progress("atlas", len(cases) * len(SCENARIOS), "mechanism x scenario blocks", step=0.1)
+    started = []
 
     def progress(what: str) -> None:  # called as a block starts: report the blocks finished before it
-        if done.done:
+        if started:
             done.tick()
+        started.append(what)
         print(f"  atlas: {what} ...", file=sys.stderr, flush=True)
 
     table = run_atlas(
