@@ -142,7 +142,7 @@ def test_committed_atlas_figure_is_what_the_committed_table_draws(tmp_path):
 
 def test_committed_atlas_covers_every_solver_and_mechanism():
     df = pd.read_csv(ROOT / "figures" / "extra_solver_atlas.csv")
-    assert set(df["mechanism"]) == {"3p4s", "2ups", "stewart12", "stewart36"}
+    assert set(df["mechanism"]) == {"3p4s", "2ups", "stewart12", "stewart36", "stewart66"}
     for mech, g in df.groupby("mechanism"):
         methods = set(g["method"])
         assert {"newton", "broyden", "bfgs", "lm", "pso", "scipy-root"} <= methods, mech
@@ -182,7 +182,7 @@ def test_bench_cli_atlas_quick_json(tmp_path):
                           "--outdir", str(tmp_path)], capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr[-2000:]
     rows = json.loads(res.stdout)["atlas"]
-    assert {r["mechanism"] for r in rows} == {"3p4s", "2ups", "stewart12", "stewart36"}
+    assert {r["mechanism"] for r in rows} == {"3p4s", "2ups", "stewart12", "stewart36", "stewart66"}
     assert (tmp_path / "extra_solver_atlas.png").exists()
     bad = subprocess.run([sys.executable, "-m", "parakin.cli", "bench", "nonsense"], capture_output=True, text=True)
     assert bad.returncode == 2 and "unknown benchmark 'nonsense'" in bad.stderr
