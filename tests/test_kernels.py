@@ -218,3 +218,16 @@ def test_threads_get_the_serial_driver_and_same_results():
     for res in out:
         np.testing.assert_array_equal(res.x, ref.x)
         np.testing.assert_array_equal(res.status, ref.status)
+
+
+def test_prune_removes_only_older_builds_of_the_same_module(tmp_path):
+    (tmp_path / "__pycache__").mkdir()
+    old, new, other, sub = "0" * 16, "1" * 16, "2" * 16, "3" * 16
+    stems = (f"parakin_loops_a_b_{old}", f"parakin_loops_a_b_{new}", f"parakin_loops_a_bc_{other}",
+             f"parakin_loops_a_b_c_{sub}")
+    for stem in stems:
+        (tmp_path / f"{stem}.py").write_text("")
+        (tmp_path / "__pycache__" / f"{stem}.f-1.py311.nbi").write_text("")
+    kernels._prune(tmp_path, "parakin_loops_a_b")
+    assert sorted(p.stem for p in tmp_path.glob("*.py")) == sorted(stems[2:])
+    assert sorted(p.name.split(".")[0] for p in (tmp_path / "__pycache__").iterdir()) == sorted(stems[2:])
