@@ -16,6 +16,7 @@ from parakin import kernels
 from parakin.mechanisms import P3P4S, UPS2, Stewart12, Stewart36
 from parakin.mechanisms.stewart12 import DriveMode
 from parakin.solvers import Status, solve_fk
+from parakin.solvers import compiled
 
 pytest.importorskip("numba")
 
@@ -102,8 +103,8 @@ def test_serial_and_parallel_identical(method):
     truth = _poses(mech, 300, seed=3, spread=0.2)
     joints = mech.ik(truth)
     x0 = np.tile(mech.home(), (len(joints), 1))
-    a = kernels.solve(mech, method, joints, x0, 1e-10, 50, {}, parallel=False)
-    b = kernels.solve(mech, method, joints, x0, 1e-10, 50, {}, parallel=True)
+    a = compiled.solve(mech, method, joints, x0, 1e-10, 50, {}, parallel=False)
+    b = compiled.solve(mech, method, joints, x0, 1e-10, 50, {}, parallel=True)
     for f in ("x", "status", "nit", "nfev", "njev", "residual"):
         np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
     ha = kernels.verify_hooks(mech, joints, a.x, parallel=False)

@@ -155,10 +155,12 @@ def test_a_toy_study_runs_from_one_registration_line(tmp_path):
     """A new mechanism with its own paper: one line in the config's `studies`, nothing else shared."""
     work = _workdir(tmp_path)
     shutil.copy(ROOT / "tests" / "data" / "toy_study.py", work / "toy_study.py")
-    (work / "toy.yaml").write_text("studies: [toy_study]\nrecord_dir: null\n")
+    # folders with a space: every path reaches the shell quoted
+    (work / "toy.yaml").write_text("studies: [toy_study]\nrecord_dir: null\n"
+                                   "figures_dir: 'build/quick run/figures'\ngenerated_dir: 'build/quick run/generated'\n")
     env = {**__import__("os").environ, "PYTHONPATH": str(work)}
     res = subprocess.run([sys.executable, "-m", "snakemake", "--cores", "2", "--configfile", "config/quick.yaml",
                           "toy.yaml", "-q"], cwd=work, capture_output=True, text=True, timeout=600, env=env)
     assert res.returncode == 0, res.stdout[-2000:] + res.stderr[-2000:]
-    table = pd.read_csv(work / "build" / "quick" / "figures" / "toy_study" / "table1.csv")
+    table = pd.read_csv(work / "build" / "quick run" / "figures" / "toy_study" / "table1.csv")
     assert len(table) == 10 and table["error_m"].max() < 1e-9

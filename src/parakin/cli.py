@@ -487,14 +487,16 @@ def cmd_bench(args) -> int:
 
     config = load_config([DEFAULT_CONFIG, QUICK_CONFIG] if args.quick else [DEFAULT_CONFIG])
     root = Path(args.outdir) if args.outdir else Path(config["figures_dir"])
-    names = args.name or ["atlas", *BENCHES]
+    names = args.name or ["atlas", "kernels", *BENCHES]
     tables = []
     for name in names:
-        if name not in BENCHES and name != "atlas":
-            raise ValueError(f"unknown benchmark {name!r}; known: atlas, {', '.join(BENCHES)}")
+        if name not in BENCHES and name not in ("atlas", "kernels"):
+            raise ValueError(f"unknown benchmark {name!r}; known: atlas, kernels, {', '.join(BENCHES)}")
         print(f"parakin bench: {name} ...", file=sys.stderr)
         if name == "atlas":
             paths = extras.ARTEFACTS["solver_atlas"](config, root)
+        elif name == "kernels":  # the compiled kernels' goals: ratios against scipy in this run
+            paths = extras.kernel_goals(config, root)
         else:
             paper, artefact = BENCHES[name]
             paths = PAPERS[paper].ARTEFACTS[artefact](config, root / paper)
@@ -715,7 +717,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_fk)
 
     p = sub.add_parser("bench", help="run benchmarks (every solver, same inputs, ratios against scipy in one run)")
-    p.add_argument("name", nargs="*", help=f"benchmark(s): atlas, {', '.join(BENCHES)} (default: all, and the summary)")
+    p.add_argument("name", nargs="*", help=f"benchmark(s): atlas, kernels, {', '.join(BENCHES)} (default: all, and the summary)")
     p.add_argument("--quick", action="store_true", help="small sizes (config/quick.yaml)")
     p.add_argument("--outdir", default=None, help="figures folder (default: figures_dir of the config)")
     p.add_argument("--json", action="store_true", help="print the tables as JSON records")

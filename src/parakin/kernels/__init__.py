@@ -150,7 +150,8 @@ def _prune(folder: Path, prefix: str) -> None:
                 pass
 
 
-def _kernel(mech: Any) -> Kernel | None:
+def kernel_of(mech: Any) -> Kernel | None:
+    """``mech.kernel()`` (with its home filled in) where the compiled path is enabled, else None."""
     get = getattr(mech, "kernel", None)
     if get is None or not enabled():
         return None
@@ -160,11 +161,12 @@ def _kernel(mech: Any) -> Kernel | None:
     return k
 
 
-def _loops(kernel: Kernel) -> ModuleType:
+def loops_of(kernel: Kernel) -> ModuleType:
+    """The compiled solver loops over ``kernel``'s module (built once, cached on disk)."""
     return build(kernel.module, kernel.n_joints, kernel.n_pose)
 
 
-def _parallel(n: int, parallel: bool | None) -> bool:
+def use_parallel(n: int, parallel: bool | None) -> bool:
     """Whether a batch of ``n`` rows runs on the prange driver: large batches, from the main thread
     only (numba's ``workqueue`` layer, chosen in :func:`build` because it is fork-safe, must not be
     entered from two threads at once; other threads get the serial driver, same results)."""
@@ -173,135 +175,18 @@ def _parallel(n: int, parallel: bool | None) -> bool:
     return parallel and threading.current_thread() is threading.main_thread()
 
 
-def solve(mech: Any, method: str, joints: np.ndarray, x0: np.ndarray, tol: float, maxiter: int,
-          options: dict[str, Any], *, parallel: bool | None = None):
-    """The compiled solve of the flat batch (``joints (N, m)``, ``x0 (N, n)``) as an
-    :class:`~parakin.solvers.result.FKResult` (not yet verified), or ``None`` where the compiled
-    path does not apply. ``parallel``: None = by batch size (:data:`PARALLEL_MIN_ROWS`)."""
-    if method not in METHODS or options.get("callback") is not None:
-        return None
-    allowed = METHODS[method]
-    if any(k not in allowed and k != "callback" for k in options):
-        return None
-    kernel = _kernel(mech)
-    if kernel is None:
-        return None
-    from parakin.solvers.result import FKResult, summarize
-
-    start = time.perf_counter()
-    values = {**allowed, **{k: v for k, v in options.items() if k != "callback"}, "tol": tol, "maxiter": maxiter}
-    try:
-        opts = np.array([float(values.get(k, 0.0)) for k in _OPTION_ORDER])
-    except (TypeError, ValueError):  # let the numpy solver report a bad option
-        return None
-    if method == "bfgs" and not float(values["maxls"]).is_integer():
-        return None
-    loops = _loops(kernel)
-    n = len(joints)
-    q = np.ascontiguousarray(joints, dtype=float)
-    x0 = np.ascontiguousarray(x0, dtype=float)
-    x = np.empty_like(x0)
-    info = np.zeros((n, 4), dtype=np.int64)
-    res = np.empty(n)
-    use_par = _parallel(n, parallel)
-    getattr(loops, f"{method}_{'parallel' if use_par else 'serial'}")(kernel.params, q, x0, opts, x, info, res)
-    status = info[:, 0].copy()
-    return FKResult(x=x, success=status >= 0, status=status, nit=info[:, 1].copy(), nfev=info[:, 2].copy(),
-                    njev=info[:, 3].copy(), residual=res, wall_time=time.perf_counter() - start, method=method,
-                    message=summarize(status, maxiter))
-
-
-_OPTS: dict[tuple, np.ndarray] = {}  # (method, tol, maxiter, options) -> options vector (single-call path)
-_ONE: dict[tuple[str, str], Any] = {}  # (kernel module, method) -> compiled single-pose solve
-
-
-def _options(method: str, tol: float, maxiter: int, options: dict[str, Any]) -> np.ndarray | None:
-    try:
-        key = (method, tol, maxiter, *sorted(options.items()))
-        return _OPTS[key]
-    except TypeError:  # an unhashable option value
-        key = None
-    except KeyError:
-        pass
-    values = {**METHODS[method], **options, "tol": tol, "maxiter": maxiter}
-    try:
-        opts = np.array([float(values.get(k, 0.0)) for k in _OPTION_ORDER])
-    except (TypeError, ValueError, OverflowError):
-        return None
-    if method == "bfgs" and not float(values["maxls"]).is_integer():
-        return None
-    if key is not None and len(_OPTS) < 1000:
-        _OPTS[key] = opts
-    return opts
-
-
-def solve_one(mech: Any, method: str, joints: Any, x0: Any, tol: float, maxiter: int, options: dict[str, Any],
-              joint_tol: float | None, start: float):
-    """The single-call path of :func:`parakin.solvers.solve_fk`: one joint vector (1-D) from one
-    start (1-D or None = home), solved and verified in one compiled call, the status then decided
-    by :func:`parakin.solvers.verify.judge_one` (the rules of :func:`~parakin.solvers.verify.verify`).
-    Returns the 0-d :class:`~parakin.solvers.result.FKResult` or ``None`` where this path does
-    not apply (then the general path runs). ``start``: the caller's ``perf_counter`` at entry."""
-    if method not in METHODS or not (isinstance(joints, (np.ndarray, list, tuple))):
-        return None
-    allowed = METHODS[method]
-    if any(k not in allowed for k in options):
-        return None
-    kernel = _kernel(mech)
-    if kernel is None:
-        return None
-    opts = _options(method, tol, maxiter, options)
-    if opts is None:
-        return None
-    try:
-        q = np.asarray(joints, dtype=float)
-        x0 = kernel.home if x0 is None else np.asarray(x0, dtype=float)
-    except (TypeError, ValueError, OverflowError):
-        return None
-    if q.shape != (kernel.n_joints,) or x0.shape != (kernel.n_pose,):
-        return None
-    fn = _ONE.get((kernel.module, method))
-    if fn is None:
-        fn = _ONE[kernel.module, method] = getattr(_loops(kernel), f"{method}_one")
-    x = np.empty(kernel.n_pose)
-    info = np.zeros(6, dtype=np.int64)  # status, nit, nfev, njev, in domain, on assembly
-    out = np.empty(2)  # residual, joint error
-    fn(kernel.params, q, x0, opts, x, info, out)
-    if info[0] == 999:  # non-finite joints or start: the general path marks the row
-        return None
-    if not _LATE:
-        _late_imports()
-    jtol = _LATE["default_joint_tol"](tol, options) if joint_tol is None else float(joint_tol)
-    status = _LATE["judge_one"](int(info[0]), bool(info[4]), bool(info[5]), float(out[1]), jtol)
-    message = "converged" if status >= 0 else _LATE["summarize"](np.array([status]), maxiter)
-    return _LATE["FKResult"](x=x, success=np.array(status >= 0), status=np.array(status, dtype=np.int64),
-                             nit=info[1, ...].copy(), nfev=info[2, ...].copy(), njev=info[3, ...].copy(),
-                             residual=out[0, ...].copy(), wall_time=time.perf_counter() - start, method=method,
-                             message=message, joint_error=out[1, ...].copy())
-
-
-_LATE: dict[str, Any] = {}  # parakin.solvers names, imported on first use (they import this module)
-
-
-def _late_imports() -> None:
-    from parakin.solvers.result import FKResult, summarize
-    from parakin.solvers.verify import default_joint_tol, judge_one
-
-    _LATE.update(FKResult=FKResult, summarize=summarize, default_joint_tol=default_joint_tol, judge_one=judge_one)
-
-
 def verify_hooks(mech: Any, joints: np.ndarray, x: np.ndarray, *, parallel: bool | None = None):
     """``(in_domain, joint_error, on_assembly)`` of the flat rows by the compiled kernels, or
     ``None`` without a kernel: what :func:`parakin.solvers.verify.verify` otherwise asks the
     mechanism's numpy methods. ``joint_error`` is inf outside the domain, ``on_assembly`` False."""
-    kernel = _kernel(mech)
+    kernel = kernel_of(mech)
     if kernel is None:
         return None
-    loops = _loops(kernel)
+    loops = loops_of(kernel)
     n = len(joints)
     flags = np.zeros((n, 2), dtype=np.int64)
     err = np.empty(n)
-    use_par = _parallel(n, parallel)
+    use_par = use_parallel(n, parallel)
     fn = loops.verify_parallel if use_par else loops.verify_serial
     fn(kernel.params, np.ascontiguousarray(joints, dtype=float), np.ascontiguousarray(x, dtype=float), flags, err)
     return flags[:, 0] == 1, err, flags[:, 1] == 1

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from parakin import kernels
+from parakin.solvers import compiled
 from parakin.errors import ShapeError
 from parakin.mechanisms.base import Array, Mechanism
 from parakin.solvers.baseline import scipy_root
@@ -168,7 +168,7 @@ def solve_fk(
     start = time.perf_counter()
     _check_settings(tol, maxiter, joint_tol)
     if fn is _COMPILED.get(method) and "callback" not in options:  # one pose, compiled: one call
-        one = kernels.solve_one(mech, method, joints, x0, tol, int(maxiter), options, joint_tol, start)
+        one = compiled.solve_one(mech, method, joints, x0, tol, int(maxiter), options, joint_tol, start)
         if one is not None:
             return one
     batch, flat_q, flat_x = flatten_problem(mech, joints, x0, tol, maxiter)
@@ -188,7 +188,7 @@ def solve_fk(
     else:
         result = None
         if fn is _COMPILED.get(method):  # the built-in method, not one registered over it
-            result = kernels.solve(mech, method, flat_q, flat_x, tol, int(maxiter), options)
+            result = compiled.solve(mech, method, flat_q, flat_x, tol, int(maxiter), options)
         if result is None:  # no kernel, or a callback / option the compiled loop does not take
             result = fn(mech, flat_q, flat_x, tol=tol, maxiter=int(maxiter), **options)
         result = verify(mech, flat_q, result, jtol, int(maxiter))

@@ -1,0 +1,120 @@
+"""The compiled solve behind :func:`parakin.solvers.solve_fk`: the kernels' loops
+(:mod:`parakin.kernels`) run on a flat batch or one pose and their results returned as
+:class:`~parakin.solvers.result.FKResult`, verified by the same rules as every other solve
+(:mod:`parakin.solvers.verify`). Kernels know nothing of solvers; this module joins the two."""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from parakin.kernels import _OPTION_ORDER, METHODS, kernel_of, loops_of, use_parallel
+from parakin.solvers.result import FKResult, summarize
+from parakin.solvers.verify import default_joint_tol, judge_one
+
+__all__ = ["solve", "solve_one"]
+
+
+def solve(mech: Any, method: str, joints: np.ndarray, x0: np.ndarray, tol: float, maxiter: int,
+          options: dict[str, Any], *, parallel: bool | None = None):
+    """The compiled solve of the flat batch (``joints (N, m)``, ``x0 (N, n)``) as an
+    :class:`~parakin.solvers.result.FKResult` (not yet verified), or ``None`` where the compiled
+    path does not apply. ``parallel``: None = by batch size (:data:`PARALLEL_MIN_ROWS`)."""
+    if method not in METHODS or options.get("callback") is not None:
+        return None
+    allowed = METHODS[method]
+    if any(k not in allowed and k != "callback" for k in options):
+        return None
+    kernel = kernel_of(mech)
+    if kernel is None:
+        return None
+    start = time.perf_counter()
+    values = {**allowed, **{k: v for k, v in options.items() if k != "callback"}, "tol": tol, "maxiter": maxiter}
+    try:
+        opts = np.array([float(values.get(k, 0.0)) for k in _OPTION_ORDER])
+    except (TypeError, ValueError):  # let the numpy solver report a bad option
+        return None
+    if method == "bfgs" and not float(values["maxls"]).is_integer():
+        return None
+    loops = loops_of(kernel)
+    n = len(joints)
+    q = np.ascontiguousarray(joints, dtype=float)
+    x0 = np.ascontiguousarray(x0, dtype=float)
+    x = np.empty_like(x0)
+    info = np.zeros((n, 4), dtype=np.int64)
+    res = np.empty(n)
+    use_par = use_parallel(n, parallel)
+    getattr(loops, f"{method}_{'parallel' if use_par else 'serial'}")(kernel.params, q, x0, opts, x, info, res)
+    status = info[:, 0].copy()
+    return FKResult(x=x, success=status >= 0, status=status, nit=info[:, 1].copy(), nfev=info[:, 2].copy(),
+                    njev=info[:, 3].copy(), residual=res, wall_time=time.perf_counter() - start, method=method,
+                    message=summarize(status, maxiter))
+
+
+_OPTS: dict[tuple, np.ndarray] = {}  # (method, tol, maxiter, options) -> options vector (single-call path)
+_ONE: dict[tuple[str, str], Any] = {}  # (kernel module, method) -> compiled single-pose solve
+
+
+def _options(method: str, tol: float, maxiter: int, options: dict[str, Any]) -> np.ndarray | None:
+    try:
+        key = (method, tol, maxiter, *sorted(options.items()))
+        return _OPTS[key]
+    except TypeError:  # an unhashable option value
+        key = None
+    except KeyError:
+        pass
+    values = {**METHODS[method], **options, "tol": tol, "maxiter": maxiter}
+    try:
+        opts = np.array([float(values.get(k, 0.0)) for k in _OPTION_ORDER])
+    except (TypeError, ValueError, OverflowError):
+        return None
+    if method == "bfgs" and not float(values["maxls"]).is_integer():
+        return None
+    if key is not None and len(_OPTS) < 1000:
+        _OPTS[key] = opts
+    return opts
+
+
+def solve_one(mech: Any, method: str, joints: Any, x0: Any, tol: float, maxiter: int, options: dict[str, Any],
+              joint_tol: float | None, start: float):
+    """The single-call path of :func:`parakin.solvers.solve_fk`: one joint vector (1-D) from one
+    start (1-D or None = home), solved and verified in one compiled call, the status then decided
+    by :func:`parakin.solvers.verify.judge_one` (the rules of :func:`~parakin.solvers.verify.verify`).
+    Returns the 0-d :class:`~parakin.solvers.result.FKResult` or ``None`` where this path does
+    not apply (then the general path runs). ``start``: the caller's ``perf_counter`` at entry."""
+    if method not in METHODS or not (isinstance(joints, (np.ndarray, list, tuple))):
+        return None
+    allowed = METHODS[method]
+    if any(k not in allowed for k in options):
+        return None
+    kernel = kernel_of(mech)
+    if kernel is None:
+        return None
+    opts = _options(method, tol, maxiter, options)
+    if opts is None:
+        return None
+    try:
+        q = np.asarray(joints, dtype=float)
+        x0 = kernel.home if x0 is None else np.asarray(x0, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        return None
+    if q.shape != (kernel.n_joints,) or x0.shape != (kernel.n_pose,):
+        return None
+    fn = _ONE.get((kernel.module, method))
+    if fn is None:
+        fn = _ONE[kernel.module, method] = getattr(loops_of(kernel), f"{method}_one")
+    x = np.empty(kernel.n_pose)
+    info = np.zeros(6, dtype=np.int64)  # status, nit, nfev, njev, in domain, on assembly
+    out = np.empty(2)  # residual, joint error
+    fn(kernel.params, q, x0, opts, x, info, out)
+    if info[0] == 999:  # non-finite joints or start: the general path marks the row
+        return None
+    jtol = default_joint_tol(tol, options) if joint_tol is None else float(joint_tol)
+    status = judge_one(int(info[0]), bool(info[4]), bool(info[5]), float(out[1]), jtol)
+    message = "converged" if status >= 0 else summarize(np.array([status]), maxiter)
+    return FKResult(x=x, success=np.array(status >= 0), status=np.array(status, dtype=np.int64),
+                             nit=info[1, ...].copy(), nfev=info[2, ...].copy(), njev=info[3, ...].copy(),
+                             residual=out[0, ...].copy(), wall_time=time.perf_counter() - start, method=method,
+                             message=message, joint_error=out[1, ...].copy())
