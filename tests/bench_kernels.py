@@ -35,7 +35,9 @@ def test_single_call(benchmark, problem, method):
 def test_batched(benchmark, problem, method):
     mech, q = problem
     solve_fk(mech, q[:100], method=method)
-    res = benchmark.pedantic(solve_fk, args=(mech, q), kwargs={"method": method}, rounds=3, iterations=1)
+    res = benchmark.pedantic(
+        solve_fk, args=(mech, q), kwargs={"method": method}, rounds=3, iterations=1
+    )
     benchmark.extra_info["solves_per_s"] = len(q) / benchmark.stats.stats.min
     assert np.mean(res.success) > 0.9
 
@@ -43,4 +45,6 @@ def test_batched(benchmark, problem, method):
 def test_stewart36_all_solutions(benchmark):
     mech = MECHS["stewart36"]
     _, q = _sample(mech, 500, seed=19)
-    benchmark.pedantic(solve_fk, args=(mech, q), kwargs={"method": "all-solutions"}, rounds=1, iterations=1)
+    benchmark.pedantic(
+        solve_fk, args=(mech, q), kwargs={"method": "all-solutions"}, rounds=1, iterations=1
+    )

@@ -13,11 +13,19 @@ import pandas as pd
 import pytest
 from matplotlib.testing.compare import compare_images
 
-from parakin.studies import solver_atlas as extras
-from parakin.atlas import AtlasCase, AtlasSolver, Scenario, evaluate, make_scenario, pose_error, run_atlas
+from parakin.atlas import (
+    AtlasCase,
+    AtlasSolver,
+    Scenario,
+    evaluate,
+    make_scenario,
+    pose_error,
+    run_atlas,
+)
 from parakin.io import is_timing_column
-from parakin.mechanisms import P3P4S, Stewart36, UPS2
+from parakin.mechanisms import P3P4S, UPS2, Stewart36
 from parakin.solvers import Status, solve_fk
+from parakin.studies import solver_atlas as extras
 from parakin.workspace import sample_reachable
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -44,7 +52,11 @@ def test_converged_on_the_mirror_assembly_is_a_failure():
     assert res.message.endswith("5 converged on another assembly")
     row = evaluate(m, AtlasSolver("Newton", "newton"), sc, tol=1e-10, success_tol=1e-6)
     assert row["success_rate"] == 0.0
-    assert row["wrong_assembly_rate"] == 1.0 and row["n_wrong_assembly"] == 5 and row["n_wrong_answer"] == 0
+    assert (
+        row["wrong_assembly_rate"] == 1.0
+        and row["n_wrong_assembly"] == 5
+        and row["n_wrong_answer"] == 0
+    )
     # and from the truth itself the same rows are successes
     ok = evaluate(m, AtlasSolver("Newton", "newton"), Scenario("c", q, truth, truth, np.ones(5)))
     assert ok["success_rate"] == 1.0 and ok["wrong_assembly_rate"] == 0.0
@@ -59,7 +71,9 @@ def test_other_branch_of_the_closed_form_is_a_wrong_assembly():
     lower = evaluate(m, AtlasSolver("closed, lower", "closed-form", {"branch": "lower"}), sc)
     assert upper["success_rate"] == 1.0
     assert lower["success_rate"] == 0.0 and lower["wrong_assembly_rate"] == 1.0
-    assert np.all(solve_fk(m, q, method="closed-form", branch="lower").status == Status.WRONG_ASSEMBLY)
+    assert np.all(
+        solve_fk(m, q, method="closed-form", branch="lower").status == Status.WRONG_ASSEMBLY
+    )
 
 
 def test_pose_error_compares_angles_modulo_2pi():
@@ -83,7 +97,10 @@ def test_all_solutions_method_returns_the_solution_nearest_the_start():
     sols = m.fk_all(q)
     above = np.where(np.nan_to_num(sols[..., 5]) > 0, 0.0, np.inf)
     lo, hi = m.pose_bounds()
-    dist = np.sqrt(np.sum((m.pose_difference(sols, m.mirror(truth)[:, None]) / (hi - lo)) ** 2, -1)) + above
+    dist = (
+        np.sqrt(np.sum((m.pose_difference(sols, m.mirror(truth)[:, None]) / (hi - lo)) ** 2, -1))
+        + above
+    )
     nearest = sols[np.arange(len(q)), np.nanargmin(dist, -1)]
     assert np.max(pose_error(m, far.x, nearest)) < 1e-9
     with pytest.raises(ValueError, match="no all-solutions"):
@@ -112,12 +129,22 @@ def test_scenarios_are_seeded_and_have_exact_references():
 
 def _small_atlas() -> pd.DataFrame:
     m = P3P4S()
-    solvers = (AtlasSolver("Newton", "newton"), AtlasSolver("PSO", "pso", {"swarm": 10}, maxiter=20, seed=3,
-                                                            max_rows=4, single_calls=2),
-               AtlasSolver("closed form", "closed-form"), AtlasSolver("scipy", "scipy-root", batched=False))
+    solvers = (
+        AtlasSolver("Newton", "newton"),
+        AtlasSolver("PSO", "pso", {"swarm": 10}, maxiter=20, seed=3, max_rows=4, single_calls=2),
+        AtlasSolver("closed form", "closed-form"),
+        AtlasSolver("scipy", "scipy-root", batched=False),
+    )
     case = AtlasCase("3p4s", m, m.pose_bounds(), solvers)
-    return run_atlas([case], lambda s: np.random.default_rng(zlib.crc32(s.encode())), n=12,
-                     n_single=2, n_batch=50, repeats=1, pool_factor=3)
+    return run_atlas(
+        [case],
+        lambda s: np.random.default_rng(zlib.crc32(s.encode())),
+        n=12,
+        n_single=2,
+        n_batch=50,
+        repeats=1,
+        pool_factor=3,
+    )
 
 
 def test_atlas_reproduces_from_seed_and_reports_ratios():
@@ -127,9 +154,15 @@ def test_atlas_reproduces_from_seed_and_reports_ratios():
     assert set(a["scenario"]) == {"nominal", "cold", "noisy", "near-singular"}
     nominal = a[a["scenario"] == "nominal"].set_index("solver")
     assert nominal.loc["scipy", "speedup_per_solve"] == pytest.approx(1.0)
-    assert nominal.loc["Newton", "success_rate"] == 1.0 and nominal.loc["closed form", "success_rate"] == 1.0
+    assert (
+        nominal.loc["Newton", "success_rate"] == 1.0
+        and nominal.loc["closed form", "success_rate"] == 1.0
+    )
     assert nominal.loc["PSO", "n"] == 4  # row cap
-    assert np.isfinite(nominal["median_latency_us"]).all() and np.isfinite(nominal["throughput_per_s"]).all()
+    assert (
+        np.isfinite(nominal["median_latency_us"]).all()
+        and np.isfinite(nominal["throughput_per_s"]).all()
+    )
     assert a[a["scenario"] != "nominal"]["median_latency_us"].isna().all()
 
 
@@ -137,7 +170,9 @@ def test_atlas_reproduces_from_seed_and_reports_ratios():
 def test_committed_atlas_figure_is_what_the_committed_table_draws(tmp_path):
     df = pd.read_csv(ROOT / "figures" / "extra_solver_atlas.csv")
     path = extras.atlas_figure(df, tmp_path / "extra_solver_atlas.png")
-    assert compare_images(str(ROOT / "figures" / "extra_solver_atlas.png"), str(path), tol=2.0) is None
+    assert (
+        compare_images(str(ROOT / "figures" / "extra_solver_atlas.png"), str(path), tol=2.0) is None
+    )
 
 
 def test_committed_atlas_covers_every_solver_and_mechanism():
@@ -162,7 +197,9 @@ def test_readme_quotes_the_generated_benchmark_block():
     readme = (ROOT / "README.md").read_text()
     bench = (ROOT / "figures" / "benchmarks.md").read_text()
     assert extras.readme_block(readme) == extras.readme_block(bench)
-    res = subprocess.run([sys.executable, "-m", "parakin.cli", "readme", "--check"], capture_output=True, text=True)
+    res = subprocess.run(
+        [sys.executable, "-m", "parakin.cli", "readme", "--check"], capture_output=True, text=True
+    )
     assert res.returncode == 0, res.stdout + res.stderr
 
 
@@ -178,13 +215,29 @@ def test_sync_readme_replaces_only_the_block(tmp_path):
 
 
 def test_bench_cli_atlas_quick_json(tmp_path):
-    res = subprocess.run([sys.executable, "-m", "parakin.cli", "bench", "atlas", "--quick", "--json",
-                          "--outdir", str(tmp_path)], capture_output=True, text=True, timeout=600)
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "parakin.cli",
+            "bench",
+            "atlas",
+            "--quick",
+            "--json",
+            "--outdir",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert res.returncode == 0, res.stderr[-2000:]
     rows = json.loads(res.stdout)["atlas"]
     assert {r["mechanism"] for r in rows} == {"3p4s", "2ups", "stewart12", "stewart36", "stewart66"}
     assert (tmp_path / "extra_solver_atlas.png").exists()
-    bad = subprocess.run([sys.executable, "-m", "parakin.cli", "bench", "nonsense"], capture_output=True, text=True)
+    bad = subprocess.run(
+        [sys.executable, "-m", "parakin.cli", "bench", "nonsense"], capture_output=True, text=True
+    )
     assert bad.returncode == 2 and "unknown benchmark 'nonsense'" in bad.stderr
 
 
@@ -192,7 +245,9 @@ def test_report_section_is_computed_from_the_atlas_table(tmp_path):
     """extras.summary reads every number from the CSV: change the table, the text follows."""
     df = pd.read_csv(ROOT / "figures" / "extra_solver_atlas.csv")
     text = extras.summary(ROOT / "figures")
-    newton = df[(df["scenario"] == "nominal") & (df["method"] == "newton") & (df["mechanism"] == "3p4s")].iloc[0]
+    newton = df[
+        (df["scenario"] == "nominal") & (df["method"] == "newton") & (df["mechanism"] == "3p4s")
+    ].iloc[0]
     assert f"3p4s {newton['throughput_per_s']:.3g} solves/s" in text
     df.loc[(df["method"] == "newton") & (df["mechanism"] == "3p4s"), "throughput_per_s"] = 12345.0
     df.to_csv(tmp_path / "extra_solver_atlas.csv", index=False)
@@ -203,11 +258,25 @@ def test_report_section_is_computed_from_the_atlas_table(tmp_path):
 
 def test_recommendation_prefers_the_fastest_of_the_most_reliable():
     rows = []
-    for solver, success, speed in [("slow exact", 1.0, 10.0), ("fast almost", 0.997, 1000.0), ("fastest bad", 0.9, 1e6)]:
+    for solver, success, speed in [
+        ("slow exact", 1.0, 10.0),
+        ("fast almost", 0.997, 1000.0),
+        ("fastest bad", 0.9, 1e6),
+    ]:
         for scenario in ("nominal", "cold"):
-            rows.append({"mechanism": "m", "solver": solver, "scenario": scenario,
-                         "success_rate": success if scenario == "nominal" else 1.0 - (solver == "slow exact") * 0.5,
-                         "throughput_per_s": speed})
+            rows.append(
+                {
+                    "mechanism": "m",
+                    "solver": solver,
+                    "scenario": scenario,
+                    "success_rate": success
+                    if scenario == "nominal"
+                    else 1.0 - (solver == "slow exact") * 0.5,
+                    "throughput_per_s": speed,
+                }
+            )
     rec = extras.recommend(pd.DataFrame(rows)).set_index("mechanism")
-    assert rec.loc["m", "nominal"].startswith("fast almost")  # within 0.5 points of the best, faster
+    assert rec.loc["m", "nominal"].startswith(
+        "fast almost"
+    )  # within 0.5 points of the best, faster
     assert rec.loc["m", "cold"].startswith("fastest bad")  # here it is (one of) the most reliable

@@ -12,7 +12,9 @@ from parakin.mechanisms import P3P4S
 
 
 def run(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "parakin.cli", *args], capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "parakin.cli", *args], capture_output=True, text=True, timeout=120
+    )
 
 
 def test_ik_prints_strokes(capsys):
@@ -22,7 +24,25 @@ def test_ik_prints_strokes(capsys):
 
 
 def test_ik_batch_json_and_parameters(capsys):
-    assert main(["ik", "3p4s", "--pose", "0", "0", "0.592", "0.03", "-0.01", "0.565", "--param", "phi=35deg", "--json"]) == 0
+    assert (
+        main(
+            [
+                "ik",
+                "3p4s",
+                "--pose",
+                "0",
+                "0",
+                "0.592",
+                "0.03",
+                "-0.01",
+                "0.565",
+                "--param",
+                "phi=35deg",
+                "--json",
+            ]
+        )
+        == 0
+    )
     out = json.loads(capsys.readouterr().out)
     mech = P3P4S(phi=np.deg2rad(35))
     assert np.allclose(out["joints"], mech.ik([[0, 0, 0.592], [0.03, -0.01, 0.565]]), atol=1e-15)
@@ -32,7 +52,22 @@ def test_ik_batch_json_and_parameters(capsys):
 @pytest.mark.parametrize("solver", ["newton", "broyden", "bfgs", "lm", "closed-form", "scipy-root"])
 def test_fk_json_carries_result_fields(capsys, solver):
     q = P3P4S().ik([0.02, 0.01, 0.576])
-    assert main(["fk", "3p4s", "--joints", *map(repr, q.tolist()), "--solver", solver, "--tol", "1e-12", "--json"]) == 0
+    assert (
+        main(
+            [
+                "fk",
+                "3p4s",
+                "--joints",
+                *map(repr, q.tolist()),
+                "--solver",
+                solver,
+                "--tol",
+                "1e-12",
+                "--json",
+            ]
+        )
+        == 0
+    )
     out = json.loads(capsys.readouterr().out)
     assert {"x", "success", "nit", "nfev", "residual", "wall_time", "method", "message"} <= set(out)
     assert out["success"] is True and out["method"] == solver
@@ -42,14 +77,45 @@ def test_fk_json_carries_result_fields(capsys, solver):
 @pytest.mark.parametrize(
     "args, message",
     [
-        (["ik", "3p4s", "--pose", "0", "0"], "--pose needs a multiple of 3 values (x, y, z), got 2"),
-        (["ik", "3p4s", "--pose", "0", "0", "0.9"], "is unreachable: limb 1 needs L^2 - x_u^2 - z_u^2"),
-        (["fk", "3p4s", "--joints", "0.4", "0.4", "0.4", "--solver", "magic"], "unknown solver 'magic'"),
-        (["fk", "3p4s", "--joints", "0", "1.5", "0"], "the three spheres of radius L = 0.38 m do not meet"),
-        (["ik", "3p4s", "--pose", "0", "0", "0.5", "--param", "phi=95deg"], "must lie in (0, pi/2)"),
-        (["ik", "3p4s", "--pose", "0", "0", "0.5", "--param", "rb=0.7"], "unknown parameter(s) ['rb']"),
-        (["fk", "3p4s", "--joints", "0.4", "0.4", "0.4", "--solver", "hybrid", "--network", "/nonexistent/net.npz"],
-         "/nonexistent/net.npz"),
+        (
+            ["ik", "3p4s", "--pose", "0", "0"],
+            "--pose needs a multiple of 3 values (x, y, z), got 2",
+        ),
+        (
+            ["ik", "3p4s", "--pose", "0", "0", "0.9"],
+            "is unreachable: limb 1 needs L^2 - x_u^2 - z_u^2",
+        ),
+        (
+            ["fk", "3p4s", "--joints", "0.4", "0.4", "0.4", "--solver", "magic"],
+            "unknown solver 'magic'",
+        ),
+        (
+            ["fk", "3p4s", "--joints", "0", "1.5", "0"],
+            "the three spheres of radius L = 0.38 m do not meet",
+        ),
+        (
+            ["ik", "3p4s", "--pose", "0", "0", "0.5", "--param", "phi=95deg"],
+            "must lie in (0, pi/2)",
+        ),
+        (
+            ["ik", "3p4s", "--pose", "0", "0", "0.5", "--param", "rb=0.7"],
+            "unknown parameter(s) ['rb']",
+        ),
+        (
+            [
+                "fk",
+                "3p4s",
+                "--joints",
+                "0.4",
+                "0.4",
+                "0.4",
+                "--solver",
+                "hybrid",
+                "--network",
+                "/nonexistent/net.npz",
+            ],
+            "/nonexistent/net.npz",
+        ),
         (["reproduce", "zhao2017_3p4s", "table9"], "unknown artefact 'table9'"),
     ],
 )
@@ -63,7 +129,9 @@ def test_bad_input_exits_nonzero_with_one_line(args, message):
 
 def test_fk_that_does_not_converge_exits_1():
     q = P3P4S().ik([0.07, 0.07, 0.53])
-    res = run("fk", "3p4s", "--joints", *map(repr, q.tolist()), "--solver", "newton", "--maxiter", "1")
+    res = run(
+        "fk", "3p4s", "--joints", *map(repr, q.tolist()), "--solver", "newton", "--maxiter", "1"
+    )
     assert res.returncode == 1
     assert "did not converge within maxiter=1" in res.stderr and "--maxiter" in res.stderr
 
@@ -81,13 +149,32 @@ def test_ik_then_fk_through_files(tmp_path, capsys, suffix):
     poses = np.array([[0.0, 0.0, 0.592], [0.03, -0.01, 0.565], [-0.02, 0.01, 0.58]])
     src = tmp_path / f"poses{suffix}"
     if suffix == ".csv":
-        src.write_text("# three poses\nx [m],y [m],z [m]\n" + "\n".join(",".join(map(repr, p)) for p in poses.tolist()) + "\n")
+        src.write_text(
+            "# three poses\nx [m],y [m],z [m]\n"
+            + "\n".join(",".join(map(repr, p)) for p in poses.tolist())
+            + "\n"
+        )
     else:
         np.save(src, poses)
     joints, back = tmp_path / f"q{suffix}", tmp_path / f"x{suffix}"
     assert main(["ik", "3p4s", "--input", str(src), "--output", str(joints)]) == 0
-    assert main(["fk", "3p4s", "--input", str(joints), "--output", str(back), "--solver", "newton",
-                 "--tol", "1e-13"]) == 0
+    assert (
+        main(
+            [
+                "fk",
+                "3p4s",
+                "--input",
+                str(joints),
+                "--output",
+                str(back),
+                "--solver",
+                "newton",
+                "--tol",
+                "1e-13",
+            ]
+        )
+        == 0
+    )
     if suffix == ".csv":
         import pandas as pd
 
@@ -117,13 +204,16 @@ def test_csv_columns_by_name_and_unit_checked(tmp_path, capsys):
     assert main(["ik", "2ups", "--input", str(f), "--units", "paper"]) == 0
 
 
-@pytest.mark.parametrize("content, message", [
-    ("", "holds no rows"),
-    ("0,0\n", "2 values, expected 3"),
-    ("0,0,nan\n", "row 1 is not finite"),
-    ("0,0,abc\n", "are not all numbers"),
-    ("a,b,c,d\n1,2,3,4\n", "names neither the columns"),
-])
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        ("", "holds no rows"),
+        ("0,0\n", "2 values, expected 3"),
+        ("0,0,nan\n", "row 1 is not finite"),
+        ("0,0,abc\n", "are not all numbers"),
+        ("a,b,c,d\n1,2,3,4\n", "names neither the columns"),
+    ],
+)
 def test_bad_input_files_one_line(tmp_path, capsys, content, message):
     f = tmp_path / "bad.csv"
     f.write_text(content)
@@ -135,7 +225,9 @@ def test_bad_input_files_one_line(tmp_path, capsys, content, message):
 def test_file_options_errors(tmp_path, capsys):
     assert main(["ik", "3p4s", "--input", str(tmp_path / "none.csv")]) == 2
     assert "none.csv" in capsys.readouterr().err
-    assert main(["ik", "3p4s", "--pose", "0", "0", "0.592", "--output", str(tmp_path / "q.txt")]) == 2
+    assert (
+        main(["ik", "3p4s", "--pose", "0", "0", "0.592", "--output", str(tmp_path / "q.txt")]) == 2
+    )
     assert "must end in .csv or .npy" in capsys.readouterr().err
     assert main(["ik", "3p4s"]) == 2
     assert "give --pose VALUES or --input FILE" in capsys.readouterr().err
@@ -152,7 +244,9 @@ def test_fk_all_lists_every_real_solution_2ups(capsys):
     code, out = _fk_all_json(capsys, "2ups", "--joints", *map(repr, q.tolist()))
     assert code == 0 and out["n_real"][0] == len(out["solutions"][0]) >= 2
     working = [s for s in out["solutions"][0] if s["working"]]
-    assert len(working) == 1 and np.allclose(working[0]["x"], [np.deg2rad(10), np.deg2rad(-20), 0.03], atol=1e-9)
+    assert len(working) == 1 and np.allclose(
+        working[0]["x"], [np.deg2rad(10), np.deg2rad(-20), 0.03], atol=1e-9
+    )
     for s in out["solutions"][0]:  # each is a right answer on its own branch
         branch = 1 if "branch +1" in s["assembly"] else -1
         assert np.allclose(UPS2(branch=branch).ik(s["x"]), q, atol=1e-9)
@@ -176,13 +270,19 @@ def test_fk_all_to_csv_and_npy(tmp_path, capsys):
     q = UPS2().ik([[0.1, 0.1, 0.01], [0.0, 0.0, 0.0]])
     src = tmp_path / "q.npy"
     np.save(src, q)
-    assert main(["fk", "2ups", "--input", str(src), "--all", "--output", str(tmp_path / "all.csv")]) == 0
+    assert (
+        main(["fk", "2ups", "--input", str(src), "--all", "--output", str(tmp_path / "all.csv")])
+        == 0
+    )
     import pandas as pd
 
     t = pd.read_csv(tmp_path / "all.csv")
     assert list(t.columns[:2]) == ["input", "solution"] and set(t["input"]) == {1, 2}
     assert t.groupby("input")["working"].sum().tolist() == [1, 1]
-    assert main(["fk", "2ups", "--input", str(src), "--all", "--output", str(tmp_path / "all.npy")]) == 0
+    assert (
+        main(["fk", "2ups", "--input", str(src), "--all", "--output", str(tmp_path / "all.npy")])
+        == 0
+    )
     a = np.load(tmp_path / "all.npy")
     assert a.shape[0] == 2 and a.shape[2] == 3 and np.isfinite(a).all(-1).sum() == len(t)
 

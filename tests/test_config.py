@@ -16,18 +16,39 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_full_and_quick_configs_are_valid(quick_config):
     full = load_config(DEFAULT_CONFIG)
     assert quick_config["seed"] == full["seed"]  # quick overrides sizes, never the seed
-    assert quick_config["zhao2017_3p4s"]["table1"]["region"]["n_delta"] < full["zhao2017_3p4s"]["table1"]["region"]["n_delta"]
-    assert quick_config["figures_dir"] != full["figures_dir"]  # quick never overwrites committed figures
+    assert (
+        quick_config["zhao2017_3p4s"]["table1"]["region"]["n_delta"]
+        < full["zhao2017_3p4s"]["table1"]["region"]["n_delta"]
+    )
+    assert (
+        quick_config["figures_dir"] != full["figures_dir"]
+    )  # quick never overwrites committed figures
 
 
 @pytest.mark.parametrize(
     "path, value, message",
     [
         (("seed",), -1, r"config key 'seed' = -1: -1 is less than the minimum of 0"),
-        (("zhao2017_3p4s", "table1", "region", "n_phi"), 2, r"'zhao2017_3p4s.table1.region.n_phi' = 2: .*minimum 5, maximum 2001"),
-        (("zhao2017_3p4s", "table1", "fit", "L"), "long", r"'zhao2017_3p4s.table1.fit.L' = \"long\": .* not of type 'number'"),
-        (("zhao2017_3p4s", "table1", "fit", "phi_range_deg"), [40, 30], r"lower bound must be < upper bound"),
-        (("zhao2017_3p4s", "table1", "fit", "phi_range_deg"), [10, 95], r"95 is greater than or equal to the maximum of 90"),
+        (
+            ("zhao2017_3p4s", "table1", "region", "n_phi"),
+            2,
+            r"'zhao2017_3p4s.table1.region.n_phi' = 2: .*minimum 5, maximum 2001",
+        ),
+        (
+            ("zhao2017_3p4s", "table1", "fit", "L"),
+            "long",
+            r"'zhao2017_3p4s.table1.fit.L' = \"long\": .* not of type 'number'",
+        ),
+        (
+            ("zhao2017_3p4s", "table1", "fit", "phi_range_deg"),
+            [40, 30],
+            r"lower bound must be < upper bound",
+        ),
+        (
+            ("zhao2017_3p4s", "table1", "fit", "phi_range_deg"),
+            [10, 95],
+            r"95 is greater than or equal to the maximum of 90",
+        ),
     ],
 )
 def test_bad_values_are_rejected_by_name(quick_config, path, value, message):
@@ -55,8 +76,22 @@ def test_missing_file(tmp_path):
 def test_snakemake_validates_the_config():
     """The Snakefile's own validation (snakemake.utils.validate) stops a malformed run."""
     res = subprocess.run(
-        [sys.executable, "-m", "snakemake", "-n", "--cores", "1", "--configfile", str(QUICK_CONFIG), "--config", "seed=-5"],
-        cwd=ROOT, capture_output=True, text=True, timeout=120,
+        [
+            sys.executable,
+            "-m",
+            "snakemake",
+            "-n",
+            "--cores",
+            "1",
+            "--configfile",
+            str(QUICK_CONFIG),
+            "--config",
+            "seed=-5",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     assert res.returncode != 0
     assert "seed" in res.stdout + res.stderr and "minimum" in res.stdout + res.stderr
@@ -66,12 +101,32 @@ def test_snakemake_validates_the_config():
 @pytest.mark.parametrize(
     "path, value, message",
     [
-        (("ye_stewart12", "d_grid_pct"), [[5, 100, 1e-12]], r"d_grid_pct.0' = \[5, 100, step 1e-12\]: .* more than the limit 100000"),
+        (
+            ("ye_stewart12", "d_grid_pct"),
+            [[5, 100, 1e-12]],
+            r"d_grid_pct.0' = \[5, 100, step 1e-12\]: .* more than the limit 100000",
+        ),
         (("ye_stewart12", "d_grid_pct"), [[100, 5, 5]], r"start 100 must be <= stop 5"),
-        (("ye_stewart12", "basin_levels_pct"), [1e308], r"basin_levels_pct.0' = 1e\+308: .*maximum"),
-        (("ye_stewart12", "structures_mm"), {"min": 30, "max": 10, "step": 10}, r"start 30 must be <= stop 10"),
-        (("zhao2017_3p4s", "optimization", "bounds", "L"), [0.45, 0.30], r"bounds.L' = \[0.45, 0.3\]: lower bound"),
-        (("zhao2017_3p4s", "indices", "k"), float("nan"), r"'zhao2017_3p4s.indices.k' = nan: must be a finite number"),
+        (
+            ("ye_stewart12", "basin_levels_pct"),
+            [1e308],
+            r"basin_levels_pct.0' = 1e\+308: .*maximum",
+        ),
+        (
+            ("ye_stewart12", "structures_mm"),
+            {"min": 30, "max": 10, "step": 10},
+            r"start 30 must be <= stop 10",
+        ),
+        (
+            ("zhao2017_3p4s", "optimization", "bounds", "L"),
+            [0.45, 0.30],
+            r"bounds.L' = \[0.45, 0.3\]: lower bound",
+        ),
+        (
+            ("zhao2017_3p4s", "indices", "k"),
+            float("nan"),
+            r"'zhao2017_3p4s.indices.k' = nan: must be a finite number",
+        ),
         (("li2020_2ups", "fig2_seed"), 10**30, r"fig2_seed"),
     ],
 )
@@ -87,7 +142,9 @@ def test_hostile_values_are_rejected_by_name(quick_config, path, value, message)
 
 def test_one_short_message_per_bad_key(quick_config):
     cfg = copy.deepcopy(quick_config)
-    cfg["zhao2017_3p4s"]["table1"] = "not a section"  # a whole section replaced: no dump of it or the schema
+    cfg["zhao2017_3p4s"]["table1"] = (
+        "not a section"  # a whole section replaced: no dump of it or the schema
+    )
     cfg["seed"] = -3
     with pytest.raises(ConfigError) as err:
         validate(cfg)

@@ -14,12 +14,12 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from parakin.mechanisms import p3p4s_dynamics as dyn
+from parakin.claims import resolve
 from parakin.errors import ConfigError, ShapeError, SingularityError, UnreachableError
 from parakin.mechanisms import P3P4S
-from parakin.claims import resolve
-from parakin.report import load_reference, printed_value
+from parakin.mechanisms import p3p4s_dynamics as dyn
 from parakin.registry import of_module
+from parakin.report import load_reference, printed_value
 
 MECH = P3P4S.zhao2017()
 PARAMS = dyn.InertialParams.zhao2017()
@@ -45,7 +45,9 @@ class Lissajous:
 
     def pose(self, t):
         t = np.asarray(t, dtype=float)[..., None]
-        return np.asarray(self.centre) + np.asarray(self.amp) * np.sin(self._w() * t + np.asarray(self.phase))
+        return np.asarray(self.centre) + np.asarray(self.amp) * np.sin(
+            self._w() * t + np.asarray(self.phase)
+        )
 
     def velocity(self, t):
         t = np.asarray(t, dtype=float)[..., None]
@@ -53,7 +55,9 @@ class Lissajous:
 
     def acceleration(self, t):
         t = np.asarray(t, dtype=float)[..., None]
-        return -np.asarray(self.amp) * self._w() ** 2 * np.sin(self._w() * t + np.asarray(self.phase))
+        return (
+            -np.asarray(self.amp) * self._w() ** 2 * np.sin(self._w() * t + np.asarray(self.phase))
+        )
 
     def state(self, t):
         return self.pose(t), self.velocity(t), self.acceleration(t)
@@ -81,7 +85,11 @@ def test_parameters_are_the_transcribed_ones():
     assert PARAMS.m_platform == val("text_s2.4", "m_platform")
     assert PARAMS.m_slider == val("text_s2.4", "m_slider")
     assert PARAMS.m_rod == val("text_s2.4", "m_rod")
-    assert PARAMS.I_rod == (val("text_s2.4", "i_xx"), val("text_s2.4", "i_yy"), val("text_s2.4", "i_zz"))
+    assert PARAMS.I_rod == (
+        val("text_s2.4", "i_xx"),
+        val("text_s2.4", "i_yy"),
+        val("text_s2.4", "i_zz"),
+    )
     assert PARAMS.rods_per_limb == int(val("text_s2.1", "rods_per_limb"))
     motion = dyn.SineMotion()
     assert motion.amplitude == val("text_s2.4", "motion.amplitude")
@@ -100,8 +108,17 @@ def test_motion_law_derivatives_are_exact():
     assert motion.period == pytest.approx(0.05)
 
 
-@pytest.mark.parametrize("bad", [dict(m_platform=-1.0), dict(m_rod=float("nan")), dict(I_rod=(0.02, 0.03, 1e-4)),
-                                 dict(I_rod=(0.02, 0.02)), dict(rods_per_limb=0), dict(g=(0.0, 9.81))])
+@pytest.mark.parametrize(
+    "bad",
+    [
+        dict(m_platform=-1.0),
+        dict(m_rod=float("nan")),
+        dict(I_rod=(0.02, 0.03, 1e-4)),
+        dict(I_rod=(0.02, 0.02)),
+        dict(rods_per_limb=0),
+        dict(g=(0.0, 9.81)),
+    ],
+)
 def test_inertial_params_reject_bad_values(bad):
     with pytest.raises(ValueError):
         dyn.InertialParams(**bad)
@@ -160,7 +177,9 @@ def test_map_functions_agree_with_limb_kinematics(lissajous):
     assert np.allclose(dyn.rod_velocity_jacobians(MECH, p), kin.J_v, rtol=0, atol=1e-14)
     assert np.allclose(dyn.acceleration_hessians(MECH, p), kin.H, rtol=0, atol=1e-12)
     # printed H = l * corrected H: the missing factor is exactly 1/l
-    assert np.allclose(dyn.acceleration_hessians(MECH, p, h_form="paper"), MECH.L * kin.H, rtol=1e-14, atol=0)
+    assert np.allclose(
+        dyn.acceleration_hessians(MECH, p, h_form="paper"), MECH.L * kin.H, rtol=1e-14, atol=0
+    )
     assert np.allclose(dyn.drive_accelerations(MECH, p, v, a), kin.qddot, rtol=0, atol=1e-13)
     assert np.allclose(dyn.rod_accelerations(MECH, p, v, a), kin.a_rod, rtol=0, atol=1e-13)
     assert np.allclose(dyn.rod_angular_accelerations(MECH, p, v, a), kin.alpha, rtol=0, atol=1e-12)
@@ -170,8 +189,12 @@ def test_map_functions_agree_with_limb_kinematics(lissajous):
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(st.floats(-0.05, 0.05), st.floats(-0.05, 0.05), st.floats(0.53, 0.59),
-       st.lists(st.floats(-1.0, 1.0), min_size=6, max_size=6))
+@given(
+    st.floats(-0.05, 0.05),
+    st.floats(-0.05, 0.05),
+    st.floats(0.53, 0.59),
+    st.lists(st.floats(-1.0, 1.0), min_size=6, max_size=6),
+)
 def test_any_state_matches_a_parabola_through_it(x, y, z, va):
     """For arbitrary (p, v, a): q(t) = ik(p + v t + a t^2/2) has qdot(0) = J v, qddot(0) = J a + v^T H v."""
     p0, v, a = np.array([x, y, z]), np.array(va[:3]), 10.0 * np.array(va[3:])
@@ -188,7 +211,9 @@ def test_any_state_matches_a_parabola_through_it(x, y, z, va):
 # ---------------------------------------------------------------------------------------- dynamics
 def test_static_load_at_the_centre():
     f = dyn.inverse_dynamics(MECH, PARAMS, [0.0, 0.0, 0.57], np.zeros(3), np.zeros(3))
-    assert f == pytest.approx([40.6308] * 3, abs=1e-4)  # docs/zhao2017_3p4s.md#s3.4: 40.63 N per motor
+    assert f == pytest.approx(
+        [40.6308] * 3, abs=1e-4
+    )  # docs/zhao2017_3p4s.md#s3.4: 40.63 N per motor
 
 
 @pytest.mark.parametrize("pose", [[0.0, 0.0, 0.57], [0.02, -0.01, 0.57], [-0.04, 0.03, 0.55]])
@@ -196,12 +221,20 @@ def test_static_load_is_the_gradient_of_potential_energy(pose):
     """Virtual work at rest: f . dq = dV, i.e. f = J^-T dV/dp with V from dyn.energy (independent)."""
     pose = np.asarray(pose)
     h = 1e-5
-    grad = np.array([
-        (dyn.energy(MECH, PARAMS, pose + h * e, np.zeros(3)).potential
-         - dyn.energy(MECH, PARAMS, pose - h * e, np.zeros(3)).potential) / (2 * h) for e in np.eye(3)
-    ])
+    grad = np.array(
+        [
+            (
+                dyn.energy(MECH, PARAMS, pose + h * e, np.zeros(3)).potential
+                - dyn.energy(MECH, PARAMS, pose - h * e, np.zeros(3)).potential
+            )
+            / (2 * h)
+            for e in np.eye(3)
+        ]
+    )
     expected = np.linalg.solve(MECH.velocity_jacobian(pose).T, grad)
-    assert dyn.inverse_dynamics(MECH, PARAMS, pose, np.zeros(3), np.zeros(3)) == pytest.approx(expected, abs=1e-6)
+    assert dyn.inverse_dynamics(MECH, PARAMS, pose, np.zeros(3), np.zeros(3)) == pytest.approx(
+        expected, abs=1e-6
+    )
 
 
 def test_power_balance_paper_motion():
@@ -211,8 +244,12 @@ def test_power_balance_paper_motion():
     assert ours.relative_error < 1e-6
     assert np.max(np.abs(ours.dEdt)) == pytest.approx(16.74, abs=0.01)
     # each printed slip breaks the balance
-    for opts, at_least in ((dict(h_form="paper"), 1e-4), (dict(gravity_moment=True), 1e-3),
-                           (dict(rod_inertia_factor=1.0), 0.1), (dyn.PAPER_PRINTED, 0.1)):
+    for opts, at_least in (
+        (dict(h_form="paper"), 1e-4),
+        (dict(gravity_moment=True), 1e-3),
+        (dict(rod_inertia_factor=1.0), 0.1),
+        (dyn.PAPER_PRINTED, 0.1),
+    ):
         assert dyn.power_balance(MECH, PARAMS, motion, t, **opts).relative_error > at_least, opts
 
 
@@ -220,13 +257,21 @@ def test_power_balance_demanding_trajectory(lissajous):
     motion, t, *_ = lissajous
     ours = dyn.power_balance(MECH, PARAMS, motion, t, step=2e-4)
     assert ours.relative_error < 1e-6
-    assert dyn.power_balance(MECH, PARAMS, motion, t, step=2e-4, h_form="paper").relative_error > 1e-2
+    assert (
+        dyn.power_balance(MECH, PARAMS, motion, t, step=2e-4, h_form="paper").relative_error > 1e-2
+    )
 
 
 def test_power_balance_other_geometry_and_masses():
     mech = P3P4S.zhao2017_optimised()
-    params = dyn.InertialParams(m_platform=3.0, m_slider=1.0, m_rod=0.5, I_rod=(0.01, 0.01, 1e-3), rods_per_limb=3,
-                                g=(0.5, -0.2, -9.0))
+    params = dyn.InertialParams(
+        m_platform=3.0,
+        m_slider=1.0,
+        m_rod=0.5,
+        I_rod=(0.01, 0.01, 1e-3),
+        rods_per_limb=3,
+        g=(0.5, -0.2, -9.0),
+    )
     motion = Lissajous(centre=(0.0, 0.0, 0.6))
     t = np.linspace(0.0, 0.2, 81)
     assert dyn.power_balance(mech, params, motion, t, step=2e-4).relative_error < 1e-6
@@ -239,7 +284,9 @@ def test_gravity_moment_term_of_eq21():
     terms = dyn.force_terms(MECH, PARAMS, [0.0, 0.0, 0.57], zero, zero, gravity_moment=True)
     assert terms["gravity_moment"] == pytest.approx([-20.681] * 3, abs=1e-3)
     assert sum(terms.values()) == pytest.approx([19.950] * 3, abs=1e-3)
-    off = dyn.force_terms(MECH, PARAMS, [0.02, -0.01, 0.57], zero, zero, gravity_moment=True)["gravity_moment"]
+    off = dyn.force_terms(MECH, PARAMS, [0.02, -0.01, 0.57], zero, zero, gravity_moment=True)[
+        "gravity_moment"
+    ]
     assert -off == pytest.approx([17.318, 24.273, 20.727], abs=1e-3)
 
 
@@ -250,7 +297,9 @@ def test_rod_inertia_factor_of_eq23():
     once = dyn.inverse_dynamics(MECH, PARAMS, p, v, a, rod_inertia_factor=1.0)
     rods = terms["rods_translation"] + terms["rods_rotation"]
     assert np.allclose(once, sum(terms.values()) - rods / 2, rtol=0, atol=1e-10)
-    assert np.max(np.abs(rods / 2)) == pytest.approx(87.50, abs=0.01)  # how much the slip changes Fig. 9
+    assert np.max(np.abs(rods / 2)) == pytest.approx(
+        87.50, abs=0.01
+    )  # how much the slip changes Fig. 9
 
 
 def test_paper_example_forces():
@@ -271,15 +320,18 @@ def test_gyroscopic_term_vanishes_for_axisymmetric_rods(lissajous):
 
 def test_batched_equals_one_by_one(lissajous):
     _, _, p, v, a, _ = lissajous
-    batch = dyn.inverse_dynamics(MECH, PARAMS, p[:24].reshape(2, 12, 3), v[:24].reshape(2, 12, 3),
-                                 a[:24].reshape(2, 12, 3))
+    batch = dyn.inverse_dynamics(
+        MECH, PARAMS, p[:24].reshape(2, 12, 3), v[:24].reshape(2, 12, 3), a[:24].reshape(2, 12, 3)
+    )
     assert batch.shape == (2, 12, 3)
     loop = np.array([dyn.inverse_dynamics(MECH, PARAMS, p[k], v[k], a[k]) for k in range(24)])
     assert np.allclose(batch.reshape(24, 3), loop, rtol=0, atol=1e-11)
     # one pose, many accelerations: broadcasting
     f = dyn.inverse_dynamics(MECH, PARAMS, p[0], v[0], a[:5])
     assert f.shape == (5, 3)
-    assert np.allclose(f[3], dyn.inverse_dynamics(MECH, PARAMS, p[0], v[0], a[3]), rtol=0, atol=1e-11)
+    assert np.allclose(
+        f[3], dyn.inverse_dynamics(MECH, PARAMS, p[0], v[0], a[3]), rtol=0, atol=1e-11
+    )
 
 
 def test_fig9_curve_is_fast():
@@ -353,7 +405,9 @@ def test_artefacts_write_their_files(section_outputs):
         "dynamics_printed": ["extra_dynamics_printed.csv", "extra_dynamics_printed.png"],
         "mujoco_tracking": ["extra_mujoco_tracking.csv", "extra_mujoco_tracking.png"],
     }
-    assert {k: sorted(p.name for p in v) for k, v in written.items()} == {k: sorted(v) for k, v in expected.items()}
+    assert {k: sorted(p.name for p in v) for k, v in written.items()} == {
+        k: sorted(v) for k, v in expected.items()
+    }
     for paths in written.values():
         for path in paths:
             assert path.stat().st_size > 0
@@ -364,8 +418,14 @@ def test_artefacts_write_their_files(section_outputs):
     assert slips.loc["corrected (ours)", "verdict"] == "passes all checks"
     for label in ("H without 1/l", "spurious gravity moment", "rod inertia without factor 2"):
         assert slips.loc[label, "verdict"] == "slip confirmed"
-    assert slips.loc["spurious gravity moment", "static_centre_change_N"] == pytest.approx(-20.681, abs=1e-3)
-    assert slips.loc["corrected (ours)", "tracking_rel"] < 1e-3 < slips.loc["all three (as printed)", "tracking_rel"]
+    assert slips.loc["spurious gravity moment", "static_centre_change_N"] == pytest.approx(
+        -20.681, abs=1e-3
+    )
+    assert (
+        slips.loc["corrected (ours)", "tracking_rel"]
+        < 1e-3
+        < slips.loc["all three (as printed)", "tracking_rel"]
+    )
     tracking = pd.read_csv(out / "extra_mujoco_tracking.csv")
     assert tracking["error_ours_parallelogram_m"].max() < 1e-6
     pb = pd.read_csv(out / "extra_power_balance.csv")
@@ -380,19 +440,31 @@ def test_claims_and_summary(section_outputs):
     for c in claims:
         printed = "printed" in c.variant
         c = resolve(c, ref)  # judged with the tolerance data/reference declares
-        assert (c.verdict == "differs — cause shown") if printed else (c.verdict == "reproduced"), (c.variant, c.ours)
+        assert (c.verdict == "differs — cause shown") if printed else (c.verdict == "reproduced"), (
+            c.variant,
+            c.ours,
+        )
     text = section.summary(out, ref)
     assert "40.63 N per motor" in text and "slip confirmed" in text and "Power balance" in text
     assert "open loop" in text
 
 
-@pytest.mark.parametrize("cfg, match", [
-    ({}, "no 'zhao2017_3p4s.dynamics'"),
-    ({"zhao2017_3p4s": {"dynamics": {"z0": 0.57, "t_end": 0.05, "samples_per_period": 40}}}, "fd_step is missing"),
-    ({"zhao2017_3p4s": {"dynamics": {**SMALL_DYN, "samples_per_period": 4}}}, "samples_per_period"),
-    ({"zhao2017_3p4s": {"dynamics": {**SMALL_DYN, "z0": "0.57"}}}, "z0"),
-    ({"zhao2017_3p4s": {"dynamics": {**SMALL_DYN, "t_end": True}}}, "t_end"),
-])
+@pytest.mark.parametrize(
+    "cfg, match",
+    [
+        ({}, "no 'zhao2017_3p4s.dynamics'"),
+        (
+            {"zhao2017_3p4s": {"dynamics": {"z0": 0.57, "t_end": 0.05, "samples_per_period": 40}}},
+            "fd_step is missing",
+        ),
+        (
+            {"zhao2017_3p4s": {"dynamics": {**SMALL_DYN, "samples_per_period": 4}}},
+            "samples_per_period",
+        ),
+        ({"zhao2017_3p4s": {"dynamics": {**SMALL_DYN, "z0": "0.57"}}}, "z0"),
+        ({"zhao2017_3p4s": {"dynamics": {**SMALL_DYN, "t_end": True}}}, "t_end"),
+    ],
+)
 def test_section_rejects_bad_config(cfg, match):
     from parakin.papers.zhao2017_3p4s import dynamics as section
 

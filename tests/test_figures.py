@@ -33,13 +33,51 @@ CHEAP = [
     ("zhao2017_3p4s", "fig01", ()),
     ("zhao2017_3p4s", "fig02", ()),
     ("zhao2017_3p4s", "table1_region", ("table1",)),
-    *[("zhao2017_3p4s", name, ()) for name in ("fig05", "fig06", "fig07", "fig08", "fig09", "fig10",
-                                               "power_balance", "dynamics_printed", "mujoco_tracking")],
-    *[("zhao2017_3p4s", name, ()) for name in ("fig11", "fig12", "fig14", "fig15", "fig17", "fig19", "fig21",
-                                               "fig23", "fig25", "index_convergence", "pareto")],
-    *[("li2020_2ups", name, ()) for name in ("fig01", "parasitic", "fk_solutions", "table2", "fig02",
-                                             "singularity_workspace")],
-    *[("ye_stewart12", name, ()) for name in ("fig01", "fig02", "fig06", "fig08", "fig09", "fig10", "fig11")],
+    *[
+        ("zhao2017_3p4s", name, ())
+        for name in (
+            "fig05",
+            "fig06",
+            "fig07",
+            "fig08",
+            "fig09",
+            "fig10",
+            "power_balance",
+            "dynamics_printed",
+            "mujoco_tracking",
+        )
+    ],
+    *[
+        ("zhao2017_3p4s", name, ())
+        for name in (
+            "fig11",
+            "fig12",
+            "fig14",
+            "fig15",
+            "fig17",
+            "fig19",
+            "fig21",
+            "fig23",
+            "fig25",
+            "index_convergence",
+            "pareto",
+        )
+    ],
+    *[
+        ("li2020_2ups", name, ())
+        for name in (
+            "fig01",
+            "parasitic",
+            "fk_solutions",
+            "table2",
+            "fig02",
+            "singularity_workspace",
+        )
+    ],
+    *[
+        ("ye_stewart12", name, ())
+        for name in ("fig01", "fig02", "fig06", "fig08", "fig09", "fig10", "fig11")
+    ],
     *[("li2017_stewart36", name, ()) for name in ("fig01", "fig02", "fig03", "adams")],
 ]
 
@@ -51,7 +89,9 @@ def test_committed_figure_is_current(tmp_path, paper, artefact, needs):
         ARTEFACTS[f"{paper}:{name}"].make(config, tmp_path / paper)
     item = ARTEFACTS[f"{paper}:{artefact}"]
     produced = item.make(config, tmp_path / paper)
-    assert sorted(p.name for p in produced) == sorted(item.outputs), "the artefact writes what it declares"
+    assert sorted(p.name for p in produced) == sorted(item.outputs), (
+        "the artefact writes what it declares"
+    )
     checks = check_artefact(item, tmp_path, RECORD)
     bad = [c for c in checks if c.status in ("differs", "missing")]
     assert not bad, "; ".join(f"{c.file}: {c.status} {c.column} {c.detail}" for c in bad)
@@ -81,11 +121,15 @@ def test_committed_figure_is_drawn_from_its_committed_table(tmp_path, folder, pn
     assert result is None, result
 
 
-@pytest.mark.parametrize("paper, stem, draw", _replot_targets(), ids=lambda v: v if isinstance(v, str) else "")
+@pytest.mark.parametrize(
+    "paper, stem, draw", _replot_targets(), ids=lambda v: v if isinstance(v, str) else ""
+)
 def test_committed_figure_matches_its_numbers(tmp_path, paper, stem, draw):
     """The committed PNG is what the plotting code draws from the committed CSV beside it."""
     committed = ROOT / "figures" / paper
     data = pd.read_csv(committed / f"{stem}.csv")
     draw(data, tmp_path)
-    result = compare_images(str(committed / f"{stem}.png"), str(tmp_path / f"{stem}.png"), tol=IMAGE_TOL)
+    result = compare_images(
+        str(committed / f"{stem}.png"), str(tmp_path / f"{stem}.png"), tol=IMAGE_TOL
+    )
     assert result is None, result

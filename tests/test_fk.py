@@ -43,7 +43,9 @@ def test_hybrid_accuracy_and_iterations(network, inputs):
     assert np.mean(err <= 1e-8) >= 0.99  # the paper's "1e-8 level"
     assert np.mean((err <= 1e-8) & (res.nit <= 3)) >= 0.95  # ... with <= 3 quasi-Newton iterations
     guess = network.predict(q)
-    assert np.median(np.max(np.abs(guess - poses), axis=-1)) > 100 * np.median(err)  # the refinement matters
+    assert np.median(np.max(np.abs(guess - poses), axis=-1)) > 100 * np.median(
+        err
+    )  # the refinement matters
 
 
 @pytest.mark.parametrize("method", ["newton", "broyden", "bfgs", "lm", "scipy-root"])
@@ -59,8 +61,12 @@ def test_closed_form_agrees_with_every_numeric_solver(inputs, method):
 def test_hybrid_flags_unreachable_strokes_without_aborting_the_batch(network):
     """Strokes whose spheres do not meet, or that assemble only in the other mode, get their own
     status; the reachable row of the same batch is still solved."""
-    res = solve_fk(P3P4S(), [[0.43, 0.43, 0.43], [0.0, 1.5, 0.0], [0.0, 0.9, 0.2]], method="hybrid",
-                   network=network)
+    res = solve_fk(
+        P3P4S(),
+        [[0.43, 0.43, 0.43], [0.0, 1.5, 0.0], [0.0, 0.9, 0.2]],
+        method="hybrid",
+        network=network,
+    )
     assert res.success.tolist() == [True, False, False]
     assert np.all(res.status[1:] == Status.UNREACHABLE)
 
@@ -94,8 +100,17 @@ def test_cli_hybrid_with_trained_network(trained, capsys):
     from parakin.cli import main
 
     q = P3P4S().ik([0.03, -0.01, 0.565])
-    args = ["fk", "3p4s", "--joints", *map(repr, q.tolist()), "--solver", "hybrid",
-            "--network", str(fk.network_path(trained[0])), "--json"]
+    args = [
+        "fk",
+        "3p4s",
+        "--joints",
+        *map(repr, q.tolist()),
+        "--solver",
+        "hybrid",
+        "--network",
+        str(fk.network_path(trained[0])),
+        "--json",
+    ]
     assert main(args) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["method"] == "hybrid" and out["success"] and out["nit"] <= 3
@@ -106,12 +121,20 @@ def test_benchmark_harness_reports_ratios(network, inputs):
     from parakin.bench import SolverSpec, bench_fk
 
     mech, poses, q = inputs
-    specs = [SolverSpec("hybrid", "hybrid", {"network": network}, start="network"),
-             SolverSpec("closed", "closed-form"),
-             SolverSpec("root", "scipy-root", batched=False)]
+    specs = [
+        SolverSpec("hybrid", "hybrid", {"network": network}, start="network"),
+        SolverSpec("closed", "closed-form"),
+        SolverSpec("root", "scipy-root", batched=False),
+    ]
     df = bench_fk(mech, specs, (q[:5], poses[:5]), (q, poses), repeats=1).set_index("solver")
     assert (df["success_rate"] == 1.0).all()
     assert df.loc["root", "speedup_single"] == 1.0 and df.loc["root", "speedup_per_solve"] == 1.0
     # timings are reported, not asserted (speed claims live in the benchmark table)
-    assert np.isfinite(df[["median_latency_us", "throughput_per_s", "speedup_single", "speedup_per_solve"]]).all().all()
+    assert (
+        np.isfinite(
+            df[["median_latency_us", "throughput_per_s", "speedup_single", "speedup_per_solve"]]
+        )
+        .all()
+        .all()
+    )
     assert df.loc["closed", "median_nit"] == 0 and df.loc["hybrid", "max_err_m"] <= 1e-8

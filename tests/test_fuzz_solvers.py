@@ -29,8 +29,13 @@ ROWS = 24
 EXAMPLES = 6
 TOL = 1e-10
 JOINT_TOL = 1e-8  # the default for TOL (100 x tol, at least 1e-8), declared before any run
-FUZZ = settings(max_examples=EXAMPLES, derandomize=True, deadline=None, database=None,
-                suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+FUZZ = settings(
+    max_examples=EXAMPLES,
+    derandomize=True,
+    deadline=None,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
 
 START_KINDS = ("near", "home", "box", "far", "huge", "nan", "inf", "zero", "negative")
 JOINT_KINDS = ("exact", "exact", "exact", "noisy", "scaled", "huge", "nan", "inf", "zero")
@@ -51,9 +56,16 @@ class Net:
 
 def _cases() -> dict[str, Mechanism]:
     s12 = Stewart12()
-    return {"3p4s": P3P4S(), "2ups": UPS2(), "2ups-mirror": UPS2(branch=-1), "stewart36": Stewart36(),
-            "stewart12": s12, "stewart12-active": ActiveLegs(mech=s12, active=(1, 2, 3, 4, 5, 6, 7, 8)),
-            "stewart12-drive-R0": DriveMode(mech=s12), "stewart12-drive-R3": DriveMode(mech=s12, passive=(10, 11, 12))}
+    return {
+        "3p4s": P3P4S(),
+        "2ups": UPS2(),
+        "2ups-mirror": UPS2(branch=-1),
+        "stewart36": Stewart36(),
+        "stewart12": s12,
+        "stewart12-active": ActiveLegs(mech=s12, active=(1, 2, 3, 4, 5, 6, 7, 8)),
+        "stewart12-drive-R0": DriveMode(mech=s12),
+        "stewart12-drive-R3": DriveMode(mech=s12, passive=(10, 11, 12)),
+    }
 
 
 CASES = _cases()
@@ -111,7 +123,9 @@ def _start(kind: str, mech: Mechanism, t: np.ndarray, g: np.random.Generator) ->
     return -np.abs(t) - 1.0  # "negative"
 
 
-def _starts(mech: Mechanism, truth: np.ndarray, kinds: list[str], g: np.random.Generator) -> np.ndarray:
+def _starts(
+    mech: Mechanism, truth: np.ndarray, kinds: list[str], g: np.random.Generator
+) -> np.ndarray:
     return np.stack([_start(kind, mech, truth[i], g) for i, kind in enumerate(kinds)])
 
 
@@ -154,15 +168,19 @@ def _independent_check(mech: Mechanism, x: np.ndarray, q: np.ndarray) -> np.ndar
     if isinstance(mech, UPS2):
         ok &= np.all(np.abs(np.angle(np.exp(1j * x[:, :2]))) < np.pi / 2, -1)
     if isinstance(mech, P3P4S):
-        ok &= np.all(np.einsum("nij,ij->ni", mech._rod(x, q), mech.m) >= -1e-6, -1)  # minus root of eq. 5
+        ok &= np.all(
+            np.einsum("nij,ij->ni", mech._rod(x, q), mech.m) >= -1e-6, -1
+        )  # minus root of eq. 5
     return ok
 
 
 @pytest.mark.parametrize("key, method", PAIRS, ids=[f"{k}-{m}" for k, m in PAIRS])
 @FUZZ
-@given(seed=st.integers(0, 2**32 - 1),
-       start_kinds=st.lists(st.sampled_from(START_KINDS), min_size=ROWS, max_size=ROWS),
-       joint_kinds=st.lists(st.sampled_from(JOINT_KINDS), min_size=ROWS, max_size=ROWS))
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    start_kinds=st.lists(st.sampled_from(START_KINDS), min_size=ROWS, max_size=ROWS),
+    joint_kinds=st.lists(st.sampled_from(JOINT_KINDS), min_size=ROWS, max_size=ROWS),
+)
 def test_no_crash_no_nonfinite_no_wrong_success(key, method, seed, start_kinds, joint_kinds):
     mech = CASES[key]
     g = np.random.default_rng(seed)
@@ -174,8 +192,16 @@ def test_no_crash_no_nonfinite_no_wrong_success(key, method, seed, start_kinds, 
         options = {"network": Net(mech), "check": not isinstance(mech, DriveMode)}
     if method == "pso":
         options["seed"] = np.arange(ROWS) + seed % 1000
-    res = solve_fk(mech, q, x0=x0, method=method, tol=TOL, maxiter=MAXITER.get(method, 40), joint_tol=JOINT_TOL,
-                   **options)
+    res = solve_fk(
+        mech,
+        q,
+        x0=x0,
+        method=method,
+        tol=TOL,
+        maxiter=MAXITER.get(method, 40),
+        joint_tol=JOINT_TOL,
+        **options,
+    )
     SOLVES["count"] += ROWS
     assert res.shape == (ROWS,) and res.x.shape == (ROWS, mech.n_pose)
     assert np.all(np.isfinite(res.x)), "a solver returned a non-finite pose"
@@ -183,12 +209,16 @@ def test_no_crash_no_nonfinite_no_wrong_success(key, method, seed, start_kinds, 
     ok = res.success
     bad_input = ~(np.all(np.isfinite(q), -1) & np.all(np.isfinite(x0), -1))
     assert not np.any(ok & bad_input)
-    assert np.all(res.residual[ok] <= (1e-6 if method == "hybrid" else TOL))  # hybrid: step eps, residual 10 eps
+    assert np.all(
+        res.residual[ok] <= (1e-6 if method == "hybrid" else TOL)
+    )  # hybrid: step eps, residual 10 eps
     assert np.all(res.joint_error[ok] <= JOINT_TOL)
     right = _independent_check(mech, res.x, np.where(bad_input[:, None], 0.0, q))
     wrong = ok & ~right
-    assert not np.any(wrong), (f"success with a wrong answer in rows {np.flatnonzero(wrong)}: "
-                               f"x = {res.x[wrong][:2]}, status = {res.status[wrong][:2]}")
+    assert not np.any(wrong), (
+        f"success with a wrong answer in rows {np.flatnonzero(wrong)}: "
+        f"x = {res.x[wrong][:2]}, status = {res.status[wrong][:2]}"
+    )
 
 
 def test_start_outside_the_domain_never_aborts_the_batch():

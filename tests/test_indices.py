@@ -4,10 +4,10 @@ delta-only dependence, the batched mass matrix against the dynamics module, quad
 import numpy as np
 import pytest
 
-from parakin.mechanisms import p3p4s_dynamics as dyn
-from parakin.mechanisms import p3p4s_indices as ix
 from parakin.errors import UnreachableError
 from parakin.mechanisms import P3P4S
+from parakin.mechanisms import p3p4s_dynamics as dyn
+from parakin.mechanisms import p3p4s_indices as ix
 
 BEFORE = P3P4S.zhao2017()
 AFTER = P3P4S.zhao2017_optimised()
@@ -46,7 +46,9 @@ def test_mass_matrix_batched_equals_dynamics_module():
         fast = ix.mass_matrix_batched(mech.delta, mech.L, mech.phi, poses)[0]
         np.testing.assert_allclose(fast, ref, rtol=1e-12, atol=1e-12)
     # and the column definition: M e_k is the force for unit acceleration e_k, v = 0, gravity off
-    f = dyn.inverse_dynamics(BEFORE, dyn.InertialParams(g=(0.0, 0.0, 0.0)), poses[0], np.zeros(3), [0.0, 1.0, 0.0])
+    f = dyn.inverse_dynamics(
+        BEFORE, dyn.InertialParams(g=(0.0, 0.0, 0.0)), poses[0], np.zeros(3), [0.0, 1.0, 0.0]
+    )
     np.testing.assert_allclose(ix.mass_matrix(BEFORE, PARAMS, poses[0])[:, 1], f, rtol=1e-12)
 
 
@@ -98,7 +100,10 @@ def test_indices_depend_on_delta_only():
 
 
 def test_quadrature_converges_and_gauss_beats_midpoint():
-    g = {n: ix.global_indices([BEFORE.delta], [BEFORE.L], [BEFORE.phi], W, n) for n in (8, 16, 32, 48)}
+    g = {
+        n: ix.global_indices([BEFORE.delta], [BEFORE.L], [BEFORE.phi], W, n)
+        for n in (8, 16, 32, 48)
+    }
     ref = g[48]
     for attr in ("sigma1", "sigma2_lambda", "sigma3"):
         # grid doubling 16 -> 32 does not move the 3rd significant digit
@@ -125,8 +130,12 @@ def test_infeasible_designs_are_flagged_not_raised():
     ind = ix.local_indices([BEFORE.delta, 0.2], [0.38, 0.2], [BEFORE.phi, 0.5], x)
     assert ind.feasible[0].all() and not ind.feasible[1].any()
     assert np.isnan(ind.dynamic[1]).all()
-    F = ix.design_objectives([[0.25, 0.67, 0.38, 0.12, BEFORE.phi], [0.25, 0.67, 0.38, 0.12, BEFORE.phi]], W, 3,
-                             max_speed=5.0)
+    F = ix.design_objectives(
+        [[0.25, 0.67, 0.38, 0.12, BEFORE.phi], [0.25, 0.67, 0.38, 0.12, BEFORE.phi]],
+        W,
+        3,
+        max_speed=5.0,
+    )
     assert np.isnan(F).all()  # max cond over W is ~12 > 5
 
 
@@ -150,8 +159,8 @@ def test_bad_input():
 # ------------------------------------------------------------------------------ any mechanism
 def test_kinematic_indices_agree_with_the_3p4s_indices():
     from parakin.indices import kinematic_indices
-    from parakin.mechanisms.p3p4s_indices import mech_indices
     from parakin.mechanisms import P3P4S
+    from parakin.mechanisms.p3p4s_indices import mech_indices
     from parakin.workspace import sample_reachable
 
     m = P3P4S()
@@ -161,13 +170,15 @@ def test_kinematic_indices_agree_with_the_3p4s_indices():
     np.testing.assert_allclose(gen["speed"], own.speed, rtol=1e-10)
     np.testing.assert_allclose(gen["stiffness_lambda"], own.stiffness_lambda, rtol=1e-10)
     np.testing.assert_allclose(gen["stiffness_sqrt"], own.stiffness_sqrt, rtol=1e-10)
-    np.testing.assert_allclose(gen["manipulability"], np.abs(np.linalg.det(m.velocity_jacobian(x))), rtol=1e-10)
+    np.testing.assert_allclose(
+        gen["manipulability"], np.abs(np.linalg.det(m.velocity_jacobian(x))), rtol=1e-10
+    )
 
 
 def test_global_kinematic_indices_match_the_3p4s_global_speed_index():
     from parakin.indices import global_kinematic_indices
-    from parakin.mechanisms.p3p4s_indices import Workspace, global_indices
     from parakin.mechanisms import P3P4S
+    from parakin.mechanisms.p3p4s_indices import Workspace, global_indices
 
     m = P3P4S()
     ws = Workspace.square(0.585, 0.05)
@@ -175,7 +186,9 @@ def test_global_kinematic_indices_match_the_3p4s_global_speed_index():
     gen = global_kinematic_indices(m, lo, hi, 8)
     own = global_indices(m.delta, m.L, m.phi, ws, 8)
     assert gen["speed"] == pytest.approx(float(np.ravel(own.sigma3)[0]), rel=1e-10)
-    assert gen["stiffness_lambda"] == pytest.approx(float(np.ravel(own.sigma2_lambda)[0]), rel=1e-10)
+    assert gen["stiffness_lambda"] == pytest.approx(
+        float(np.ravel(own.sigma2_lambda)[0]), rel=1e-10
+    )
     with pytest.raises(UnreachableError, match="quadrature node"):
         global_kinematic_indices(m, lo, hi + np.array([0, 0, 0.5]), 4)
 
@@ -186,6 +199,8 @@ def test_box_nodes_integrate_polynomials_exactly():
     x, w = box_nodes([0.0, 1.0, 2.0], [1.0, 3.0, 2.0], 3)  # third axis fixed
     assert x.shape == (9, 3) and np.all(x[:, 2] == 2.0)
     assert w.sum() == pytest.approx(1.0)
-    assert w @ (x[:, 0] ** 5 * x[:, 1] ** 3) == pytest.approx((1 / 6) * (3**4 - 1) / 4 / 2, rel=1e-12)
+    assert w @ (x[:, 0] ** 5 * x[:, 1] ** 3) == pytest.approx(
+        (1 / 6) * (3**4 - 1) / 4 / 2, rel=1e-12
+    )
     with pytest.raises(ValueError, match="lo <= hi"):
         box_nodes([1.0], [0.0], 3)

@@ -34,9 +34,19 @@ def test_markdown_table_format():
     assert md.splitlines() == ["| x | n |", "|---|---|", "| 1.235 | a |"]
 
 
-@pytest.mark.parametrize("name, timed", [("time_ms", True), ("median_latency_us", True), ("batched_s", True),
-                                         ("speedup_single", True), ("iteration", False), ("t_s", False),
-                                         ("mujoco_loop_error_m", False), ("e3", False)])
+@pytest.mark.parametrize(
+    "name, timed",
+    [
+        ("time_ms", True),
+        ("median_latency_us", True),
+        ("batched_s", True),
+        ("speedup_single", True),
+        ("iteration", False),
+        ("t_s", False),
+        ("mujoco_loop_error_m", False),
+        ("e3", False),
+    ],
+)
 def test_timing_columns_are_recognised(name, timed):
     from parakin.io import is_timing_column
 

@@ -15,13 +15,19 @@ import pytest
 from parakin import kernels
 from parakin.mechanisms import P3P4S, UPS2, Stewart12, Stewart36
 from parakin.mechanisms.stewart12 import DriveMode
-from parakin.solvers import Status, solve_fk
-from parakin.solvers import compiled
+from parakin.solvers import Status, compiled, solve_fk
 
 pytest.importorskip("numba")
 
-MECHS = {"3p4s": P3P4S(), "3p4s-opt": P3P4S.zhao2017_optimised(), "2ups": UPS2(), "2ups-mirror": UPS2(branch=-1),
-         "stewart12": Stewart12(), "stewart36": Stewart36(), "stewart36-b2": Stewart36(b=2.0)}
+MECHS = {
+    "3p4s": P3P4S(),
+    "3p4s-opt": P3P4S.zhao2017_optimised(),
+    "2ups": UPS2(),
+    "2ups-mirror": UPS2(branch=-1),
+    "stewart12": Stewart12(),
+    "stewart36": Stewart36(),
+    "stewart36-b2": Stewart36(b=2.0),
+}
 METHODS = ["newton", "lm", "broyden", "bfgs"]
 
 
@@ -45,7 +51,9 @@ def test_kernels_equal_numpy_methods(key):
     mod = importlib.import_module(k.module)
     rng = np.random.default_rng(5)
     lo, hi = mech.pose_bounds()
-    x = rng.uniform(lo - 0.5 * (hi - lo), hi + 0.5 * (hi - lo), size=(300, mech.n_pose))  # also outside the domain
+    x = rng.uniform(
+        lo - 0.5 * (hi - lo), hi + 0.5 * (hi - lo), size=(300, mech.n_pose)
+    )  # also outside the domain
     inside = mech.in_domain(x)
     q = np.where(inside[:, None], 0.0, 0.1) + rng.uniform(0.0, 1.0, (len(x), mech.n_joints))
     q[inside] = mech.ik(x[inside]) + 1e-3 * rng.standard_normal((inside.sum(), mech.n_joints))
@@ -60,7 +68,9 @@ def test_kernels_equal_numpy_methods(key):
         mod.residual(k.params, xi, qi, r)
         mod.jacobian(k.params, xi, qi, jac)
         assert mod.ik(k.params, xi, out)
-        np.testing.assert_allclose(r, mech.residual(xi, qi), rtol=1e-12, atol=1e-13 * (1 + qi @ qi))  # |v|^2 - L^2 cancels
+        np.testing.assert_allclose(
+            r, mech.residual(xi, qi), rtol=1e-12, atol=1e-13 * (1 + qi @ qi)
+        )  # |v|^2 - L^2 cancels
         np.testing.assert_allclose(jac, mech.jacobian_pose(xi, qi), rtol=1e-10, atol=1e-13)
         np.testing.assert_allclose(out, mech.ik(xi), rtol=1e-13, atol=1e-14)
         assert bool(mod.on_assembly(k.params, xi, qi)) == bool(mech.on_assembly(xi, qi))
@@ -85,7 +95,9 @@ def test_compiled_solves_equal_numpy(key, method, monkeypatch):
     for f in ("nit", "nfev", "njev"):
         a, b = getattr(got, f), getattr(ref, f)
         differ = a != b
-        assert differ.mean() <= 0.02 and np.all(np.abs(a - b)[differ] <= 2 * (1 + (method == "bfgs") * 30)), f
+        assert differ.mean() <= 0.02 and np.all(
+            np.abs(a - b)[differ] <= 2 * (1 + (method == "bfgs") * 30)
+        ), f
         if method != "bfgs":
             assert differ.mean() <= 0.01, f
     # poses equal to rounding where both took the same path (BFGS's slow final approach near a
@@ -118,8 +130,12 @@ def test_options_and_verification_apply(monkeypatch):
     mech = Stewart36()
     truth = _poses(mech, 100, seed=8, spread=0.3)
     joints = mech.ik(truth)
-    cases = [("newton", {"xtol": 1e-6}), ("lm", {"gtol": 1e-3, "tau": 1e-3}), ("bfgs", {"maxls": 5, "c1": 1e-3}),
-             ("broyden", {"maxiter": 3})]
+    cases = [
+        ("newton", {"xtol": 1e-6}),
+        ("lm", {"gtol": 1e-3, "tau": 1e-3}),
+        ("bfgs", {"maxls": 5, "c1": 1e-3}),
+        ("broyden", {"maxiter": 3}),
+    ]
     x0 = truth + 0.01
     for method, opts in cases:
         got = solve_fk(mech, joints, x0, method=method, tol=1e-12, **opts)
@@ -186,13 +202,27 @@ def test_single_call_verification_rules():
     from parakin.solvers.verify import judge_one
 
     mech = Stewart36()
-    combos = [(s, d, a, e) for s in (0, 1, -1) for d in (True, False) for a in (True, False) for e in (0.0, 1.0)]
+    combos = [
+        (s, d, a, e)
+        for s in (0, 1, -1)
+        for d in (True, False)
+        for a in (True, False)
+        for e in (0.0, 1.0)
+    ]
     for s, d, a, e in combos:
         got = judge_one(s, d, a, e, 0.5)
         # the batched rule, written out as verify() applies it
         want = s
         if s >= 0:
-            want = Status.OUT_OF_DOMAIN if not d else Status.WRONG_ASSEMBLY if not a else Status.WRONG_ANSWER if e > 0.5 else s
+            want = (
+                Status.OUT_OF_DOMAIN
+                if not d
+                else Status.WRONG_ASSEMBLY
+                if not a
+                else Status.WRONG_ANSWER
+                if e > 0.5
+                else s
+            )
         assert got == want
     # and the single-call path reports WRONG_ASSEMBLY like the batched one (mirror start converges below the base)
     q = mech.ik(mech.home())
@@ -210,7 +240,10 @@ def test_threads_get_the_serial_driver_and_same_results():
     joints = mech.ik(_poses(mech, 500, seed=9))
     ref = solve_fk(mech, joints, method="lm")
     out: list = []
-    threads = [threading.Thread(target=lambda: out.append(solve_fk(mech, joints, method="lm"))) for _ in range(3)]
+    threads = [
+        threading.Thread(target=lambda: out.append(solve_fk(mech, joints, method="lm")))
+        for _ in range(3)
+    ]
     for t in threads:
         t.start()
     for t in threads:
@@ -224,11 +257,17 @@ def test_threads_get_the_serial_driver_and_same_results():
 def test_prune_removes_only_older_builds_of_the_same_module(tmp_path):
     (tmp_path / "__pycache__").mkdir()
     old, new, other, sub = "0" * 16, "1" * 16, "2" * 16, "3" * 16
-    stems = (f"parakin_loops_a_b_{old}", f"parakin_loops_a_b_{new}", f"parakin_loops_a_bc_{other}",
-             f"parakin_loops_a_b_c_{sub}")
+    stems = (
+        f"parakin_loops_a_b_{old}",
+        f"parakin_loops_a_b_{new}",
+        f"parakin_loops_a_bc_{other}",
+        f"parakin_loops_a_b_c_{sub}",
+    )
     for stem in stems:
         (tmp_path / f"{stem}.py").write_text("")
         (tmp_path / "__pycache__" / f"{stem}.f-1.py311.nbi").write_text("")
     kernels._prune(tmp_path, "parakin_loops_a_b")
     assert sorted(p.stem for p in tmp_path.glob("*.py")) == sorted(stems[2:])
-    assert sorted(p.name.split(".")[0] for p in (tmp_path / "__pycache__").iterdir()) == sorted(stems[2:])
+    assert sorted(p.name.split(".")[0] for p in (tmp_path / "__pycache__").iterdir()) == sorted(
+        stems[2:]
+    )

@@ -9,7 +9,12 @@ import pandas as pd
 import pytest
 
 import parakin.papers.li2017_stewart36 as L
-from parakin.papers.li2017_stewart36.chaos import arcsine_expected, histogram, logistic_weights, run_pso
+from parakin.papers.li2017_stewart36.chaos import (
+    arcsine_expected,
+    histogram,
+    logistic_weights,
+    run_pso,
+)
 from parakin.report import load_reference
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -56,13 +61,15 @@ def test_reference_table3_decoded():
     t = L.common.table3(ref)
     assert len(t) == 19
     cols = ["alpha", "beta", "gamma", "X", "Y", "Z"]
-    assert np.array_equal(t.loc[3, cols], t.loc[16, cols]) and np.array_equal(t.loc[5, cols], t.loc[17, cols])
+    assert np.array_equal(t.loc[3, cols], t.loc[16, cols]) and np.array_equal(
+        t.loc[5, cols], t.loc[17, cols]
+    )
     assert t.loc[14, "alpha"] - t.loc[2, "alpha"] == pytest.approx(5.0)
 
 
 def test_artefacts_small_config(config, tmp_path):
     paths = []
-    for name, fn in L.ARTEFACTS.items():
+    for fn in L.ARTEFACTS.values():
         paths += fn(config, tmp_path)
     assert all(p.exists() for p in paths)
     for png in [p for p in paths if p.suffix == ".png"]:
@@ -78,12 +85,28 @@ def test_artefacts_small_config(config, tmp_path):
     assert s.loc["max_roundtrip_error", "ours_max"] < 1e-9
     ref = load_reference(L.KEY)
     claims = {(c.artefact, c.quantity, c.variant): c for c in L.claims(tmp_path, ref)}
-    assert claims[("table3", "n_solutions", "certified FK: max above-base solutions over the b sweep")].verdict == "differs — cause shown"
-    assert claims[("sec4", "table3_rows_outside_ranges", "the paper's Table 3 against its own §4 ranges")].ours == 11
+    assert (
+        claims[
+            ("table3", "n_solutions", "certified FK: max above-base solutions over the b sweep")
+        ].verdict
+        == "differs — cause shown"
+    )
+    assert (
+        claims[
+            ("sec4", "table3_rows_outside_ranges", "the paper's Table 3 against its own §4 ranges")
+        ].ours
+        == 11
+    )
     rows = [c for c in claims.values() if c.artefact == "table3" and c.quantity.startswith("row")]
     assert len(rows) == 19 * 6  # every printed pose value judged against the certified solutions
-    assert all(c.verdict == "consistent after fitting or assuming" for c in rows if c.quantity.startswith("row1."))
-    assert sum(c.differs for c in rows) >= 18 * 6 - 6  # rows 2-19 are not solutions (a coordinate may agree by chance)
+    assert all(
+        c.verdict == "consistent after fitting or assuming"
+        for c in rows
+        if c.quantity.startswith("row1.")
+    )
+    assert (
+        sum(c.differs for c in rows) >= 18 * 6 - 6
+    )  # rows 2-19 are not solutions (a coordinate may agree by chance)
     t = pd.read_csv(tmp_path / "extra_pso_test.csv").set_index("quantity")["value"]
     assert t["runs_chaotic"] >= 2 and 0 <= t["p_chaotic_lower"] <= 1
     assert claims[("eq9", "mu", "mu that gives Fig. 2 / Table 1")].ours == 4
@@ -95,7 +118,8 @@ def test_notebook_runs(tmp_path):
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")
     nb = nbformat.read(ROOT / "notebooks" / "li2017_stewart36.ipynb", as_version=4)
-    nbclient.NotebookClient(nb, timeout=60, kernel_name="python3",
-                            resources={"metadata": {"path": str(tmp_path)}}).execute()
+    nbclient.NotebookClient(
+        nb, timeout=60, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}
+    ).execute()
     outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])]
     assert not any(o.get("output_type") == "error" for o in outputs)

@@ -7,10 +7,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from parakin.claims import resolve
 from parakin.config import DEFAULT_CONFIG, QUICK_CONFIG, load_config
 from parakin.papers import li2020_2ups as L
 from parakin.papers.li2020_2ups.fk import consistency_checks
-from parakin.claims import resolve
 from parakin.report import load_reference
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -19,8 +19,17 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_reference_transcription():
     ref = load_reference(L.KEY)
     assert (ref["paper"] == L.KEY).all()
-    t2 = ref[(ref["artefact"] == "table2") & ref["quantity"].str.startswith("case")]  # the printed table
-    assert len(t2) == 30 and t2["value"].tolist()[:6] == ["0", "-24", "26", "-0.680", "1.713", "0.311"]
+    t2 = ref[
+        (ref["artefact"] == "table2") & ref["quantity"].str.startswith("case")
+    ]  # the printed table
+    assert len(t2) == 30 and t2["value"].tolist()[:6] == [
+        "0",
+        "-24",
+        "26",
+        "-0.680",
+        "1.713",
+        "0.311",
+    ]
 
 
 def test_table2_contradicts_own_ik():
@@ -28,7 +37,9 @@ def test_table2_contradicts_own_ik():
     c = consistency_checks()
     assert c["same_l1_Y_spread_mm"] == pytest.approx(1.043)  # cases 1, 2: l_i1 = 0, Y differ
     assert c["order_violations"] >= 1  # Y5 < Y4 though l_i1(5) < l_i1(4)
-    assert c["a_max_mm"] < 15 and c["c_max_mm"] < 18  # docs/li2020_2ups.md#s4.3: a <= 14.6, c <= 17.3 mm
+    assert (
+        c["a_max_mm"] < 15 and c["c_max_mm"] < 18
+    )  # docs/li2020_2ups.md#s4.3: a <= 14.6, c <= 17.3 mm
     assert c["a_max_with_positive_l1_mm"] == 0.0
     assert c["sign_violations"] == 4
 
@@ -58,24 +69,45 @@ def test_artefacts_and_claims(outputs):
     assert by  # summary is built from outputs
     # docs/li2020_2ups.md#s6: claims C2, C4, C5, C8, C9, C11
     q = {(c.artefact, c.quantity): c for c in claims}
-    for key in (("eq7", "B2B3_identity"), ("eq14", "P_identity"), ("eq14", "X_residual"), ("eq14", "Z_residual"),
-                ("eq9-11", "l1_identity"), ("eq9-11", "l2_identity"), ("eq9-11", "l3_identity")):
+    for key in (
+        ("eq7", "B2B3_identity"),
+        ("eq14", "P_identity"),
+        ("eq14", "X_residual"),
+        ("eq14", "Z_residual"),
+        ("eq9-11", "l1_identity"),
+        ("eq9-11", "l2_identity"),
+        ("eq9-11", "l3_identity"),
+    ):
         assert q[key].verdict == "reproduced", key
-    assert q[("eq16", "printed_equals_vector_form")].verdict == "differs — cause shown"  # the printed (16) has a typo
-    assert q[("table2", "paper_pose_fitness")].verdict == "differs — cause shown" and q[("table2", "paper_pose_fitness")].ours > 1
+    assert (
+        q[("eq16", "printed_equals_vector_form")].verdict == "differs — cause shown"
+    )  # the printed (16) has a typo
+    assert (
+        q[("table2", "paper_pose_fitness")].verdict == "differs — cause shown"
+        and q[("table2", "paper_pose_fitness")].ours > 1
+    )
     prec = {c.variant.split(":")[0]: c for c in claims if c.quantity == "pso_all_inputs_precise"}
     assert prec["PSO as_printed"].differs and prec["PSO as_printed"].ours == 0.0
     fig2 = {c.variant.split(",")[0]: c for c in claims if c.quantity == "iterations_to_threshold"}
     assert fig2["PSO as_printed"].differs
-    assert {("text_intro", "analytic_fk_cost"), ("text_intro", "newton_failure_from_home")} <= set(q)
-    assert q[("text_intro", "analytic_fk_cost")].verdict == "differs — cause shown"  # < 1 ms: not costly
+    assert {("text_intro", "analytic_fk_cost"), ("text_intro", "newton_failure_from_home")} <= set(
+        q
+    )
+    assert (
+        q[("text_intro", "analytic_fk_cost")].verdict == "differs — cause shown"
+    )  # < 1 ms: not costly
     text = L.summary(outputs, ref)
     assert "Table 2 cannot satisfy" in text and "α = 0" in text
     df = pd.read_csv(outputs / "table2.csv")
     assert set(df["variant"]) == {"as_printed", "improved", "improved_clamped"}
     fig2 = pd.read_csv(outputs / "fig02_fitness.csv")
     assert set(fig2["case"]) == {1, 2, 3, 4, 5}
-    for png in ("fig01_mechanism.png", "fig02_fitness.png", "extra_parasitic.png", "extra_fk_solutions.png"):
+    for png in (
+        "fig01_mechanism.png",
+        "fig02_fitness.png",
+        "extra_parasitic.png",
+        "extra_fk_solutions.png",
+    ):
         assert (outputs / png).stat().st_size > 10_000
 
 
@@ -90,9 +122,20 @@ def test_loop_pso_equals_vectorised():
     for variant in ("as_printed", "improved", "improved_clamped"):
         o = {**pso_options(cfg, variant), "maxiter": 60}
         r = solve_fk(m, q[1:2], method="pso", seed=7, **o)
-        loop = pso_loop(m, q[1], seed=7, **{k: o[k] for k in ("swarm", "maxiter", "c1", "c2", "w", "w_end", "inertia",
-                                                                "vclamp", "tol")})
-        assert np.array_equal(loop["x"], r.x[0]) and loop["fitness"] == r.fitness[0] and loop["nit"] == r.nit[0]
+        loop = pso_loop(
+            m,
+            q[1],
+            seed=7,
+            **{
+                k: o[k]
+                for k in ("swarm", "maxiter", "c1", "c2", "w", "w_end", "inertia", "vclamp", "tol")
+            },
+        )
+        assert (
+            np.array_equal(loop["x"], r.x[0])
+            and loop["fitness"] == r.fitness[0]
+            and loop["nit"] == r.nit[0]
+        )
 
 
 def test_benchmark(tmp_path, monkeypatch):
@@ -108,7 +151,10 @@ def test_benchmark(tmp_path, monkeypatch):
     assert {p.name for p in paths} == {"extra_benchmark.csv", "extra_benchmark.md"}
     assert df.loc[df["part"] == "pso", "same_result"].all()
     fk = df[df["part"] == "fk"]
-    assert "scipy-root" in set(fk["method"]) and (fk.loc[fk["method"] == "scipy-root", "speedup_single"] == 1).all()
+    assert (
+        "scipy-root" in set(fk["method"])
+        and (fk.loc[fk["method"] == "scipy-root", "speedup_single"] == 1).all()
+    )
     assert "Benchmarks" in bench.summary(tmp_path, load_reference(L.KEY))
 
 

@@ -9,10 +9,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from parakin.mechanisms import p3p4s_dynamics as dyn
-from parakin.mechanisms import p3p4s_mujoco as mc
 from parakin.errors import ShapeError
 from parakin.mechanisms import P3P4S
+from parakin.mechanisms import p3p4s_dynamics as dyn
+from parakin.mechanisms import p3p4s_mujoco as mc
 
 MECH = P3P4S.zhao2017()
 PARAMS = dyn.InertialParams.zhao2017()
@@ -96,8 +96,14 @@ def test_demanding_trajectory_agrees(model):
 
 def test_other_geometry_masses_and_gravity():
     mech = P3P4S.zhao2017_optimised()
-    params = dyn.InertialParams(m_platform=3.0, m_slider=1.0, m_rod=0.5, I_rod=(0.01, 0.01, 1e-3),
-                                rods_per_limb=3, g=(0.5, -0.2, -9.0))
+    params = dyn.InertialParams(
+        m_platform=3.0,
+        m_slider=1.0,
+        m_rod=0.5,
+        I_rod=(0.01, 0.01, 1e-3),
+        rods_per_limb=3,
+        g=(0.5, -0.2, -9.0),
+    )
     p = np.array([[0.01, -0.02, 0.6], [-0.03, 0.01, 0.62]])
     v = np.array([[0.3, -0.2, 0.1], [0.0, 0.1, -0.3]])
     a = np.array([[1.0, 2.0, -0.5], [-3.0, 0.5, 2.0]])
@@ -110,8 +116,12 @@ def test_other_geometry_masses_and_gravity():
 def test_printed_slips_disagree_with_mujoco(paper_motion):
     _, _, p, v, a = paper_motion
     res = mc.inverse_dynamics(mc.build(MECH, PARAMS), p, v, a)
-    for opts, at_least in ((dict(h_form="paper"), 1e-4), (dict(gravity_moment=True), 0.04),
-                           (dict(rod_inertia_factor=1.0), 0.15), (dyn.PAPER_PRINTED, 0.2)):
+    for opts, at_least in (
+        (dict(h_form="paper"), 1e-4),
+        (dict(gravity_moment=True), 0.04),
+        (dict(rod_inertia_factor=1.0), 0.15),
+        (dyn.PAPER_PRINTED, 0.2),
+    ):
         assert rel(dyn.inverse_dynamics(MECH, PARAMS, p, v, a, **opts), res.force) > at_least, opts
 
 
@@ -120,12 +130,18 @@ def test_open_loop_simulation_follows_the_motion():
     law; driven by the printed equations' forces it does not."""
     motion = dyn.SineMotion()
     model = mc.build(MECH, PARAMS, "equivalent")
-    ours = mc.track(model, motion, 0.025, lambda t: dyn.inverse_dynamics(MECH, PARAMS, *motion.state(t)))
+    ours = mc.track(
+        model, motion, 0.025, lambda t: dyn.inverse_dynamics(MECH, PARAMS, *motion.state(t))
+    )
     assert len(ours.t) == 251 and ours.t[-1] == pytest.approx(0.025)
     assert np.max(ours.error) < 1e-3 * motion.amplitude
     assert np.max(ours.loop_error) < 1e-8
-    printed = mc.track(model, motion, 0.025,
-                       lambda t: dyn.inverse_dynamics(MECH, PARAMS, *motion.state(t), **dyn.PAPER_PRINTED))
+    printed = mc.track(
+        model,
+        motion,
+        0.025,
+        lambda t: dyn.inverse_dynamics(MECH, PARAMS, *motion.state(t), **dyn.PAPER_PRINTED),
+    )
     assert np.max(printed.error) > 0.3 * motion.amplitude
 
 
@@ -146,6 +162,8 @@ def test_bad_input():
         mc.mjcf(object(), PARAMS)
     model = mc.build(MECH, PARAMS)
     with pytest.raises(ShapeError):
-        mc.inverse_dynamics(model, np.zeros((2, 3)) + [0, 0, 0.57], np.zeros((3, 3)), np.zeros((2, 3)))
+        mc.inverse_dynamics(
+            model, np.zeros((2, 3)) + [0, 0, 0.57], np.zeros((3, 3)), np.zeros((2, 3))
+        )
     with pytest.raises(ValueError, match="3 finite motor forces"):
         mc.track(model, dyn.SineMotion(), 0.001, lambda t: [1.0, 2.0])

@@ -13,8 +13,17 @@ from parakin.nn import BPNetwork, residual_jacobian, residuals, torch_forward, t
 from parakin.nn.bp import nguyen_widrow_init  # noqa: E402
 from parakin.workspace import sample_reachable  # noqa: E402
 
-LOG_COLUMNS = ["epoch", "mu", "train_mse", "val_mse", "test_mse", "train_rms_m", "val_rms_m",
-               "test_rms_m", "grad_norm"]
+LOG_COLUMNS = [
+    "epoch",
+    "mu",
+    "train_mse",
+    "val_mse",
+    "test_mse",
+    "train_rms_m",
+    "val_rms_m",
+    "test_rms_m",
+    "grad_norm",
+]
 
 
 def _strokes_and_poses(n: int, seed: int = 20171010) -> tuple[np.ndarray, np.ndarray]:
@@ -47,7 +56,10 @@ def test_training_reaches_millimetre_level_on_3p4s(trained):
     assert net.n_weights == 73 and (net.n_in, net.hidden, net.n_out) == (3, 10, 3)
     assert list(log.columns) == LOG_COLUMNS
     assert summary["epochs"] == 200 and summary["stop_reason"] == "max_epochs"
-    assert summary["n_train"] + summary["n_val"] + summary["n_test"] == 2000 and summary["n_test"] == 300
+    assert (
+        summary["n_train"] + summary["n_val"] + summary["n_test"] == 2000
+        and summary["n_test"] == 300
+    )
     # measured (seed 0, this data): test RMS 0.818 mm, max 3.72 mm, p95 1.33 mm; the initial
     # network is off by ~0.2 m. (A 3-10-3 net on the whole pose box does not reach the paper's "1e-4
     # level": 10,000 samples and 1,000 epochs give ~0.95 mm RMS.)
@@ -59,7 +71,7 @@ def test_training_reaches_millimetre_level_on_3p4s(trained):
     # the summary's test RMS is the returned network's, in metres
     q, p = _strokes_and_poses(2000)
     rng_split = np.random.default_rng(0).permutation(2000)
-    test = np.sort(rng_split[2000 - 300:])
+    test = np.sort(rng_split[2000 - 300 :])
     err = np.linalg.norm(net.predict(q[test]) - p[test], axis=1)
     assert np.sqrt(np.mean(err**2)) == pytest.approx(summary["test_rms_m"], rel=1e-12)
     assert err.max() == pytest.approx(summary["test_max_m"], rel=1e-12)
@@ -71,7 +83,9 @@ def test_training_reaches_millimetre_level_on_3p4s(trained):
 def test_training_error_never_increases(trained):
     _, log, _ = trained
     assert log["epoch"].tolist() == list(range(len(log)))
-    assert np.all(np.diff(log["train_mse"].to_numpy()) <= 0), "LM accepted a step that raised the training error"
+    assert np.all(np.diff(log["train_mse"].to_numpy()) <= 0), (
+        "LM accepted a step that raised the training error"
+    )
     assert log["train_mse"].iloc[-1] < 1e-3 * log["train_mse"].iloc[0]
     assert np.all(log["mu"] > 0) and np.all(log["grad_norm"] >= 0)
 
@@ -84,12 +98,21 @@ def test_jacobian_matches_finite_differences():
     J = residual_jacobian(w, x, t, 10)
     assert J.shape == (45, 73)
     h = 1e-6
-    fd = torch.stack([(residuals(w + h * e, x, t, 10) - residuals(w - h * e, x, t, 10)) / (2 * h)
-                      for e in torch.eye(73, dtype=torch.float64)], dim=1)
+    fd = torch.stack(
+        [
+            (residuals(w + h * e, x, t, 10) - residuals(w - h * e, x, t, 10)) / (2 * h)
+            for e in torch.eye(73, dtype=torch.float64)
+        ],
+        dim=1,
+    )
     assert torch.max(torch.abs(J - fd)) < 1e-8 * max(1.0, float(torch.max(torch.abs(J))))
     # and it is the Jacobian of the residual vector in its row order: e = vec(net(x) - t)
-    torch.testing.assert_close(residuals(w, x, t, 10).reshape(15, 3)[4], residuals(w, x[4:5], t[4:5], 10),
-                               rtol=0, atol=1e-15)
+    torch.testing.assert_close(
+        residuals(w, x, t, 10).reshape(15, 3)[4],
+        residuals(w, x[4:5], t[4:5], 10),
+        rtol=0,
+        atol=1e-15,
+    )
 
 
 def test_same_seed_same_weights_different_seed_different(p3p4s_data, small):
@@ -128,13 +151,17 @@ def test_early_stopping_returns_best_validation_weights():
     rng = np.random.default_rng(0)
     x = rng.uniform(-1, 1, (60, 1))
     y = np.sin(3 * x) + 0.3 * rng.standard_normal((60, 1))
-    net, log, summary = train_lm(x, y, hidden=20, seed=0, max_epochs=500, val_fraction=0.3, max_fail=6)
+    net, log, summary = train_lm(
+        x, y, hidden=20, seed=0, max_epochs=500, val_fraction=0.3, max_fail=6
+    )
     assert summary["stop_reason"] == "max_fail"
     assert summary["epochs"] == summary["best_epoch"] + 6 == len(log) - 1
     val = log["val_mse"].to_numpy()
     assert val[summary["best_epoch"]] == val.min()
     # the returned weights are those of the best epoch, not the last
-    assert summary["val_rms_m"] == pytest.approx(log["val_rms_m"].iloc[summary["best_epoch"]], rel=1e-9)
+    assert summary["val_rms_m"] == pytest.approx(
+        log["val_rms_m"].iloc[summary["best_epoch"]], rel=1e-9
+    )
     assert summary["val_rms_m"] < log["val_rms_m"].iloc[-1]
 
 
@@ -150,7 +177,11 @@ def test_goal_and_max_epochs_and_progress(p3p4s_data):
     _, _, summary = train_lm(q[:200], p[:200], min_grad=1e9)
     assert summary["stop_reason"] == "min_grad"
     _, log, summary = train_lm(q[:200], p[:200], max_epochs=2, val_fraction=0.0, test_fraction=0.0)
-    assert summary["n_train"] == 200 and np.isnan(summary["test_rms_m"]) and log["val_mse"].isna().all()
+    assert (
+        summary["n_train"] == 200
+        and np.isnan(summary["test_rms_m"])
+        and log["val_mse"].isna().all()
+    )
 
 
 def test_bad_training_input_is_rejected(p3p4s_data):

@@ -9,8 +9,8 @@ from parakin.config import DEFAULT_CONFIG, QUICK_CONFIG, load_config
 from parakin.errors import ConfigError
 from parakin.optimize import GAOptions, ga, non_dominated, normalised_sum, nsga2, rank_expectation
 from parakin.papers.zhao2017_3p4s import optimization as op
-from parakin.report import load_reference
 from parakin.registry import of_module
+from parakin.report import load_reference
 
 
 def sphere(X):
@@ -33,8 +33,13 @@ def test_ga_reproducible_per_seed_and_converges():
 
 def test_ga_handles_infeasible_and_fixed_variables():
     lo, hi = np.array([-1.0, 0.5]), np.array([1.0, 0.5])
-    r = ga(lambda X: np.where(X[:, 0] < 0, np.inf, (X[:, 0] - 0.2) ** 2), lo, hi, np.random.default_rng(1),
-           GAOptions(population=20, generations=40))
+    r = ga(
+        lambda X: np.where(X[:, 0] < 0, np.inf, (X[:, 0] - 0.2) ** 2),
+        lo,
+        hi,
+        np.random.default_rng(1),
+        GAOptions(population=20, generations=40),
+    )
     assert abs(r.x[0] - 0.2) < 1e-2 and r.x[1] == 0.5
     with pytest.raises(ValueError, match="lower <= upper"):
         ga(sphere, HI, LO, np.random.default_rng(0))
@@ -45,8 +50,12 @@ def test_ga_handles_infeasible_and_fixed_variables():
 def test_rank_scaling_and_normalisation():
     e = rank_expectation(np.array([3.0, 1.0, np.inf, 2.0]), 8)
     assert e.sum() == pytest.approx(8) and e[1] > e[3] > e[0] > e[2]
-    f = normalised_sum(np.array([[10.0, 0.5, 2.0], [20.0, 0.1, 4.0]]), [10, 0.1, 2], [20, 0.5, 4],
-                       [False, True, False])
+    f = normalised_sum(
+        np.array([[10.0, 0.5, 2.0], [20.0, 0.1, 4.0]]),
+        [10, 0.1, 2],
+        [20, 0.5, 4],
+        [False, True, False],
+    )
     np.testing.assert_allclose(f, [0.0, 3.0])  # stiffness term flipped (docs/zhao2017_3p4s.md#g18)
     with pytest.raises(ValueError, match="max > min"):
         normalised_sum(np.ones((1, 3)), [1, 1, 1], [1, 2, 3], [False] * 3)
@@ -69,14 +78,36 @@ def test_non_dominated_and_nsga2_front():
 def small_config():
     cfg = load_config([DEFAULT_CONFIG, QUICK_CONFIG])
     cfg["zhao2017_3p4s"]["indices"] = {
-        "z0": 0.585, "half_width": 0.05, "z_half_height": 0.0, "quadrature": "gauss", "nodes": 6,
-        "atlas_grid": 9, "k": 1.0, "stiffness": "lambda", "convergence_nodes": [2, 4, 8], "benchmark_poses": 400,
-        "loop_poses": 20}
+        "z0": 0.585,
+        "half_width": 0.05,
+        "z_half_height": 0.0,
+        "quadrature": "gauss",
+        "nodes": 6,
+        "atlas_grid": 9,
+        "k": 1.0,
+        "stiffness": "lambda",
+        "convergence_nodes": [2, 4, 8],
+        "benchmark_poses": 400,
+        "loop_poses": 20,
+    }
     cfg["zhao2017_3p4s"]["optimization"] = {
-        "seeds": [1, 2], "population": 12, "generations": 5, "elite": 2, "crossover_fraction": 0.8, "ga_nodes": 3,
-        "max_speed": 50.0, "nsga2_population": 12, "nsga2_generations": 3,
-        "bounds": {"r_a": [0.15, 0.30], "r_b": [0.55, 0.80], "L": [0.30, 0.45], "d": [0.08, 0.16],
-                   "phi_deg": [20.0, 45.0]}}
+        "seeds": [1, 2],
+        "population": 12,
+        "generations": 5,
+        "elite": 2,
+        "crossover_fraction": 0.8,
+        "ga_nodes": 3,
+        "max_speed": 50.0,
+        "nsga2_population": 12,
+        "nsga2_generations": 3,
+        "bounds": {
+            "r_a": [0.15, 0.30],
+            "r_b": [0.55, 0.80],
+            "L": [0.30, 0.45],
+            "d": [0.08, 0.16],
+            "phi_deg": [20.0, 45.0],
+        },
+    }
     return cfg
 
 
@@ -86,12 +117,25 @@ def test_section_artefacts_write_their_files(small_config, tmp_path):
         paths = fn(small_config, tmp_path)
         assert paths and all(p.exists() and p.stat().st_size > 0 for p in paths), name
         written += [p.name for p in paths]
-    for stem in ["fig11_velocity_sphere", "fig12_velocity_ellipsoid", "fig14_ga_convergence", "extra_pareto",
-                 *(f"fig{n:02d}_{k}_{w}_{kind}" for n0, k, w, *_ in op.ATLASES
-                   for n, kind in ((n0, "atlas"), (n0 + 1, "contour")))]:
+    for stem in [
+        "fig11_velocity_sphere",
+        "fig12_velocity_ellipsoid",
+        "fig14_ga_convergence",
+        "extra_pareto",
+        *(
+            f"fig{n:02d}_{k}_{w}_{kind}"
+            for n0, k, w, *_ in op.ATLASES
+            for n, kind in ((n0, "atlas"), (n0 + 1, "contour"))
+        ),
+    ]:
         assert f"{stem}.png" in written and f"{stem}.csv" in written, stem
-    assert {"table3.csv", "table3.md", "extra_index_convergence.csv", "extra_index_sensitivity.md",
-            "extra_index_benchmark.csv"} <= set(written)
+    assert {
+        "table3.csv",
+        "table3.md",
+        "extra_index_convergence.csv",
+        "extra_index_sensitivity.md",
+        "extra_index_benchmark.csv",
+    } <= set(written)
     t3 = pd.read_csv(tmp_path / "table3.csv")
     assert {"ours seed 1", "ours seed 2", "paper before", "paper after"} <= set(t3["design"])
     ref = load_reference("zhao2017_3p4s")

@@ -10,7 +10,6 @@ from parakin.errors import ShapeError, UnreachableError
 from parakin.geometry import rot_x, rot_z
 from parakin.mechanisms import P3P4S
 from parakin.mechanisms.base import Mechanism
-
 from parakin.workspace import sample_reachable as reachable_poses
 
 
@@ -22,7 +21,9 @@ def ik_paper_frames(mech: P3P4S, pose: np.ndarray) -> np.ndarray:
     for gamma, alpha in zip(np.deg2rad([0, 120, 240]), np.deg2rad([90, 210, 330])):
         rot = rot_z(alpha) @ rot_x(mech.phi)  # +phi: the only reading that reaches Table 1
         u = mech.r_b * np.array([math.cos(gamma), math.sin(gamma), 0.0])
-        d_platform = mech.r_a * math.cos(mech.theta) * np.array([math.cos(gamma), math.sin(gamma), 0.0])
+        d_platform = (
+            mech.r_a * math.cos(mech.theta) * np.array([math.cos(gamma), math.sin(gamma), 0.0])
+        )
         x, y, z = rot.T @ (pose + d_platform - u)
         out.append(y - math.sqrt(mech.L**2 - x**2 - z**2))
     return np.array(out)
@@ -68,7 +69,9 @@ def test_velocity_jacobian_eq8_by_finite_differences(p3p4s, rng):
     poses = reachable_poses(p3p4s, 300, rng)
     j = p3p4s.velocity_jacobian(poses)
     h = 1e-6
-    fd = np.stack([(p3p4s.ik(poses + h * e) - p3p4s.ik(poses - h * e)) / (2 * h) for e in np.eye(3)], axis=-1)
+    fd = np.stack(
+        [(p3p4s.ik(poses + h * e) - p3p4s.ik(poses - h * e)) / (2 * h) for e in np.eye(3)], axis=-1
+    )
     assert np.max(np.abs(j - fd) / (1 + np.abs(fd))) < 1e-7
     # eq (8) in the paper's form: diag(n_i . m_i)^-1 [n_1; n_2; n_3]
     n = p3p4s.rod_directions(poses)
@@ -97,7 +100,9 @@ def test_limb_frames_are_rz_alpha_rx_phi():
 
 def test_unreachable_pose_raises_with_value_and_limit():
     m = P3P4S()
-    with pytest.raises(UnreachableError, match=r"limb 1 needs L\^2 - x_u\^2 - z_u\^2 = -0.17\d+ m\^2 >= 0"):
+    with pytest.raises(
+        UnreachableError, match=r"limb 1 needs L\^2 - x_u\^2 - z_u\^2 = -0.17\d+ m\^2 >= 0"
+    ):
         m.ik([0.0, 0.0, 0.9])
     batch = np.array([[0, 0, 0.59], [0, 0, 0.9], [0, 0, 1.0]])
     with pytest.raises(UnreachableError, match=r"batch index \(1,\) \(1 more in this batch\)"):

@@ -23,8 +23,20 @@ def run_pipeline(workdir: Path) -> Path:
         (shutil.copytree if src.is_dir() else shutil.copy)(src, workdir / item)
     shutil.copytree(ROOT / "data" / "reference", workdir / "data" / "reference")
     res = subprocess.run(
-        [sys.executable, "-m", "snakemake", "--cores", "2", "--configfile", "config/quick.yaml", "-q"],
-        cwd=workdir, capture_output=True, text=True, timeout=900,
+        [
+            sys.executable,
+            "-m",
+            "snakemake",
+            "--cores",
+            "2",
+            "--configfile",
+            "config/quick.yaml",
+            "-q",
+        ],
+        cwd=workdir,
+        capture_output=True,
+        text=True,
+        timeout=900,
     )
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
     return workdir / "build" / "quick" / "figures"
@@ -32,13 +44,20 @@ def run_pipeline(workdir: Path) -> Path:
 
 @pytest.fixture(scope="module")
 def two_runs(tmp_path_factory):
-    return run_pipeline(tmp_path_factory.mktemp("run1")), run_pipeline(tmp_path_factory.mktemp("run2"))
+    return run_pipeline(tmp_path_factory.mktemp("run1")), run_pipeline(
+        tmp_path_factory.mktemp("run2")
+    )
 
 
 def test_pipeline_writes_table1_and_report(two_runs):
     figures, _ = two_runs
-    for name in ("zhao2017_3p4s/table1.csv", "zhao2017_3p4s/table1.md", "zhao2017_3p4s/table2.md",
-                 "zhao2017_3p4s/fk_benchmark.md", "REPORT.md"):
+    for name in (
+        "zhao2017_3p4s/table1.csv",
+        "zhao2017_3p4s/table1.md",
+        "zhao2017_3p4s/table2.md",
+        "zhao2017_3p4s/fk_benchmark.md",
+        "REPORT.md",
+    ):
         assert (figures / name).stat().st_size > 0
     assert "Table 1 (IK)" in (figures / "REPORT.md").read_text()
     assert not list(figures.rglob(".*.tmp*")), "temporary files left behind"
@@ -47,13 +66,19 @@ def test_pipeline_writes_table1_and_report(two_runs):
 def _same(a: Path, b: Path) -> bool:
     if a.suffix == ".json":
         ja, jb = (json.loads(p.read_text()) for p in (a, b))
-        return {k: v for k, v in ja.items() if "time" not in k} == {k: v for k, v in jb.items() if "time" not in k}
+        return {k: v for k, v in ja.items() if "time" not in k} == {
+            k: v for k, v in jb.items() if "time" not in k
+        }
     if a.suffix == ".csv":
         da, db = pd.read_csv(a), pd.read_csv(b)
         keep = [c for c in da.columns if not is_timing_column(c)]
         return list(da.columns) == list(db.columns) and da[keep].equals(db[keep])
     timed_csv = a.with_suffix(".csv")
-    if a.suffix == ".md" and timed_csv.exists() and any(is_timing_column(c) for c in pd.read_csv(timed_csv).columns):
+    if (
+        a.suffix == ".md"
+        and timed_csv.exists()
+        and any(is_timing_column(c) for c in pd.read_csv(timed_csv).columns)
+    ):
         return True  # the Markdown view of a timed table: its CSV is compared above
     if a.name in ("REPORT.md", "report.csv", "benchmarks.md"):
         return True  # quote timings; every number in them comes from the CSVs compared above
@@ -83,16 +108,34 @@ def test_quick_table1_agrees_with_committed(two_runs):
 
 def test_snakemake_lint_is_clean():
     """`snakemake --lint` passes: log per rule, software env, no hard-coded path params (issue 18)."""
-    res = subprocess.run([sys.executable, "-m", "snakemake", "--lint"], cwd=ROOT, capture_output=True, text=True,
-                         timeout=300)
+    res = subprocess.run(
+        [sys.executable, "-m", "snakemake", "--lint"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
 
 
 def test_report_has_every_figure_with_its_caption(two_runs):
     """`snakemake --report` on the finished quick run: every figure and table marked, captioned."""
     workdir = two_runs[0].parents[2]
-    res = subprocess.run([sys.executable, "-m", "snakemake", "--configfile", "config/quick.yaml", "--report",
-                          "report.html"], cwd=workdir, capture_output=True, text=True, timeout=600)
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "snakemake",
+            "--configfile",
+            "config/quick.yaml",
+            "--report",
+            "report.html",
+        ],
+        cwd=workdir,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
     html = (workdir / "report.html").read_text(errors="replace")
     assert "fig03_convergence.png" in html and "table1.csv" in html and "REPORT.md" in html
@@ -104,11 +147,21 @@ def test_long_jobs_declare_resources_and_report_progress():
     from parakin.pipeline import artefacts
 
     found = artefacts()
-    for key in ("zhao2017_3p4s:train", "zhao2017_3p4s:fig14", "zhao2017_3p4s:table3", "zhao2017_3p4s:pareto",
-                "zhao2017_3p4s:ga_paper_box", "extra:solver_atlas", "li2017_stewart36:fig03", "li2020_2ups:table2"):
+    for key in (
+        "zhao2017_3p4s:train",
+        "zhao2017_3p4s:fig14",
+        "zhao2017_3p4s:table3",
+        "zhao2017_3p4s:pareto",
+        "zhao2017_3p4s:ga_paper_box",
+        "extra:solver_atlas",
+        "li2017_stewart36:fig03",
+        "li2020_2ups:table2",
+    ):
         assert dict(found[key].resources)["runtime"] >= 30, key
     assert all(a.description for a in found.values())
-    assert (ROOT / "profiles" / "slurm" / "config.yaml").exists() and (ROOT / "docs" / "cluster.md").exists()
+    assert (ROOT / "profiles" / "slurm" / "config.yaml").exists() and (
+        ROOT / "docs" / "cluster.md"
+    ).exists()
 
 
 def test_progress_lines(capsys):

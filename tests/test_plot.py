@@ -262,7 +262,9 @@ def test_save_figure_atomic_png(tmp_path: Path, skeleton: Skeleton) -> None:
     # saving the same figure again, and drawing it afresh, give the same bytes
     save_figure(fig, target)
     assert target.read_bytes() == first
-    save_figure(draw_mechanism(skeleton).figure, tmp_path / "again" / "fig01_mechanism.png")  # same tag "Fig. 1"
+    save_figure(
+        draw_mechanism(skeleton).figure, tmp_path / "again" / "fig01_mechanism.png"
+    )  # same tag "Fig. 1"
     assert (tmp_path / "again" / "fig01_mechanism.png").read_bytes() == first
 
 
@@ -302,7 +304,10 @@ def test_figures_carry_their_paper_figure_number(tmp_path: Path) -> None:
     title unless a title already says it (issue 18: every figure titled with its number)."""
     from parakin.plot import figure_tag, new_figure
 
-    assert figure_tag("fig05_cm_velocity.png") == "Fig. 5" and figure_tag("extra_basin.png") == "Beyond the paper"
+    assert (
+        figure_tag("fig05_cm_velocity.png") == "Fig. 5"
+        and figure_tag("extra_basin.png") == "Beyond the paper"
+    )
     assert figure_tag("sketch.png") is None
     fig, ax = new_figure()
     ax.set_title("CM velocity")

@@ -31,7 +31,9 @@ def test_improved_converges_as_printed_does_not():
     m = UPS2()
     q = np.repeat(Q, 3, axis=0)
     seeds = np.arange(len(q))
-    imp = solve_fk(m, q, method="pso", tol=1e-9, maxiter=1500, inertia="linear", vclamp=0.2, seed=seeds)
+    imp = solve_fk(
+        m, q, method="pso", tol=1e-9, maxiter=1500, inertia="linear", vclamp=0.2, seed=seeds
+    )
     assert imp.success.all() and np.all(imp.fitness <= 1e-9)
     assert np.max(np.abs(imp.x - m.fk(q))) < 1e-5
     lit = solve_fk(m, q, method="pso", tol=1e-9, maxiter=1500, inertia="constant", seed=seeds)
@@ -50,10 +52,20 @@ def test_custom_schedule_and_fitness_and_other_mechanism():
         calls.append(k)
         return np.full(len(rows), 0.6)
 
-    res = solve_fk(m, m.ik(x), method="pso", tol=1e-9, maxiter=800, inertia=sched, seed=1,
-                   fitness=lambda xx, q: np.sum(m.residual(xx, np.broadcast_to(q[:, None, :], xx.shape)) ** 2, -1),
-                   ftol=1e-20)
-    assert calls[0] == 1 and np.allclose(res.inertia[1:len(calls) + 1], 0.6)
+    res = solve_fk(
+        m,
+        m.ik(x),
+        method="pso",
+        tol=1e-9,
+        maxiter=800,
+        inertia=sched,
+        seed=1,
+        fitness=lambda xx, q: np.sum(
+            m.residual(xx, np.broadcast_to(q[:, None, :], xx.shape)) ** 2, -1
+        ),
+        ftol=1e-20,
+    )
+    assert calls[0] == 1 and np.allclose(res.inertia[1 : len(calls) + 1], 0.6)
     assert np.max(np.abs(res.x - x)) < 1e-6
 
 

@@ -7,7 +7,6 @@ import sys
 from pathlib import Path
 
 import pandas as pd
-import pytest
 
 from parakin import registry
 from parakin.check import compare_file
@@ -19,7 +18,9 @@ ARTEFACTS = artefacts()
 
 
 def test_every_committed_file_is_made_by_one_artefact():
-    committed = subprocess.run(["git", "ls-files", "figures"], cwd=ROOT, capture_output=True, text=True).stdout.split()
+    committed = subprocess.run(
+        ["git", "ls-files", "figures"], cwd=ROOT, capture_output=True, text=True
+    ).stdout.split()
     assert committed, "no committed record"
     declared = {p for a in ARTEFACTS.values() for p in a.output_paths("figures", "data/generated")}
     assert sorted(set(committed) - declared - {"figures/REPORT.md", "figures/report.csv"}) == []
@@ -38,13 +39,19 @@ def test_outputs_are_declared_once_and_every_tolerance_has_a_reason():
 
 
 def test_which_answers_for_every_committed_file(capsys):
-    committed = subprocess.run(["git", "ls-files", "figures"], cwd=ROOT, capture_output=True, text=True).stdout.split()
+    committed = subprocess.run(
+        ["git", "ls-files", "figures"], cwd=ROOT, capture_output=True, text=True
+    ).stdout.split()
     for path in committed:
         text = describe(path, ARTEFACTS)
         assert "made by:" in text and ".py:" in text, text
     assert main(["which", "figures/zhao2017_3p4s/fig14_ga_convergence.png"]) == 0
     out = capsys.readouterr().out
-    assert "zhao2017_3p4s:fig14" in out and "optimization.py:" in out and "rule:      zhao2017_3p4s_fig14" in out
+    assert (
+        "zhao2017_3p4s:fig14" in out
+        and "optimization.py:" in out
+        and "rule:      zhao2017_3p4s_fig14" in out
+    )
     assert main(["which", "figures/nowhere.png"]) == 2
 
 
@@ -85,7 +92,10 @@ def _import_graph() -> dict[str, set[str]]:
             deps |= {n for n in names if n.startswith("parakin")}
         graph[mod] = deps
     # a dependency on a.b.c is one on the module itself (a name imported from it is not a module)
-    return {m: {d if d in graph else d.rpartition(".")[0] for d in deps} - {m} for m, deps in graph.items()}
+    return {
+        m: {d if d in graph else d.rpartition(".")[0] for d in deps} - {m}
+        for m, deps in graph.items()
+    }
 
 
 def test_no_import_cycle():
@@ -99,7 +109,7 @@ def test_no_import_cycle():
             if d not in graph:
                 continue
             if state.get(d) == 1:
-                cycle.append(stack[stack.index(d):] + [d])
+                cycle.append(stack[stack.index(d) :] + [d])
             elif d not in state:
                 visit(d, stack + [d])
         state[m] = 2
@@ -114,7 +124,9 @@ def test_check_statuses(tmp_path):
     tol = registry.ROUNDING
     rec, new = tmp_path / "rec.csv", tmp_path / "new.csv"
     pd.DataFrame({"a": [1.0, 2.0], "label": ["x", "y"], "time_ms": [1, 2]}).to_csv(rec, index=False)
-    pd.DataFrame({"a": [1.0, 2.0 + 1e-9], "label": ["x", "y"], "time_ms": [5, 9]}).to_csv(new, index=False)
+    pd.DataFrame({"a": [1.0, 2.0 + 1e-9], "label": ["x", "y"], "time_ms": [5, 9]}).to_csv(
+        new, index=False
+    )
     assert compare_file(rec, new, tol)[0] == "within tolerance"  # timing columns never decide
     pd.DataFrame({"a": [1.0, 2.1], "label": ["x", "y"], "time_ms": [1, 2]}).to_csv(new, index=False)
     status, column, excess, detail = compare_file(rec, new, tol)
@@ -124,10 +136,14 @@ def test_check_statuses(tmp_path):
     new.write_bytes(rec.read_bytes())
     assert compare_file(rec, new, tol)[0] == "identical"
     assert compare_file(rec, tmp_path / "absent.csv", tol)[0] == "missing"
-    stat = registry.Tolerance("statistical", 0.0, 0.0, "only b is stable", columns={"b": (0.1, 0.0)})
+    stat = registry.Tolerance(
+        "statistical", 0.0, 0.0, "only b is stable", columns={"b": (0.1, 0.0)}
+    )
     pd.DataFrame({"a": [1.0], "b": [10.0]}).to_csv(rec, index=False)
     pd.DataFrame({"a": [7.0], "b": [10.5]}).to_csv(new, index=False)
-    assert compare_file(rec, new, stat)[0] == "within tolerance"  # statistical: only declared columns
+    assert (
+        compare_file(rec, new, stat)[0] == "within tolerance"
+    )  # statistical: only declared columns
     pd.DataFrame({"a": [1.0], "b": [12.0]}).to_csv(new, index=False)
     assert compare_file(rec, new, stat)[:2] == ("differs", "b")
 
@@ -144,10 +160,19 @@ def test_fresh_clone_schedules_every_artefact(tmp_path):
     """Nothing counts as done because it is committed: a dry run on a fresh tree plans every rule."""
     work = _workdir(tmp_path)
     shutil.copytree(ROOT / "figures", work / "figures")
-    res = subprocess.run([sys.executable, "-m", "snakemake", "-n", "--cores", "2", "--quiet", "rules"],
-                         cwd=work, capture_output=True, text=True, timeout=300)
+    res = subprocess.run(
+        [sys.executable, "-m", "snakemake", "-n", "--cores", "2", "--quiet", "rules"],
+        cwd=work,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert res.returncode == 0, res.stderr[-2000:]
-    planned = {line.split()[0] for line in res.stdout.splitlines() if line.strip() and line.split()[-1].isdigit()}
+    planned = {
+        line.split()[0]
+        for line in res.stdout.splitlines()
+        if line.strip() and line.split()[-1].isdigit()
+    }
     assert {a.rule for a in ARTEFACTS.values()} | {"report", "reproduction_check", "all"} <= planned
 
 
@@ -156,11 +181,29 @@ def test_a_toy_study_runs_from_one_registration_line(tmp_path):
     work = _workdir(tmp_path)
     shutil.copy(ROOT / "tests" / "data" / "toy_study.py", work / "toy_study.py")
     # folders with a space: every path reaches the shell quoted
-    (work / "toy.yaml").write_text("studies: [toy_study]\nrecord_dir: null\n"
-                                   "figures_dir: 'build/quick run/figures'\ngenerated_dir: 'build/quick run/generated'\n")
+    (work / "toy.yaml").write_text(
+        "studies: [toy_study]\nrecord_dir: null\n"
+        "figures_dir: 'build/quick run/figures'\ngenerated_dir: 'build/quick run/generated'\n"
+    )
     env = {**__import__("os").environ, "PYTHONPATH": str(work)}
-    res = subprocess.run([sys.executable, "-m", "snakemake", "--cores", "2", "--configfile", "config/quick.yaml",
-                          "toy.yaml", "-q"], cwd=work, capture_output=True, text=True, timeout=600, env=env)
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "snakemake",
+            "--cores",
+            "2",
+            "--configfile",
+            "config/quick.yaml",
+            "toy.yaml",
+            "-q",
+        ],
+        cwd=work,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env=env,
+    )
     assert res.returncode == 0, res.stdout[-2000:] + res.stderr[-2000:]
     table = pd.read_csv(work / "build" / "quick run" / "figures" / "toy_study" / "table1.csv")
     assert len(table) == 10 and table["error_m"].max() < 1e-9

@@ -6,7 +6,10 @@ import pytest
 from parakin.report import Claim, half_ulp, judge, load_reference
 
 
-@pytest.mark.parametrize("printed, ulp", [("0.42", 0.005), ("0.592", 0.0005), ("3", 0.5), ("4.51e-8", 5e-11), ("0.5919999528", 5e-11)])
+@pytest.mark.parametrize(
+    "printed, ulp",
+    [("0.42", 0.005), ("0.592", 0.0005), ("3", 0.5), ("4.51e-8", 5e-11), ("0.5919999528", 5e-11)],
+)
 def test_half_ulp_from_printed_digits(printed, ulp):
     assert half_ulp(printed) == pytest.approx(ulp)
 
@@ -39,7 +42,9 @@ def test_reference_csv_is_well_formed():
     assert (ref["paper"] == "zhao2017_3p4s").all()
     for value in ref["value"]:
         float(value)  # every value is a number as printed
-    assert len(ref[ref["artefact"] == "table1"]) == 30 and len(ref[ref["artefact"] == "table2"]) == 40
+    assert (
+        len(ref[ref["artefact"] == "table1"]) == 30 and len(ref[ref["artefact"] == "table2"]) == 40
+    )
 
 
 # ------------------------------------------------------------------ issue 15: verdicts that cannot flatter
@@ -65,9 +70,16 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_verdict_vocabulary():
-    assert VERDICTS[:8] == ("reproduced", "reproduced within rounding", "bound satisfied",
-                            "consistent after fitting or assuming", "differs — cause shown", "differs — cause unknown",
-                            "not comparable", "input")
+    assert VERDICTS[:8] == (
+        "reproduced",
+        "reproduced within rounding",
+        "bound satisfied",
+        "consistent after fitting or assuming",
+        "differs — cause shown",
+        "differs — cause unknown",
+        "not comparable",
+        "input",
+    )
     fit = Claim("p", "t", "q", "0.42", 0.4201, "m", basis="geometry fitted to these numbers")
     assert fit.verdict == CONSISTENT  # a fit never counts as reproduced
     assert Claim("p", "t", "q", "0.42", 0.5, "m", basis="fitted").verdict == DIFFERS_UNKNOWN
@@ -82,10 +94,30 @@ def test_tolerances_come_from_the_reference():
     assert parse_tolerance("exact", "3") == ("value", 0.0, 1.0)
     assert parse_tolerance("upper:10", "20") == ("upper", None, 10.0)
     assert judge("20", 3.0, kind="upper", margin=10) == "differs"
-    ref = pd.DataFrame([{"paper": "p", "artefact": "t", "quantity": "q", "value": "0.42", "unit": "m", "note": "",
-                         "role": "result", "tolerance": ""},
-                        {"paper": "p", "artefact": "t", "quantity": "r", "value": "1", "unit": "1", "note": "",
-                         "role": "input", "tolerance": ""}])
+    ref = pd.DataFrame(
+        [
+            {
+                "paper": "p",
+                "artefact": "t",
+                "quantity": "q",
+                "value": "0.42",
+                "unit": "m",
+                "note": "",
+                "role": "result",
+                "tolerance": "",
+            },
+            {
+                "paper": "p",
+                "artefact": "t",
+                "quantity": "r",
+                "value": "1",
+                "unit": "1",
+                "note": "",
+                "role": "input",
+                "tolerance": "",
+            },
+        ]
+    )
     # a tolerance typed in code is replaced by the reference's (none here): the code cannot loosen it
     c = resolve(Claim("p", "t", "q", "0.42", 0.43, "m", tol=0.1), ref)
     assert c.tol is None and c.verdict == DIFFERS_UNKNOWN
@@ -103,13 +135,20 @@ def test_every_reference_row_gets_one_verdict(key):
     assert set(ref["role"]) <= set(ROLES)
     for value in ref["value"]:
         assert value.strip(), "a transcribed number is empty"
-    ref_, claims = paper_claims(key, ROOT / "figures")  # every claim's paper value is in data/reference
+    ref_, claims = paper_claims(
+        key, ROOT / "figures"
+    )  # every claim's paper value is in data/reference
     rows = report_rows(key, ref_, claims, ROOT / "figures" / key)
     assert len(rows) == len(ref)  # the counts add up to the reference
     assert rows["verdict"].isin(VERDICTS).all()
-    judged_later = {("abstract", "chaotic_more_precise.p_value")}  # made by an artefact newer than the record
-    missing = [(a, q) for a, q, v in zip(rows["artefact"], rows["quantity"], rows["verdict"])
-               if v == NOT_JUDGED and (a, q) not in judged_later]
+    judged_later = {
+        ("abstract", "chaotic_more_precise.p_value")
+    }  # made by an artefact newer than the record
+    missing = [
+        (a, q)
+        for a, q, v in zip(rows["artefact"], rows["quantity"], rows["verdict"])
+        if v == NOT_JUDGED and (a, q) not in judged_later
+    ]
     assert missing == []
     # a fit or an assumption never reads as reproduced
     for c in claims:

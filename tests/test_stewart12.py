@@ -4,16 +4,46 @@ import numpy as np
 import pytest
 
 from parakin.errors import UnreachableError
-from parakin.mechanisms.stewart12 import CONVENTIONS, NESTED_PASSIVE, ActiveLegs, DriveMode, Stewart12
+from parakin.mechanisms.stewart12 import (
+    CONVENTIONS,
+    NESTED_PASSIVE,
+    ActiveLegs,
+    DriveMode,
+    Stewart12,
+)
 from parakin.papers.ye_stewart12.common import run_mode, steps  # registers gauss-newton, broyden-ls
 from parakin.solvers import solve_fk
 
 TEST_POSE = np.array([0.5e-3, 0.0, 0.0, -0.05, 0.05, 0.05])
 #: docs/ye_stewart12.md#s1.3: leg lengths (mm) at the §3.3 pose, Euler-parameter and Cayley readings
-NOTES_EP = [26.865024, 23.922647, 26.585689, 24.132186, 23.605347, 26.108406, 26.976044, 24.047256,
-            26.639024, 23.134415, 23.671737, 27.106966]
-NOTES_CAYLEY = [26.856652, 23.924807, 26.579426, 24.136746, 23.610032, 26.102050, 26.967297, 24.048945,
-                26.632587, 23.138956, 23.676152, 27.100619]
+NOTES_EP = [
+    26.865024,
+    23.922647,
+    26.585689,
+    24.132186,
+    23.605347,
+    26.108406,
+    26.976044,
+    24.047256,
+    26.639024,
+    23.134415,
+    23.671737,
+    27.106966,
+]
+NOTES_CAYLEY = [
+    26.856652,
+    23.924807,
+    26.579426,
+    24.136746,
+    23.610032,
+    26.102050,
+    26.967297,
+    24.048945,
+    26.632587,
+    23.138956,
+    23.676152,
+    27.100619,
+]
 
 
 def random_poses(m, k, seed=0):
@@ -27,7 +57,9 @@ def test_home_and_test_pose_lengths():
     assert np.allclose(m.ik(TEST_POSE) * 1e3, NOTES_EP, atol=1e-6)
     assert np.allclose(Stewart12(convention="cayley").ik(TEST_POSE) * 1e3, NOTES_CAYLEY, atol=1e-6)
     r = m.rotation(TEST_POSE)
-    assert r[0, 1] == pytest.approx(-0.104624, abs=1e-6) and r[0, 0] == pytest.approx(0.99, abs=1e-12)
+    assert r[0, 1] == pytest.approx(-0.104624, abs=1e-6) and r[0, 0] == pytest.approx(
+        0.99, abs=1e-12
+    )
 
 
 @pytest.mark.parametrize("convention", CONVENTIONS)
@@ -47,8 +79,20 @@ def test_linear_fk_matches_notes_closed_forms_off_manifold():
     n, L = m.n, m.L
     q = np.random.default_rng(1).uniform(0.02, 0.03, (50, 12)) ** 2
     mm, u = m.fk_points(np.sqrt(q))
-    x0 = (q[:, 0] - q[:, 1] - q[:, 2] + q[:, 3] + q[:, 4] - q[:, 5] - q[:, 6] + q[:, 7] + q[:, 8] - q[:, 9]
-          - q[:, 10] + q[:, 11]) / (8 * L)
+    x0 = (
+        q[:, 0]
+        - q[:, 1]
+        - q[:, 2]
+        + q[:, 3]
+        + q[:, 4]
+        - q[:, 5]
+        - q[:, 6]
+        + q[:, 7]
+        + q[:, 8]
+        - q[:, 9]
+        - q[:, 10]
+        + q[:, 11]
+    ) / (8 * L)
     s = np.sum(mm**2, -1)
     k = L * (s + L**2 + 2 * n * L + 4 * n * n)
     u1y = (2 * k - (L + n) * (q[:, 0] + q[:, 6]) + n * (q[:, 1] + q[:, 7])) / (4 * L * (L + 2 * n))
@@ -81,8 +125,13 @@ def test_compatibility_jacobian_matches_finite_differences_and_has_rank_6():
     lengths = m.ik(TEST_POSE)
     jac = m.compatibility_jacobian(lengths)
     h = 1e-8
-    fd = np.stack([(m.compatibility(lengths + h * e) - m.compatibility(lengths - h * e)) / (2 * h)
-                   for e in np.eye(12)], -1)
+    fd = np.stack(
+        [
+            (m.compatibility(lengths + h * e) - m.compatibility(lengths - h * e)) / (2 * h)
+            for e in np.eye(12)
+        ],
+        -1,
+    )
     assert np.max(np.abs(jac - fd)) < 1e-8 * np.max(np.abs(jac))
     assert np.linalg.matrix_rank(jac) == 6
 
@@ -139,7 +188,9 @@ def test_pose_space_lm_and_least_squares_fk():
     m = Stewart12()
     lengths = m.ik(TEST_POSE)
     al = ActiveLegs(m, (1, 2, 3, 4, 5, 6, 9))
-    res = solve_fk(al, lengths[[0, 1, 2, 3, 4, 5, 8]], x0=np.zeros(6), method="lm", tol=1e-14, maxiter=50)
+    res = solve_fk(
+        al, lengths[[0, 1, 2, 3, 4, 5, 8]], x0=np.zeros(6), method="lm", tol=1e-14, maxiter=50
+    )
     assert bool(res.success) and np.allclose(res.x, TEST_POSE, atol=1e-12)
     res = solve_fk(m, lengths, x0=np.zeros(6), method="gauss-newton", tol=1e-14, maxiter=50)
     assert bool(res.success) and np.allclose(res.x, TEST_POSE, atol=1e-12)

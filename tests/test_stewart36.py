@@ -30,16 +30,26 @@ def wrap(d):
 
 def test_reconstructed_inputs_match_notes():
     # docs/li2017_stewart36.md#s3.2: L = IK(Table 3 row 1, b)
-    assert np.allclose(Stewart36(b=1.0).ik(pose_from_paper(TABLE3_ROW1)),
-                       [2.201919, 1.889476, 2.025009, 1.901896, 1.871540, 1.573125], atol=1e-6)
-    assert np.allclose(Stewart36(b=3.0).ik(pose_from_paper(TABLE3_ROW1)),
-                       [3.534129, 2.941952, 3.494753, 3.280693, 3.642136, 3.190821], atol=1e-6)
+    assert np.allclose(
+        Stewart36(b=1.0).ik(pose_from_paper(TABLE3_ROW1)),
+        [2.201919, 1.889476, 2.025009, 1.901896, 1.871540, 1.573125],
+        atol=1e-6,
+    )
+    assert np.allclose(
+        Stewart36(b=3.0).ik(pose_from_paper(TABLE3_ROW1)),
+        [3.534129, 2.941952, 3.494753, 3.280693, 3.642136, 3.190821],
+        atol=1e-6,
+    )
 
 
 def test_geometry_and_residual(mech):
-    assert np.allclose(np.linalg.norm(np.diff(mech.top_points[[0, 1, 2, 0]], axis=0), axis=1), mech.a)
+    assert np.allclose(
+        np.linalg.norm(np.diff(mech.top_points[[0, 1, 2, 0]], axis=0), axis=1), mech.a
+    )
     assert np.allclose(np.linalg.norm(mech.base_points, axis=1), mech.b)
-    assert np.allclose(mech.base_points[0], [0, mech.b, 0]) and np.allclose(mech.base_points[3], [0, -mech.b, 0])
+    assert np.allclose(mech.base_points[0], [0, mech.b, 0]) and np.allclose(
+        mech.base_points[3], [0, -mech.b, 0]
+    )
     x = random_poses(mech, 50)
     q = mech.ik(x)
     assert np.max(np.abs(mech.residual(x, q))) < 1e-12
@@ -92,7 +102,9 @@ def test_fk_all_certified_roots_and_true_pose():
         # mirror pairs: even counts, and each solution's mirror is a solution
         assert np.all(info["n_real"] % 2 == 0)
         mir = m.mirror(np.nan_to_num(sols))
-        dm = np.max(np.abs(wrap(mir[:, :, None, :] - np.nan_to_num(sols, nan=1e9)[:, None, :, :])), -1).min(-1)
+        dm = np.max(
+            np.abs(wrap(mir[:, :, None, :] - np.nan_to_num(sols, nan=1e9)[:, None, :, :])), -1
+        ).min(-1)
         assert np.all(dm[fin] < 1e-7)
         assert np.all(info["n_above"] * 2 == info["n_real"])
 
@@ -142,8 +154,16 @@ def test_fk_all_near_triple_cluster_keeps_mirror_pairs():
     t1 roots within 0.008 (~0.2477, 0.2487, 0.2550): complex Newton used to send two of them to the
     same solution, giving 10 real solutions (5 mirror pairs). The truth is 12 (6 pairs)."""
     m = Stewart36(b=3.0)
-    q = np.array([3.9211831668661516, 3.3199299404926013, 3.389189195533072,
-                  3.0564559700375993, 3.4826360889603336, 3.6066525832391036])
+    q = np.array(
+        [
+            3.9211831668661516,
+            3.3199299404926013,
+            3.389189195533072,
+            3.0564559700375993,
+            3.4826360889603336,
+            3.6066525832391036,
+        ]
+    )
     sols, info = m.fk_all(q, return_info=True)
     real = sols[np.isfinite(sols[:, 0])]
     assert info["n_real"] == 12 and info["n_above"] == 6

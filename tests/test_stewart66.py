@@ -135,7 +135,9 @@ def test_random_platforms_give_40_complex_and_recover_the_pose(random_mechs):
         r = m.fk_all(m.ik(x), return_info=True)
         assert np.all(r.complete) and np.all(r.n_found == 40)
         assert np.nanmax(r.alpha) < hc.ALPHA0 and np.nanmax(r.ik_error) < 1e-9
-        assert np.all(r.n_real % 2 == 0) and np.all(r.n_real >= 2)  # non-real ones come in conjugate pairs
+        assert np.all(r.n_real % 2 == 0) and np.all(
+            r.n_real >= 2
+        )  # non-real ones come in conjugate pairs
         d = np.max(np.abs(_wrap(r.poses - x[:, None])), -1)
         assert np.all(np.nanmin(d, axis=1) < 1e-9)  # the pose the legs came from is among them
         # complex solutions: rotation matrices with R^T R = I (no conjugation) and the leg equations
@@ -164,8 +166,14 @@ def test_three_six_special_case_agrees_with_stewart36():
     m = Stewart66(base=s.base_points, platform=s.top_points[LEG_TOP], allow_coincident=True)
     assert m.root_count == 16  # the 3-6 has 16 complex solutions, not 40
     rng = np.random.default_rng(5)
-    x = np.concatenate([rng.uniform(-0.5, 0.5, (5, 3)), rng.uniform(-0.3, 0.3, (5, 2)),
-                        rng.uniform(1.0, 2.0, (5, 1))], -1)
+    x = np.concatenate(
+        [
+            rng.uniform(-0.5, 0.5, (5, 3)),
+            rng.uniform(-0.3, 0.3, (5, 2)),
+            rng.uniform(1.0, 2.0, (5, 1)),
+        ],
+        -1,
+    )
     q = s.ik(x)
     r = m.fk_all(q, return_info=True)
     ref = s.fk_all(q)
@@ -203,8 +211,17 @@ def test_all_solutions_closed_form_and_pso(mech):
     assert np.all(res.success) and np.max(np.abs(mech.residual(res.x, q))) < 1e-10
     assert np.allclose(res.x, mech.fk(q, near=mech.home()))
     lo, hi = mech.pose_bounds()
-    res = solve_fk(mech, q[:2], x0=x[:2], method="pso", tol=1e-6, maxiter=300, swarm=30,
-                   bounds=(np.maximum(lo, x[:2].min(0) - 0.05), np.minimum(hi, x[:2].max(0) + 0.05)), seed=0)
+    res = solve_fk(
+        mech,
+        q[:2],
+        x0=x[:2],
+        method="pso",
+        tol=1e-6,
+        maxiter=300,
+        swarm=30,
+        bounds=(np.maximum(lo, x[:2].min(0) - 0.05), np.minimum(hi, x[:2].max(0) + 0.05)),
+        seed=0,
+    )
     # the swarm runs on the 6-6 through the protocol; it does not reach 1e-6 in 300 iterations (a
     # global search in 6-D, as on the 3-6), so only its finiteness and improvement are checked
     assert np.all(np.isfinite(res.x)) and np.max(np.abs(mech.residual(res.x, q[:2]))) < 0.5
@@ -219,7 +236,9 @@ def test_atlas_row(mech):
     # "nearest the start" may pick a neighbouring assembly when the start (10 % of the box away) is closer to it
     row = evaluate(mech, solvers["all-solutions"], sc)
     assert row["success_rate"] >= 0.85
-    assert 0 < evaluate(mech, solvers["newton"], sc)["success_rate"] <= 1  # local: starts 10 % of the box away
+    assert (
+        0 < evaluate(mech, solvers["newton"], sc)["success_rate"] <= 1
+    )  # local: starts 10 % of the box away
 
 
 # ------------------------------------------------------------------------------------ studies

@@ -27,7 +27,9 @@ def test_stated_geometry_misses_table1(table1_outputs):
     geo = pd.read_csv(table1_outputs / "extra_table1_fit.csv").set_index("geometry")
     stated = geo.loc["stated"]
     assert stated["delta"] == pytest.approx(0.427307, abs=1e-6)
-    assert stated["max_abs_err"] == pytest.approx(0.02044, abs=5e-5)  # docs/zhao2017_3p4s.md#s4.1: 0.0204 m
+    assert stated["max_abs_err"] == pytest.approx(
+        0.02044, abs=5e-5
+    )  # docs/zhao2017_3p4s.md#s4.1: 0.0204 m
     assert stated["n_within_rounding"] == 5  # docs/zhao2017_3p4s.md#s4.1: 5/15
 
 
@@ -40,7 +42,9 @@ def test_fitted_geometry_reproduces_table1_within_rounding(table1_outputs):
     # a geometry exists that reproduces all 15 strokes within rounding (docs/zhao2017_3p4s.md#notes-differ: delta 0.4933-0.4946 at 35 deg)
     assert mm["n_within_rounding"] == 15 and mm["max_abs_err"] <= 0.005
     assert 34.6 <= mm["phi_deg"] <= 36.1
-    assert opt["max_abs_err"] == pytest.approx(0.01244, abs=5e-5)  # docs/zhao2017_3p4s.md#s4.2: 0.0124
+    assert opt["max_abs_err"] == pytest.approx(
+        0.01244, abs=5e-5
+    )  # docs/zhao2017_3p4s.md#s4.2: 0.0124
 
 
 def test_table1_csv_matches_the_ik(table1_outputs):
@@ -55,5 +59,7 @@ def test_table1_csv_matches_the_ik(table1_outputs):
 
 def test_error_map_marks_unreachable_as_inf():
     poses, strokes = z.table1_inputs()
-    err = z.error_map(poses, np.array(strokes, dtype=float), 0.38, np.array([0.4945, 3.0]), np.deg2rad([35.11]))
+    err = z.error_map(
+        poses, np.array(strokes, dtype=float), 0.38, np.array([0.4945, 3.0]), np.deg2rad([35.11])
+    )
     assert err[0, 0] < 0.005 and np.isinf(err[0, 1])

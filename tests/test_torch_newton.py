@@ -57,10 +57,15 @@ def test_residual_matches_numpy(key):
         assert got.dtype == torch.float64 and got.shape == joints.shape
         np.testing.assert_allclose(got.numpy(), mech.residual(x, joints), rtol=0, atol=1e-12)
     # any leading batch axes, and a single row
-    np.testing.assert_allclose(f(_t(x[:6].reshape(2, 3, -1)), _t(q_off[:6].reshape(2, 3, -1))).numpy(),
-                               mech.residual(x[:6], q_off[:6]).reshape(2, 3, -1), rtol=0, atol=1e-12)
-    np.testing.assert_allclose(f(_t(x[0]), _t(q_off[0])).numpy(), mech.residual(x[0], q_off[0]),
-                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        f(_t(x[:6].reshape(2, 3, -1)), _t(q_off[:6].reshape(2, 3, -1))).numpy(),
+        mech.residual(x[:6], q_off[:6]).reshape(2, 3, -1),
+        rtol=0,
+        atol=1e-12,
+    )
+    np.testing.assert_allclose(
+        f(_t(x[0]), _t(q_off[0])).numpy(), mech.residual(x[0], q_off[0]), rtol=0, atol=1e-12
+    )
 
 
 @pytest.mark.filterwarnings("ignore::DeprecationWarning")  # torch's forward-AD set-up, first jacfwd
@@ -78,12 +83,17 @@ def test_torch_jacobian_matches_analytic(key):
 
 def test_residual_reads_the_parameters():
     """Non-default geometry goes through: the port reads the dataclass, not the defaults."""
-    for mech in (P3P4S.zhao2017_optimised(), UPS2(a=0.17, b=0.09, c=0.31), Stewart36(b=2.0, a=1.3),
-                 ActiveLegs(mech=Stewart12(n=0.02, L=0.03), active=(2, 4, 6, 8, 10, 12))):
+    for mech in (
+        P3P4S.zhao2017_optimised(),
+        UPS2(a=0.17, b=0.09, c=0.31),
+        Stewart36(b=2.0, a=1.3),
+        ActiveLegs(mech=Stewart12(n=0.02, L=0.03), active=(2, 4, 6, 8, 10, 12)),
+    ):
         x = _poses(mech, n=30, seed=2)
         q = mech.ik(x) * 1.001
-        np.testing.assert_allclose(torch_residual(mech)(_t(x), _t(q)).numpy(), mech.residual(x, q),
-                                   rtol=0, atol=1e-12)
+        np.testing.assert_allclose(
+            torch_residual(mech)(_t(x), _t(q)).numpy(), mech.residual(x, q), rtol=0, atol=1e-12
+        )
 
 
 def test_active_legs_outside_lambda_domain_is_nan_like_numpy():
@@ -210,7 +220,9 @@ def test_batch_shapes_defaults_and_validation():
     with pytest.raises(ShapeError):
         newton_torch(mech, np.zeros((2, 3)), np.zeros((3, 3)), device="cpu")
     with pytest.raises(ShapeError, match="as many equations"):
-        newton_torch(ActiveLegs(active=tuple(range(1, 13))), np.full(12, 0.025), np.zeros(6), device="cpu")
+        newton_torch(
+            ActiveLegs(active=tuple(range(1, 13))), np.full(12, 0.025), np.zeros(6), device="cpu"
+        )
     with pytest.raises(ValueError, match="tol"):
         newton_torch(mech, mech.ik(pose), None, tol=-1.0, device="cpu")
 
@@ -218,7 +230,9 @@ def test_batch_shapes_defaults_and_validation():
 def test_float32_runs():
     mech = MECHS["ups2"]
     truth = _poses(mech, n=20)
-    got = newton_torch(mech, mech.ik(truth), truth + 1e-3, tol=1e-5, device="cpu", dtype=torch.float32)
+    got = newton_torch(
+        mech, mech.ik(truth), truth + 1e-3, tol=1e-5, device="cpu", dtype=torch.float32
+    )
     assert got.success.all() and got.x.dtype == np.float64
     assert np.abs(got.x - truth).max() < 1e-3
 

@@ -46,10 +46,14 @@ def test_closed_form_lambdified_from_sympy(mech):
     a, bb, c = (sp.Float(v) for v in (mech.a, mech.b, mech.c))
     k, h, rho = sp.sqrt(2) / 2 * bb, sp.sqrt(3) / 2 * a, sp.sqrt(c**2 - Y**2)
     P = sp.Matrix([rho * sp.sin(b), Y, rho * sp.cos(b)])
-    R = sp.Matrix([[sp.cos(b), 0, sp.sin(b)], [0, 1, 0], [-sp.sin(b), 0, sp.cos(b)]]) * \
-        sp.Matrix([[1, 0, 0], [0, sp.cos(g), -sp.sin(g)], [0, sp.sin(g), sp.cos(g)]])
-    legs = [sp.Rational(2, 3) * P - sp.Matrix([0, h, 0]), P + R * sp.Matrix([k, k, 0]) - sp.Matrix([a / 2, h, 0]),
-            P + R * sp.Matrix([-k, k, 0]) - sp.Matrix([-a / 2, h, 0])]
+    R = sp.Matrix([[sp.cos(b), 0, sp.sin(b)], [0, 1, 0], [-sp.sin(b), 0, sp.cos(b)]]) * sp.Matrix(
+        [[1, 0, 0], [0, sp.cos(g), -sp.sin(g)], [0, sp.sin(g), sp.cos(g)]]
+    )
+    legs = [
+        sp.Rational(2, 3) * P - sp.Matrix([0, h, 0]),
+        P + R * sp.Matrix([k, k, 0]) - sp.Matrix([a / 2, h, 0]),
+        P + R * sp.Matrix([-k, k, 0]) - sp.Matrix([-a / 2, h, 0]),
+    ]
     f = sp.lambdify((b, g, Y), [sp.sqrt(v.dot(v)) for v in legs], "numpy")
     x = box_poses(mech, 200, seed=3)
     ref = np.stack(f(x[:, 0], x[:, 1], x[:, 2]), axis=-1)

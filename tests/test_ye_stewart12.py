@@ -7,12 +7,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from parakin.claims import resolve
 from parakin.config import DEFAULT_CONFIG, QUICK_CONFIG, load_config
 from parakin.papers import ye_stewart12 as Y
-from parakin.claims import resolve
 from parakin.report import claims_table, load_reference
 
 ROOT = Path(__file__).resolve().parents[1]
+
 
 def quick_config() -> dict:
     return load_config([DEFAULT_CONFIG, QUICK_CONFIG])
@@ -23,7 +24,14 @@ def test_reference_transcription():
     assert (ref["paper"] == Y.KEY).all() and not ref.duplicated(["artefact", "quantity"]).any()
     t5 = ref[ref["artefact"] == "table5"].set_index("quantity")["value"]
     assert [t5[f"d{d}.nr_steps"] for d in range(20, 26)] == ["5", "5", "5", "5", "6", "6"]
-    assert [t5[f"d{d}.broyden_time"] for d in range(20, 26)] == ["156.3", "156.3", "156.3", "156.3", "171.9", "187.5"]
+    assert [t5[f"d{d}.broyden_time"] for d in range(20, 26)] == [
+        "156.3",
+        "156.3",
+        "156.3",
+        "156.3",
+        "171.9",
+        "187.5",
+    ]
     # the printed means are the means of the printed rows (docs/ye_stewart12.md#s3)
     nr_t = np.mean([float(t5[f"d{d}.nr_time"]) for d in range(20, 26)])
     assert f"{nr_t:.1f}" == t5["mean.nr_time"]
@@ -54,39 +62,83 @@ def test_claims_and_summary(outputs):
     ref = load_reference(Y.KEY)
     claims = [resolve(c, ref) for c in Y.claims(outputs, ref)]  # judged as the report judges them
     table = claims_table(claims).set_index("quantity")
-    for q in ("equations.before", "highest_terms.after", "d20.nr_steps", "d25.nr_steps", "mean.nr_steps",
-              "fk.max_position_error", "composite.initial"):
+    for q in (
+        "equations.before",
+        "highest_terms.after",
+        "d20.nr_steps",
+        "d25.nr_steps",
+        "mean.nr_steps",
+        "fk.max_position_error",
+        "composite.initial",
+    ):
         assert table.loc[q, "verdict"] == "reproduced", q
     assert table.loc["accuracy_factor", "verdict"] == "bound satisfied"  # against a round-off floor
-    assert table.loc["broyden.match_step", "verdict"].startswith("differs")  # C7: Fig. 8's narrative is refuted
-    assert table.loc["time_fraction", "verdict"] == "not comparable"  # wall-clock of another machine
+    assert table.loc["broyden.match_step", "verdict"].startswith(
+        "differs"
+    )  # C7: Fig. 8's narrative is refuted
+    assert (
+        table.loc["time_fraction", "verdict"] == "not comparable"
+    )  # wall-clock of another machine
     assert float(table.loc["accuracy_factor", "ours"]) > 1e3
     assert {"composite.nr", "composite_ratio", "width.R2.nr", "bump.R0.L"} <= set(table.index)
     # C9, C10, C11, C15 and the rest of C8 are rows (qualitative statements, encodings in the reasons)
-    assert {"tol_sensitive.top3_in_R0R1R3", "tol_sensitive.nr_most_R", "least_initial_dependence_R",
-            "broyden.most_initial_dependence_R", "nr.step_drops", "broyden.step_drops", "broyden.drops_near_dmax",
-            "broyden.trend_spearman", "dmax_vs_n.spearman", "dmax_vs_L.spearman", "odd_even_ratio.nr",
-            "odd_even_ratio.broyden"} <= set(table.index)
-    assert table.loc["broyden.trend_spearman", "verdict"] == "bound satisfied"  # C10: Broyden's steps rise with d
+    assert {
+        "tol_sensitive.top3_in_R0R1R3",
+        "tol_sensitive.nr_most_R",
+        "least_initial_dependence_R",
+        "broyden.most_initial_dependence_R",
+        "nr.step_drops",
+        "broyden.step_drops",
+        "broyden.drops_near_dmax",
+        "broyden.trend_spearman",
+        "dmax_vs_n.spearman",
+        "dmax_vs_L.spearman",
+        "odd_even_ratio.nr",
+        "odd_even_ratio.broyden",
+    } <= set(table.index)
+    assert (
+        table.loc["broyden.trend_spearman", "verdict"] == "bound satisfied"
+    )  # C10: Broyden's steps rise with d
     text = Y.summary(outputs, ref)
     assert "Table 5 steps" in text and "cond(dF/dX)" in text
 
 
 def test_figures_exist_and_match_their_csv(outputs):
-    for png in ("fig09_drive_modes.png", "fig01_mechanism.png", "fig02_topology.png", "fig06_prototype.png", "fig08_convergence.png",
-                "fig10_steps_tol1e-6.png", "fig11_steps_tol1e-9.png", "fig12_dmax_structures.png", "extra_basin.png"):
+    for png in (
+        "fig09_drive_modes.png",
+        "fig01_mechanism.png",
+        "fig02_topology.png",
+        "fig06_prototype.png",
+        "fig08_convergence.png",
+        "fig10_steps_tol1e-6.png",
+        "fig11_steps_tol1e-9.png",
+        "fig12_dmax_structures.png",
+        "extra_basin.png",
+    ):
         assert (outputs / png).stat().st_size > 10_000, png
     f12 = pd.read_csv(outputs / "fig12_dmax_structures.csv")
     assert len(f12) == 9 * 6 * 2
     nominal = f12[(f12["n_mm"] == 20) & (f12["L_mm"] == 20)]
     assert (nominal["d_max_pct"] > 0).all()
     f8 = pd.read_csv(outputs / "fig08_convergence.csv")
-    assert f8["nr_composite_mm"].iloc[0] == pytest.approx(32.841346, abs=1e-6)  # 1.3 x mean passive length
+    assert f8["nr_composite_mm"].iloc[0] == pytest.approx(
+        32.841346, abs=1e-6
+    )  # 1.3 x mean passive length
     f9 = pd.read_csv(outputs / "fig09_drive_modes.csv")
-    assert len(f9) == 6 * 12 and (f9.groupby("R")["active"].sum() == f9.groupby("R")["active_legs"].first()).all()
+    assert (
+        len(f9) == 6 * 12
+        and (f9.groupby("R")["active"].sum() == f9.groupby("R")["active_legs"].first()).all()
+    )
     assert f9.groupby("R")["active"].sum().to_dict() == {r: 6 + r for r in range(6)}
     home = f9[f9["R"] == 0].set_index("leg")["home_direction"]
-    assert [home[k] for k in range(1, 7)] == ["+y", "-z", "+y", "-x", "-z", "+x"]  # docs/ye_stewart12.md#s1.2
+    assert [home[k] for k in range(1, 7)] == [
+        "+y",
+        "-z",
+        "+y",
+        "-x",
+        "-z",
+        "+x",
+    ]  # docs/ye_stewart12.md#s1.2
     cond = pd.read_csv(outputs / "extra_conditioning.csv").set_index("R")
     assert cond.loc[0, "cond_dF_dX"] == pytest.approx(179.37, abs=0.01)  # docs/ye_stewart12.md#s2.3
 

@@ -46,8 +46,18 @@ from parakin.mechanisms.base import Array, Mechanism
 from parakin.solvers import Status, solve_fk
 from parakin.workspace import sample_reachable
 
-__all__ = ["AtlasSolver", "AtlasCase", "Scenario", "SCENARIOS", "BASELINE", "make_scenario", "pose_error",
-           "evaluate", "run_atlas", "standard_solvers"]
+__all__ = [
+    "AtlasSolver",
+    "AtlasCase",
+    "Scenario",
+    "SCENARIOS",
+    "BASELINE",
+    "make_scenario",
+    "pose_error",
+    "evaluate",
+    "run_atlas",
+    "standard_solvers",
+]
 
 BASELINE = "scipy-root"
 SCENARIOS = ("nominal", "cold", "noisy", "near-singular")
@@ -60,9 +70,13 @@ class AtlasSolver:
     label: str
     method: str
     options: dict[str, Any] = field(default_factory=dict)
-    batched: bool = True  #: False: one call per input (the scipy baseline); throughput from that loop
+    batched: bool = (
+        True  #: False: one call per input (the scipy baseline); throughput from that loop
+    )
     max_rows: int | None = None  #: solve only the first rows of each scenario (costly solvers: PSO)
-    single_calls: int | None = None  #: cap on the single-call latency samples (default: the atlas's)
+    single_calls: int | None = (
+        None  #: cap on the single-call latency samples (default: the atlas's)
+    )
     maxiter: int | None = None  #: iteration limit of this solver (default: the atlas's)
     seed: int | None = None  #: stochastic solvers: input i is solved with ``seed = seed + i``
 
@@ -70,7 +84,9 @@ class AtlasSolver:
         """Keyword arguments of :func:`parakin.solvers.solve_fk` for input ``rows`` (a slice or an index)."""
         kw = dict(method=self.method, tol=tol, maxiter=self.maxiter or maxiter, **self.options)
         if self.seed is not None:
-            kw["seed"] = self.seed + (np.arange(rows.start or 0, rows.stop) if isinstance(rows, slice) else rows)
+            kw["seed"] = self.seed + (
+                np.arange(rows.start or 0, rows.stop) if isinstance(rows, slice) else rows
+            )
         return kw
 
 
@@ -130,7 +146,11 @@ def make_scenario(
     else:
         truth = sample_reachable(mech, n, g, bounds=box)
     joints = mech.ik(truth)
-    start = np.broadcast_to(mech.home(), truth.shape).copy() if name == "cold" else _starts(truth, box, start_spread, g)
+    start = (
+        np.broadcast_to(mech.home(), truth.shape).copy()
+        if name == "cold"
+        else _starts(truth, box, start_spread, g)
+    )
     reference = truth
     if name == "noisy":
         joints = joints + g.normal(0.0, joint_noise, joints.shape)
@@ -145,17 +165,26 @@ def pose_error(mech: Mechanism, x: Array, reference: Array) -> Array:
     return np.max(np.abs(mech.pose_difference(x, reference)), axis=-1)
 
 
-def _solve(mech: Mechanism, solver: AtlasSolver, joints: Array, start: Array, tol: float, maxiter: int):
+def _solve(
+    mech: Mechanism, solver: AtlasSolver, joints: Array, start: Array, tol: float, maxiter: int
+):
     """Batched call, or one call per input for a non-batched solver; returns (result fields, seconds)."""
     t0 = time.perf_counter()
     if solver.batched:
         r = solve_fk(mech, joints, x0=start, **solver.kwargs(tol, maxiter, slice(0, len(joints))))
         out = (r.x, r.success, r.status, r.nit, r.nfev)
     else:
-        rs = [solve_fk(mech, joints[i], x0=start[i], **solver.kwargs(tol, maxiter, i)) for i in range(len(joints))]
-        out = (np.array([r.x for r in rs]).reshape(start.shape), np.array([bool(r.success) for r in rs]),
-               np.array([int(r.status) for r in rs]), np.array([int(r.nit) for r in rs]),
-               np.array([int(r.nfev) for r in rs]))
+        rs = [
+            solve_fk(mech, joints[i], x0=start[i], **solver.kwargs(tol, maxiter, i))
+            for i in range(len(joints))
+        ]
+        out = (
+            np.array([r.x for r in rs]).reshape(start.shape),
+            np.array([bool(r.success) for r in rs]),
+            np.array([int(r.status) for r in rs]),
+            np.array([int(r.nit) for r in rs]),
+            np.array([int(r.nfev) for r in rs]),
+        )
     return out, time.perf_counter() - t0
 
 
@@ -179,21 +208,31 @@ def evaluate(
     wrong_assembly = (status == Status.WRONG_ASSEMBLY) | (success & ~right)
     wrong_answer = np.isin(status, [Status.WRONG_ANSWER, Status.OUT_OF_DOMAIN])
     return {
-        "solver": solver.label, "method": solver.method, "scenario": scenario.name, "n": len(q),
+        "solver": solver.label,
+        "method": solver.method,
+        "scenario": scenario.name,
+        "n": len(q),
         "median_cond": float(np.median(scenario.cond[rows])),
         "success_rate": float(np.mean(success & right)),
         "wrong_assembly_rate": float(np.mean(wrong_assembly)),
         "wrong_answer_rate": float(np.mean(wrong_answer)),
-        "n_wrong_assembly": int(np.sum(wrong_assembly)), "n_wrong_answer": int(np.sum(wrong_answer)),
-        "median_err": float(np.median(err)), "p95_err": float(np.percentile(err, 95)),
-        "median_nit": float(np.median(nit)), "median_nfev": float(np.median(nfev)),
+        "n_wrong_assembly": int(np.sum(wrong_assembly)),
+        "n_wrong_answer": int(np.sum(wrong_answer)),
+        "median_err": float(np.median(err)),
+        "p95_err": float(np.percentile(err, 95)),
+        "median_nit": float(np.median(nit)),
+        "median_nfev": float(np.median(nfev)),
         "_throughput": len(q) / seconds,
     }
 
 
-def _latency(mech: Mechanism, solver: AtlasSolver, scenario: Scenario, n: int, tol: float, maxiter: int) -> float:
+def _latency(
+    mech: Mechanism, solver: AtlasSolver, scenario: Scenario, n: int, tol: float, maxiter: int
+) -> float:
     """Median wall time (s) of one ``solve_fk`` call on one input, over the first ``n`` inputs."""
-    solve_fk(mech, scenario.joints[0], x0=scenario.start[0], **solver.kwargs(tol, maxiter, 0))  # warm-up
+    solve_fk(
+        mech, scenario.joints[0], x0=scenario.start[0], **solver.kwargs(tol, maxiter, 0)
+    )  # warm-up
     times = []
     for i in range(min(n, len(scenario.joints))):
         kwargs = solver.kwargs(tol, maxiter, i)
@@ -203,8 +242,9 @@ def _latency(mech: Mechanism, solver: AtlasSolver, scenario: Scenario, n: int, t
     return float(np.median(times))
 
 
-def _throughput(mech: Mechanism, solver: AtlasSolver, scenario: Scenario, repeats: int, tol: float,
-                maxiter: int) -> float:
+def _throughput(
+    mech: Mechanism, solver: AtlasSolver, scenario: Scenario, repeats: int, tol: float, maxiter: int
+) -> float:
     """Solves per second of one batched call on all of ``scenario`` (best of ``repeats``)."""
     best = np.inf
     for _ in range(max(repeats, 1)):
@@ -249,25 +289,47 @@ def run_atlas(
         for name in scenarios:
             if progress:
                 progress(f"{case.key}: {name}")
-            sc = make_scenario(case.mech, name, n, rng_for(f"atlas.{case.key}.{name}"), box=case.box,
-                               start_spread=start_spread, joint_noise=joint_noise, pool_factor=pool_factor)
+            sc = make_scenario(
+                case.mech,
+                name,
+                n,
+                rng_for(f"atlas.{case.key}.{name}"),
+                box=case.box,
+                start_spread=start_spread,
+                joint_noise=joint_noise,
+                pool_factor=pool_factor,
+            )
             big = gpu_rates = None
             if name == "nominal":
-                big = make_scenario(case.mech, name, n_batch, rng_for(f"atlas.{case.key}.batch"), box=case.box,
-                                    start_spread=start_spread)
+                big = make_scenario(
+                    case.mech,
+                    name,
+                    n_batch,
+                    rng_for(f"atlas.{case.key}.batch"),
+                    box=case.box,
+                    start_spread=start_spread,
+                )
                 gpu_rates = gpu(case, big) if gpu else None
             for solver in case.solvers:
-                row = {"mechanism": case.key, "home_cond": home_cond, **evaluate(case.mech, solver, sc, tol=tol, maxiter=maxiter,
-                                                         success_tol=success_tol)}
+                row = {
+                    "mechanism": case.key,
+                    "home_cond": home_cond,
+                    **evaluate(
+                        case.mech, solver, sc, tol=tol, maxiter=maxiter, success_tol=success_tol
+                    ),
+                }
                 rate = row.pop("_throughput")
                 row["median_latency_us"] = np.nan
                 row["throughput_per_s"] = np.nan
                 if big is not None:
-                    row["median_latency_us"] = 1e6 * _latency(case.mech, solver, sc, solver.single_calls or n_single,
-                                                              tol, maxiter)
+                    row["median_latency_us"] = 1e6 * _latency(
+                        case.mech, solver, sc, solver.single_calls or n_single, tol, maxiter
+                    )
                     row["throughput_per_s"] = (
                         _throughput(case.mech, solver, big, repeats, tol, maxiter)
-                        if solver.batched and solver.max_rows is None else rate)
+                        if solver.batched and solver.max_rows is None
+                        else rate
+                    )
                     if gpu_rates is not None:
                         row["gpu_throughput_per_s"] = gpu_rates.get(solver.method, np.nan)
                 rows.append(row)
@@ -325,4 +387,3 @@ def standard_solvers(
         out.append(AtlasSolver("closed form", "closed-form"))
     out.append(AtlasSolver("scipy.optimize.root (hybr), loop", BASELINE, batched=False))
     return tuple(out)
-

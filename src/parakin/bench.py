@@ -33,7 +33,9 @@ class SolverSpec:
     method: str
     options: dict[str, Any] = field(default_factory=dict)
     start: str = "home"  #: "home" (the mechanism's home pose) or "network" (hybrid: ignored)
-    batched: bool = True  #: False for per-pose loops (the scipy baseline): throughput on the single set
+    batched: bool = (
+        True  #: False for per-pose loops (the scipy baseline): throughput on the single set
+    )
 
 
 def _errors(x: Array, truth: Array) -> Array:
@@ -88,21 +90,23 @@ def bench_fk(
         else:
             err, nit, ok, n_acc = _errors(xs, x1), nits, oks, len(q1)
             throughput = len(q1) / latencies.sum()
-        rows.append({
-            "solver": spec.label,
-            "method": spec.method,
-            "start": spec.start,
-            "n_accuracy": n_acc,
-            "success_rate": float(np.mean(ok & (err <= success_tol))),
-            "median_err_m": float(np.median(err)),
-            "max_err_m": float(np.max(err)),
-            "median_nit": float(np.median(nit)),
-            "max_nit": int(np.max(nit)),
-            "median_latency_us": float(np.median(latencies) * 1e6),
-            "p95_latency_us": float(np.percentile(latencies, 95) * 1e6),
-            "throughput_per_s": float(throughput),
-            "batched": spec.batched,
-        })
+        rows.append(
+            {
+                "solver": spec.label,
+                "method": spec.method,
+                "start": spec.start,
+                "n_accuracy": n_acc,
+                "success_rate": float(np.mean(ok & (err <= success_tol))),
+                "median_err_m": float(np.median(err)),
+                "max_err_m": float(np.max(err)),
+                "median_nit": float(np.median(nit)),
+                "max_nit": int(np.max(nit)),
+                "median_latency_us": float(np.median(latencies) * 1e6),
+                "p95_latency_us": float(np.percentile(latencies, 95) * 1e6),
+                "throughput_per_s": float(throughput),
+                "batched": spec.batched,
+            }
+        )
     df = pd.DataFrame(rows)
     base = df[df["method"] == BASELINE]
     if len(base):
@@ -114,8 +118,13 @@ def bench_fk(
 
 # ---------------------------------------------------------------------------- compiled-path goals
 #: the goals of the compiled path (issue 17), checked by :func:`kernel_goals`
-GOALS = {"single_vs_scipy": 30.0, "newton_per_s": 1e6, "lm_per_s": 5e5, "stewart36_all_per_s": 2e4,
-         "li2017_pso_s": 2.0}
+GOALS = {
+    "single_vs_scipy": 30.0,
+    "newton_per_s": 1e6,
+    "lm_per_s": 5e5,
+    "stewart36_all_per_s": 2e4,
+    "li2017_pso_s": 2.0,
+}
 
 
 def _sample(mech: Mechanism, n: int, seed: int) -> tuple[Array, Array]:
@@ -136,8 +145,14 @@ def _best(f: Callable[[], Any], repeats: int) -> float:
     return best
 
 
-def kernel_goals(n_single: int = 200, n_batch: int = 100_000, n_all: int = 2000, repeats: int = 3,
-                 pso: bool = True, progress: Callable[[str], None] | None = None) -> pd.DataFrame:
+def kernel_goals(
+    n_single: int = 200,
+    n_batch: int = 100_000,
+    n_all: int = 2000,
+    repeats: int = 3,
+    pso: bool = True,
+    progress: Callable[[str], None] | None = None,
+) -> pd.DataFrame:
     """The compiled path's goals measured in one run (ratios against ``scipy.optimize.root`` in the
     same run): per mechanism, the median single-call latency of ``solve_fk`` (Newton, LM, Broyden,
     BFGS; one joint vector per call, start = home) over ``scipy-root``'s, and the batched Newton
@@ -148,9 +163,19 @@ def kernel_goals(n_single: int = 200, n_batch: int = 100_000, n_all: int = 2000,
 
     rows: list[dict[str, Any]] = []
 
-    def add(mech: str, what: str, value: float, unit: str, goal: float, higher: bool = True) -> None:
-        rows.append({"mechanism": mech, "what": what, "value": value, "unit": unit, "goal": goal,
-                     "met": bool(value >= goal if higher else value <= goal)})
+    def add(
+        mech: str, what: str, value: float, unit: str, goal: float, higher: bool = True
+    ) -> None:
+        rows.append(
+            {
+                "mechanism": mech,
+                "what": what,
+                "value": value,
+                "unit": unit,
+                "goal": goal,
+                "met": bool(value >= goal if higher else value <= goal),
+            }
+        )
 
     for mech in (P3P4S(), UPS2(), Stewart12(), Stewart36()):
         if progress:
@@ -172,7 +197,9 @@ def kernel_goals(n_single: int = 200, n_batch: int = 100_000, n_all: int = 2000,
         for method in ("newton", "lm", "broyden", "bfgs"):
             t = latency(method)
             add(mech.name, f"{method} single call", t * 1e6, "us", np.nan)
-            add(mech.name, f"{method} single call vs scipy", base / t, "x", GOALS["single_vs_scipy"])
+            add(
+                mech.name, f"{method} single call vs scipy", base / t, "x", GOALS["single_vs_scipy"]
+            )
         for method, goal in (("newton", GOALS["newton_per_s"]), ("lm", GOALS["lm_per_s"])):
             solve_fk(mech, q2[:1000], method=method, maxiter=100)
             t = _best(lambda: solve_fk(mech, q2, method=method, maxiter=100), repeats)  # noqa: B023
@@ -187,9 +214,29 @@ def kernel_goals(n_single: int = 200, n_batch: int = 100_000, n_all: int = 2000,
             progress("Li 2017 PSO")
         q = np.broadcast_to(mech.ik(mech.home()), (50, 6))
         fit = lambda x, joints: mech.objective(x, joints[:, None, :])  # noqa: E731  (as chaos.run_pso)
-        t = _best(lambda: solve_fk(mech, q, method="pso", seed=np.arange(50), tol=0.0, maxiter=1000, swarm=50,
-                                   inertia="linear", vclamp=0.2, fitness=fit), 1)
-        add(mech.name, "Li 2017 PSO experiment (50 x 50 x 1000)", t, "s", GOALS["li2017_pso_s"], higher=False)
+        t = _best(
+            lambda: solve_fk(
+                mech,
+                q,
+                method="pso",
+                seed=np.arange(50),
+                tol=0.0,
+                maxiter=1000,
+                swarm=50,
+                inertia="linear",
+                vclamp=0.2,
+                fitness=fit,
+            ),
+            1,
+        )
+        add(
+            mech.name,
+            "Li 2017 PSO experiment (50 x 50 x 1000)",
+            t,
+            "s",
+            GOALS["li2017_pso_s"],
+            higher=False,
+        )
     return pd.DataFrame(rows)
 
 
@@ -197,7 +244,11 @@ def format_goals(df: pd.DataFrame) -> str:
     """The rows of :func:`kernel_goals` as a Markdown table."""
     lines = ["| mechanism | measurement | value | goal | met |", "|---|---|---|---|---|"]
     for r in df.itertuples():
-        goal = "" if not np.isfinite(r.goal) else f"{'<=' if r.unit == 's' else '>='} {r.goal:.3g} {r.unit}"
+        goal = (
+            ""
+            if not np.isfinite(r.goal)
+            else f"{'<=' if r.unit == 's' else '>='} {r.goal:.3g} {r.unit}"
+        )
         met = "" if not np.isfinite(r.goal) else ("yes" if r.met else "no")
         lines.append(f"| {r.mechanism} | {r.what} | {r.value:.3g} {r.unit} | {goal} | {met} |")
     return "\n".join(lines)
@@ -207,7 +258,11 @@ if __name__ == "__main__":  # python -m parakin.bench [--quick]
     import sys
 
     quick = "--quick" in sys.argv
-    table = kernel_goals(n_single=50 if quick else 200, n_batch=10_000 if quick else 100_000,
-                         n_all=200 if quick else 2000, pso=not quick,
-                         progress=lambda s: print(f"parakin.bench: {s} ...", file=sys.stderr))
+    table = kernel_goals(
+        n_single=50 if quick else 200,
+        n_batch=10_000 if quick else 100_000,
+        n_all=200 if quick else 2000,
+        pso=not quick,
+        progress=lambda s: print(f"parakin.bench: {s} ...", file=sys.stderr),
+    )
     print(format_goals(table))

@@ -76,7 +76,9 @@ def _compare_frames(rec: pd.DataFrame, new: pd.DataFrame, tol) -> tuple[str, str
                 gap = np.abs(y - x)
             bad = ~(same_nan | same_inf) & ~(gap <= allowed)
             if bad.any():
-                excess = float(np.nanmax(np.where(bad, gap / np.where(allowed > 0, allowed, np.inf), 0)))
+                excess = float(
+                    np.nanmax(np.where(bad, gap / np.where(allowed > 0, allowed, np.inf), 0))
+                )
                 i = int(np.argmax(bad))
                 excess = excess if math.isfinite(excess) else math.inf
                 detail = f"row {i}: {y[i]:.6g} vs record {x[i]:.6g} (rtol {rtol:g}, atol {atol:g})"
@@ -88,7 +90,9 @@ def _compare_frames(rec: pd.DataFrame, new: pd.DataFrame, tol) -> tuple[str, str
     return worst
 
 
-def compare_file(record: Path, ours: Path, tol, siblings: Iterable[str] = ()) -> tuple[str, str, float, str]:
+def compare_file(
+    record: Path, ours: Path, tol, siblings: Iterable[str] = ()
+) -> tuple[str, str, float, str]:
     """(status, column, excess, detail) of one output file against its record."""
     if not ours.exists():
         return "missing", "", math.inf, "not written by this run"
@@ -104,13 +108,21 @@ def compare_file(record: Path, ours: Path, tol, siblings: Iterable[str] = ()) ->
     if record.suffix in (".png", ".md") and data in siblings:
         return "within tolerance", "", 0.0, f"drawn from {data}, judged there"
     if record.suffix == ".png":
-        return "within tolerance", "", 0.0, "figure redrawn from this artefact's tables, judged there"
+        return (
+            "within tolerance",
+            "",
+            0.0,
+            "figure redrawn from this artefact's tables, judged there",
+        )
     if record.suffix == ".csv":
         return _compare_frames(pd.read_csv(record), pd.read_csv(ours), tol)
-    if record.suffix == ".md":  # text with numbers: the words must match, the numbers within tolerance
+    if (
+        record.suffix == ".md"
+    ):  # text with numbers: the words must match, the numbers within tolerance
         a, b = record.read_text(), ours.read_text()
         if re.sub(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?", "#", a) != re.sub(
-                r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?", "#", b):
+            r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?", "#", b
+        ):
             return "differs", "", math.inf, "text differs beyond its numbers"
         frame = pd.DataFrame({"value": [float(v) for v in _numbers(a)]})
         return _compare_frames(frame, pd.DataFrame({"value": [float(v) for v in _numbers(b)]}), tol)
@@ -123,7 +135,17 @@ def check_artefact(item: Artefact, results: Path, record: Path) -> list[FileChec
     for name in item.outputs:
         rec, new = record / item.study_folder / name, results / item.study_folder / name
         status, col, excess, detail = compare_file(rec, new, item.tolerance, siblings=item.outputs)
-        out.append(FileCheck(item.study, item.name, f"{item.study_folder}/{name}".lstrip("/"), status, col, excess, detail))
+        out.append(
+            FileCheck(
+                item.study,
+                item.name,
+                f"{item.study_folder}/{name}".lstrip("/"),
+                status,
+                col,
+                excess,
+                detail,
+            )
+        )
     return out
 
 
@@ -139,9 +161,18 @@ def summarise(files: pd.DataFrame, artefacts: dict[str, Artefact]) -> pd.DataFra
         worst = max(group["status"], key=STATUSES.index)
         bad = group[group["status"] == worst].iloc[0]
         tol = artefacts[f"{study}:{name}"].tolerance
-        rows.append({"study": study, "artefact": name, "status": worst, "tolerance": tol.kind,
-                     "file": bad["file"] if worst != "identical" else "",
-                     "column": bad["column"], "detail": bad["detail"], "reason": tol.reason})
+        rows.append(
+            {
+                "study": study,
+                "artefact": name,
+                "status": worst,
+                "tolerance": tol.kind,
+                "file": bad["file"] if worst != "identical" else "",
+                "column": bad["column"],
+                "detail": bad["detail"],
+                "reason": tol.reason,
+            }
+        )
     return pd.DataFrame(rows)
 
 
@@ -151,7 +182,9 @@ def summary_line(per_artefact: pd.DataFrame) -> str:
     return f"reproduction check: {len(per_artefact)} artefacts: " + ", ".join(parts)
 
 
-def write_check(artefacts: dict[str, Artefact], results: Path, record: Path, out: Path) -> tuple[Path, Path, str]:
+def write_check(
+    artefacts: dict[str, Artefact], results: Path, record: Path, out: Path
+) -> tuple[Path, Path, str]:
     """Write ``out.csv`` (one row per file) and ``out.md`` (per artefact); return them and the summary line."""
     files = check_all(artefacts.values(), results, record)
     per = summarise(files, artefacts)
@@ -159,9 +192,16 @@ def write_check(artefacts: dict[str, Artefact], results: Path, record: Path, out
     # what needs a reader's attention first: missing, differs, then the rest in registry order
     per = per.iloc[sorted(range(len(per)), key=lambda i: -STATUSES.index(per["status"].iloc[i]))]
     csv = write_csv(files, Path(out).with_suffix(".csv"))
-    text = (f"# Reproduction check\n\n{line}.\n\nThis run's outputs (`{results}`) against the committed "
-            f"record (`{record}`), each artefact within the tolerance declared beside its code "
-            "(`parakin which FILE` names it). Statuses: " + ", ".join(f"*{s}*" for s in STATUSES)
-            + ". One row per file: `" + csv.name + "`.\n\n" + markdown_table(per) + "\n")
+    text = (
+        f"# Reproduction check\n\n{line}.\n\nThis run's outputs (`{results}`) against the committed "
+        f"record (`{record}`), each artefact within the tolerance declared beside its code "
+        "(`parakin which FILE` names it). Statuses: "
+        + ", ".join(f"*{s}*" for s in STATUSES)
+        + ". One row per file: `"
+        + csv.name
+        + "`.\n\n"
+        + markdown_table(per)
+        + "\n"
+    )
     md = atomic_write_text(Path(out).with_suffix(".md"), text)
     return csv, md, line

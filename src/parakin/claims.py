@@ -33,10 +33,31 @@ import pandas as pd
 
 from parakin.config import ROOT
 
-__all__ = ["Claim", "judge", "half_ulp", "load_reference", "printed_value", "claims_table", "REFERENCE_DIR",
-           "REPRODUCED", "WITHIN_ROUNDING", "BOUND", "CONSISTENT", "DIFFERS_SHOWN", "DIFFERS_UNKNOWN",
-           "NOT_COMPARABLE", "INPUT", "NOT_JUDGED", "VERDICTS", "DIFFERS", "parse_tolerance", "resolve",
-           "reference_row", "row_verdicts", "ROLES"]
+__all__ = [
+    "Claim",
+    "judge",
+    "half_ulp",
+    "load_reference",
+    "printed_value",
+    "claims_table",
+    "REFERENCE_DIR",
+    "REPRODUCED",
+    "WITHIN_ROUNDING",
+    "BOUND",
+    "CONSISTENT",
+    "DIFFERS_SHOWN",
+    "DIFFERS_UNKNOWN",
+    "NOT_COMPARABLE",
+    "INPUT",
+    "NOT_JUDGED",
+    "VERDICTS",
+    "DIFFERS",
+    "parse_tolerance",
+    "resolve",
+    "reference_row",
+    "row_verdicts",
+    "ROLES",
+]
 
 REFERENCE_DIR = ROOT / "data" / "reference"
 
@@ -51,8 +72,17 @@ INPUT = "input"
 #: a published result no artefact judges yet (the tests require none; it keeps the counts honest)
 NOT_JUDGED = "not judged yet"
 #: every verdict, strongest first: a reference row with several claims gets the strongest
-VERDICTS = (REPRODUCED, WITHIN_ROUNDING, BOUND, CONSISTENT, DIFFERS_SHOWN, DIFFERS_UNKNOWN, NOT_COMPARABLE, INPUT,
-            NOT_JUDGED)
+VERDICTS = (
+    REPRODUCED,
+    WITHIN_ROUNDING,
+    BOUND,
+    CONSISTENT,
+    DIFFERS_SHOWN,
+    DIFFERS_UNKNOWN,
+    NOT_COMPARABLE,
+    INPUT,
+    NOT_JUDGED,
+)
 #: the raw outcome of a comparison before basis and evidence are applied
 DIFFERS = "differs"
 
@@ -73,7 +103,9 @@ def half_ulp(printed: str) -> float:
 KINDS = ("value", "upper", "lower", "order")
 
 
-def judge(printed: str, ours: float, tol: float | None = None, kind: str = "value", margin: float = 1.0) -> str:
+def judge(
+    printed: str, ours: float, tol: float | None = None, kind: str = "value", margin: float = 1.0
+) -> str:
     """The raw outcome of comparing our value with the printed one.
 
     ``kind="value"``: ``reproduced`` when ``|ours - paper| <= tol`` (a tolerance declared in the
@@ -124,7 +156,9 @@ def parse_tolerance(text: str, printed: str) -> tuple[str, float | None, float]:
         return name, None, float(arg) if arg else 1.0
     if name == "order":
         return "order", None, 1.0
-    raise ValueError(f"unknown tolerance {text!r} (one of '', exact, abs:X, rel:X, upper[:M], lower[:M], order)")
+    raise ValueError(
+        f"unknown tolerance {text!r} (one of '', exact, abs:X, rel:X, upper[:M], lower[:M], order)"
+    )
 
 
 @dataclass(frozen=True)
@@ -148,12 +182,18 @@ class Claim:
     tol: float | None = None  #: claim-specific tolerance for "reproduced"
     reason: str = ""  #: why it differs, or what was assumed
     kind: str = "value"  #: "value", "upper"/"lower" (a bound the paper states), "order" (see judge)
-    basis: str = ""  #: what was fitted or assumed to get agreement ("" = an independent computation)
+    basis: str = (
+        ""  #: what was fitted or assumed to get agreement ("" = an independent computation)
+    )
     evidence: str = ""  #: the file or test that shows the cause of a difference
-    comparable: bool = True  #: False: lost, qualitative or another machine's clock (reason says why)
+    comparable: bool = (
+        True  #: False: lost, qualitative or another machine's clock (reason says why)
+    )
     margin: float = 1.0  #: a bound must be met this many times over
     tolerance: str = ""  #: the declared tolerance as written in the reference CSV (set by resolve)
-    outcome: str = field(init=False)  #: raw comparison: reproduced / within rounding / bound satisfied / differs
+    outcome: str = field(
+        init=False
+    )  #: raw comparison: reproduced / within rounding / bound satisfied / differs
     verdict: str = field(init=False)
 
     def __post_init__(self) -> None:
@@ -201,7 +241,9 @@ def load_reference(paper: str, reference_dir: Path = REFERENCE_DIR) -> pd.DataFr
 def reference_row(ref: pd.DataFrame, artefact: str, quantity: str) -> pd.Series:
     rows = ref[(ref["artefact"] == artefact) & (ref["quantity"] == quantity)]
     if len(rows) != 1:
-        raise KeyError(f"reference has {len(rows)} rows for ({artefact!r}, {quantity!r}), expected 1")
+        raise KeyError(
+            f"reference has {len(rows)} rows for ({artefact!r}, {quantity!r}), expected 1"
+        )
     return rows.iloc[0]
 
 
@@ -217,14 +259,18 @@ def resolve(claim: Claim, ref: pd.DataFrame) -> Claim:
     reference CSV's, never the code's; an ``input`` row's claims are set-up echoes (verdict input)."""
     row = reference_row(ref, claim.artefact, claim.quantity)
     if str(row["value"]) != claim.printed:
-        raise ValueError(f"{claim.paper} {claim.artefact}/{claim.quantity}: claim prints {claim.printed!r}, "
-                         f"the reference {row['value']!r}")
+        raise ValueError(
+            f"{claim.paper} {claim.artefact}/{claim.quantity}: claim prints {claim.printed!r}, "
+            f"the reference {row['value']!r}"
+        )
     kind, tol, margin = parse_tolerance(row["tolerance"], claim.printed)
     out = replace(claim, kind=kind, tol=tol, margin=margin, tolerance=row["tolerance"])
     if row["role"] == "input":
         object.__setattr__(out, "verdict", INPUT)
     elif row["role"] == "not comparable" and out.verdict != NOT_COMPARABLE:
-        out = replace(out, comparable=False, reason=(out.reason + "; " if out.reason else "") + row["note"])
+        out = replace(
+            out, comparable=False, reason=(out.reason + "; " if out.reason else "") + row["note"]
+        )
     return out
 
 
@@ -244,8 +290,15 @@ def row_verdicts(claims: list[Claim], ref: pd.DataFrame) -> pd.DataFrame:
             verdict = NOT_COMPARABLE
         else:
             verdict = best.verdict if best is not None else NOT_JUDGED
-        rows.append({"artefact": r["artefact"], "quantity": r["quantity"], "verdict": verdict, "claim": best,
-                     "ref": r})
+        rows.append(
+            {
+                "artefact": r["artefact"],
+                "quantity": r["quantity"],
+                "verdict": verdict,
+                "claim": best,
+                "ref": r,
+            }
+        )
     return pd.DataFrame(rows)
 
 
@@ -270,8 +323,19 @@ def claims_table(claims: list[Claim]) -> pd.DataFrame:
             "difference": [_fmt(c.diff) for c in claims],
             "unit": [c.unit for c in claims],
             "verdict": [c.verdict for c in claims],
-            "reason": [("; ".join(x for x in (f"{'fitted/assumed' if c.basis else ''}{': ' + c.basis if c.basis else ''}",
-                                                c.reason, f"evidence: {c.evidence}" if c.evidence else "") if x))
-                       for c in claims],
+            "reason": [
+                (
+                    "; ".join(
+                        x
+                        for x in (
+                            f"{'fitted/assumed' if c.basis else ''}{': ' + c.basis if c.basis else ''}",
+                            c.reason,
+                            f"evidence: {c.evidence}" if c.evidence else "",
+                        )
+                        if x
+                    )
+                )
+                for c in claims
+            ],
         }
     )

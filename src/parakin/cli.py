@@ -33,7 +33,9 @@ MAXITER_LIMIT = 100_000
 #: largest magnitude of a --param value in SI units (m, rad): far beyond any real mechanism
 PARAM_LIMIT = 1e6
 #: what argparse must read as a (negative) number, not an option: -1, -1.5, -.5, -1e-3, -1.5E+02, -inf, -nan
-_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
+_NEGATIVE_NUMBER = re.compile(
+    r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE
+)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -81,8 +83,10 @@ def parameters_of(cls) -> list[str]:
 def _parameter(name: str, key: str, text: str) -> float:
     value = parse_quantity(text)
     if not (math.isfinite(value) and 0 < value <= PARAM_LIMIT):
-        raise ValueError(f"--param {key}={text} of {name}: {value!r} must be a positive finite number "
-                         f"<= {PARAM_LIMIT:g} (SI units)")
+        raise ValueError(
+            f"--param {key}={text} of {name}: {value!r} must be a positive finite number "
+            f"<= {PARAM_LIMIT:g} (SI units)"
+        )
     return value
 
 
@@ -106,8 +110,10 @@ def _finite(values: np.ndarray, what: str, inputs: np.ndarray) -> np.ndarray:
     bad = ~np.all(np.isfinite(np.atleast_2d(values)), axis=-1)
     if np.any(bad):
         row = np.atleast_2d(inputs)[int(np.argmax(bad))]
-        raise ValueError(f"{what} of {np.array2string(row, precision=6)} is not finite "
-                         f"(|values| up to {np.max(np.abs(row)):.3g}: too large for this mechanism?)")
+        raise ValueError(
+            f"{what} of {np.array2string(row, precision=6)} is not finite "
+            f"(|values| up to {np.max(np.abs(row)):.3g}: too large for this mechanism?)"
+        )
     return values
 
 
@@ -118,7 +124,9 @@ def _dumps(obj) -> str:
 
 def _batch(values: Sequence[float], n: int, what: str, names: Sequence[str]) -> np.ndarray:
     if len(values) == 0 or len(values) % n:
-        raise ValueError(f"{what} needs a multiple of {n} values ({', '.join(names)}), got {len(values)}")
+        raise ValueError(
+            f"{what} needs a multiple of {n} values ({', '.join(names)}), got {len(values)}"
+        )
     a = np.asarray(values, dtype=float).reshape(-1, n)
     return a[0] if len(a) == 1 else a
 
@@ -141,10 +149,19 @@ def _fmt_vector(names, values, units) -> str:
 def _units_note(mech, command: str, paper: bool) -> None:
     """``--units paper`` where the paper prints SI: say so (once, on stderr) instead of silently
     printing the same numbers."""
-    if paper and mech.paper_pose_units == mech.pose_units and mech.paper_joint_units == mech.joint_units:
-        units = ", ".join(sorted(set(mech.pose_units + mech.joint_units) - {"1"})) or "dimensionless"
-        print(f"parakin {command}: note: the paper prints {mech.name} poses and joints in SI units ({units}), "
-              "so --units paper is the same as --units si", file=sys.stderr)
+    if (
+        paper
+        and mech.paper_pose_units == mech.pose_units
+        and mech.paper_joint_units == mech.joint_units
+    ):
+        units = (
+            ", ".join(sorted(set(mech.pose_units + mech.joint_units) - {"1"})) or "dimensionless"
+        )
+        print(
+            f"parakin {command}: note: the paper prints {mech.name} poses and joints in SI units ({units}), "
+            "so --units paper is the same as --units si",
+            file=sys.stderr,
+        )
 
 
 #: file formats of --input and --output
@@ -174,7 +191,9 @@ def _header_name(token: str) -> tuple[str, str | None]:
     return (m.group(1), m.group(2)) if m else (token.strip(), None)
 
 
-def read_rows(path: str, names: Sequence[str], units: Sequence[str], option: str = "--input") -> np.ndarray:
+def read_rows(
+    path: str, names: Sequence[str], units: Sequence[str], option: str = "--input"
+) -> np.ndarray:
     """The ``(N, n)`` values of a CSV or .npy file, one pose or joint vector per row.
 
     A CSV may start with a header; where it names every one of ``names`` (e.g. ``x [m]`` or ``x``,
@@ -188,14 +207,22 @@ def read_rows(path: str, names: Sequence[str], units: Sequence[str], option: str
         try:
             a = np.load(path, allow_pickle=False)
         except ValueError as exc:
-            raise ValueError(f"{option} {path}: not a numeric .npy array ({_one_line(exc)})") from None
+            raise ValueError(
+                f"{option} {path}: not a numeric .npy array ({_one_line(exc)})"
+            ) from None
         if a.dtype.kind not in "iuf" or a.ndim not in (1, 2) or a.shape[-1] != n:
-            raise ValueError(f"{option} {path}: a .npy file must hold a numeric array of shape (N, {n}) "
-                             f"({', '.join(names)}), got {a.dtype} {a.shape}")
+            raise ValueError(
+                f"{option} {path}: a .npy file must hold a numeric array of shape (N, {n}) "
+                f"({', '.join(names)}), got {a.dtype} {a.shape}"
+            )
         a = np.atleast_2d(a.astype(float))
     else:
         with open(path, newline="") as fh:
-            lines = [(k + 1, line.strip()) for k, line in enumerate(fh) if line.strip() and not line.lstrip().startswith("#")]
+            lines = [
+                (k + 1, line.strip())
+                for k, line in enumerate(fh)
+                if line.strip() and not line.lstrip().startswith("#")
+            ]
         if not lines:
             raise ValueError(f"{option} {path}: the file holds no rows")
         if len(lines) > MAX_ROWS + 1:
@@ -210,19 +237,25 @@ def read_rows(path: str, names: Sequence[str], units: Sequence[str], option: str
                 for name, want in zip(names, units):
                     unit = found[name][1]
                     if unit not in (None, "", want) and not (unit == "-" and want == "1"):
-                        raise ValueError(f"{option} {path}: column {name!r} is in {unit} but these --units read "
-                                         f"{name} in {want}")
+                        raise ValueError(
+                            f"{option} {path}: column {name!r} is in {unit} but these --units read "
+                            f"{name} in {want}"
+                        )
             elif len(header) != n:
-                raise ValueError(f"{option} {path}: the header {cells[0][1]} names neither the columns "
-                                 f"{list(names)} nor {n} columns")
+                raise ValueError(
+                    f"{option} {path}: the header {cells[0][1]} names neither the columns "
+                    f"{list(names)} nor {n} columns"
+                )
             cells = cells[1:]
             if not cells:
                 raise ValueError(f"{option} {path}: the file holds a header and no rows")
         rows = []
         for k, row in cells:
             if len(row) < max(columns) + 1 or (columns == list(range(n)) and len(row) != n):
-                raise ValueError(f"{option} {path}, line {k}: {len(row)} values, expected {n} "
-                                 f"({', '.join(names)})")
+                raise ValueError(
+                    f"{option} {path}, line {k}: {len(row)} values, expected {n} "
+                    f"({', '.join(names)})"
+                )
             try:
                 rows.append([float(row[c]) for c in columns])
             except ValueError:
@@ -232,13 +265,21 @@ def read_rows(path: str, names: Sequence[str], units: Sequence[str], option: str
         raise ValueError(f"{option} {path}: the file holds no rows")
     bad = ~np.all(np.isfinite(a), axis=-1)
     if np.any(bad):
-        raise ValueError(f"{option} {path}: row {int(np.argmax(bad)) + 1} is not finite "
-                         f"({np.array2string(a[int(np.argmax(bad))], precision=6)})")
+        raise ValueError(
+            f"{option} {path}: row {int(np.argmax(bad)) + 1} is not finite "
+            f"({np.array2string(a[int(np.argmax(bad))], precision=6)})"
+        )
     return a
 
 
-def write_rows(path: str, names: Sequence[str], units: Sequence[str], values: np.ndarray,
-               extra: dict[str, Sequence] | None = None, lead: dict[str, Sequence] | None = None) -> None:
+def write_rows(
+    path: str,
+    names: Sequence[str],
+    units: Sequence[str],
+    values: np.ndarray,
+    extra: dict[str, Sequence] | None = None,
+    lead: dict[str, Sequence] | None = None,
+) -> None:
     """Write ``values (N, n)`` to a CSV (header ``name [unit]``, then ``extra`` columns; ``lead``
     columns first) or ``.npy`` (the values only, any shape). Written to a temporary file first."""
     fmt = _format_of(path, "--output")
@@ -249,7 +290,11 @@ def write_rows(path: str, names: Sequence[str], units: Sequence[str], values: np
             with open(tmp, "wb") as fh:
                 np.save(fh, np.asarray(values, dtype=float))
         else:
-            header = [*(lead or {}), *(f"{n} [{u}]" if u != "1" else n for n, u in zip(names, units)), *(extra or {})]
+            header = [
+                *(lead or {}),
+                *(f"{n} [{u}]" if u != "1" else n for n, u in zip(names, units)),
+                *(extra or {}),
+            ]
             v = np.atleast_2d(values)
             with open(tmp, "w", newline="") as fh:
                 fh.write(",".join(header) + "\n")
@@ -294,10 +339,23 @@ def cmd_ik(args) -> int:
         joints = _finite(from_si(mech.ik(pose), ju), "the inverse kinematics", given)
     if args.output:
         write_rows(args.output, mech.joint_names, ju, np.atleast_2d(joints))
-        print(f"parakin ik: {len(np.atleast_2d(joints))} joint vector(s) written to {args.output}", file=sys.stderr)
+        print(
+            f"parakin ik: {len(np.atleast_2d(joints))} joint vector(s) written to {args.output}",
+            file=sys.stderr,
+        )
     if args.json:
-        print(_dumps({"mechanism": mech.name, "parameters": mech.parameters(), "pose": given.tolist(),
-                      "pose_units": pu, "joints": joints.tolist(), "joint_units": ju}))
+        print(
+            _dumps(
+                {
+                    "mechanism": mech.name,
+                    "parameters": mech.parameters(),
+                    "pose": given.tolist(),
+                    "pose_units": pu,
+                    "joints": joints.tolist(),
+                    "joint_units": ju,
+                }
+            )
+        )
     elif not args.output:
         for q in np.atleast_2d(joints):
             print(_fmt_vector(mech.joint_names, q, ju))
@@ -315,30 +373,58 @@ def cmd_fk(args) -> int:
     joints = _finite(to_si(given, ju), "--joints in SI units", given)
     if args.all:
         if args.solver is not None or args.x0 is not None:
-            raise ValueError("--all lists every solution of the all-solutions method: it takes no --solver or --x0")
+            raise ValueError(
+                "--all lists every solution of the all-solutions method: it takes no --solver or --x0"
+            )
         return _fk_all(args, mech, given, joints, pu, ju)
     with np.errstate(all="ignore"):
-        mech.check_joints(joints)  # unreachable joints: the mechanism's own error, whatever the solver
+        mech.check_joints(
+            joints
+        )  # unreachable joints: the mechanism's own error, whatever the solver
     method = args.solver or ("closed-form" if mech.fk is not None else "newton")
     if method not in METHODS:
         raise ValueError(f"unknown solver {method!r}; known: {', '.join(sorted(METHODS))}")
-    x0 = None if args.x0 is None else to_si(_batch(args.x0, mech.n_pose, "--x0", mech.pose_names), pu)
+    x0 = (
+        None
+        if args.x0 is None
+        else to_si(_batch(args.x0, mech.n_pose, "--x0", mech.pose_names), pu)
+    )
     options = {"network": _network(mech, args.network)} if method == "hybrid" else {}
-    res = solve_fk(mech, joints, x0=x0, method=method, tol=args.tol, maxiter=args.maxiter,
-                   joint_tol=args.joint_tol, **options)
+    res = solve_fk(
+        mech,
+        joints,
+        x0=x0,
+        method=method,
+        tol=args.tol,
+        maxiter=args.maxiter,
+        joint_tol=args.joint_tol,
+        **options,
+    )
     with np.errstate(all="ignore"):
         pose = _finite(from_si(res.x, pu), "the solution in --units " + args.units, given)
     if args.output:
         flat = np.atleast_2d(pose)
-        extra = {"success": np.atleast_1d(res.success), "status": [_status_name(v) for v in np.atleast_1d(res.status)],
-                 "nit": np.atleast_1d(res.nit), "residual": np.atleast_1d(res.residual).astype(float),
-                 "joint_error_m": np.atleast_1d(res.joint_error).astype(float)}
+        extra = {
+            "success": np.atleast_1d(res.success),
+            "status": [_status_name(v) for v in np.atleast_1d(res.status)],
+            "nit": np.atleast_1d(res.nit),
+            "residual": np.atleast_1d(res.residual).astype(float),
+            "joint_error_m": np.atleast_1d(res.joint_error).astype(float),
+        }
         write_rows(args.output, mech.pose_names, pu, flat, extra=extra)
-        print(f"parakin fk: {len(flat)} pose(s) written to {args.output} ({int(np.sum(res.success))} converged)",
-              file=sys.stderr)
+        print(
+            f"parakin fk: {len(flat)} pose(s) written to {args.output} ({int(np.sum(res.success))} converged)",
+            file=sys.stderr,
+        )
     if args.json:
-        out = {"mechanism": mech.name, "parameters": mech.parameters(), "joints": given.tolist(),
-               "joint_units": ju, "pose_units": pu, **res.to_dict()}
+        out = {
+            "mechanism": mech.name,
+            "parameters": mech.parameters(),
+            "joints": given.tolist(),
+            "joint_units": ju,
+            "pose_units": pu,
+            **res.to_dict(),
+        }
         out["x"] = pose.tolist()
         print(_dumps(out))
     elif not args.output:
@@ -362,8 +448,10 @@ def all_solutions_of(mech, joints: np.ndarray) -> list[list[tuple[str, np.ndarra
     elif hasattr(mech, "fk_all"):
         sets = [(None, mech.fk_all(joints))]
     else:
-        raise ValueError(f"{mech.name} has no all-solutions method; --all works on "
-                         f"{', '.join(all_solution_mechanisms())}")
+        raise ValueError(
+            f"{mech.name} has no all-solutions method; --all works on "
+            f"{', '.join(all_solution_mechanisms())}"
+        )
     try:
         with np.errstate(all="ignore"):
             working = np.atleast_2d(mech.fk(joints))
@@ -379,12 +467,17 @@ def all_solutions_of(mech, joints: np.ndarray) -> list[list[tuple[str, np.ndarra
                     continue
                 parts = []
                 if branch is not None:
-                    parts.append(f"branch {branch:+d} ({'rho > 0, the paper' if branch > 0 else 'rho < 0, mirror'})")
+                    parts.append(
+                        f"branch {branch:+d} ({'rho > 0, the paper' if branch > 0 else 'rho < 0, mirror'})"
+                    )
                 if z is not None:
                     parts.append("above the base" if x[z] > 0 else "below the base")
                 own = branch is None or branch == getattr(mech, "branch", branch)
-                near = own and bool(np.all(np.isfinite(working[i]))) and float(
-                    np.max(np.abs(mech.pose_difference(x, working[i])))) < 1e-7
+                near = (
+                    own
+                    and bool(np.all(np.isfinite(working[i])))
+                    and float(np.max(np.abs(mech.pose_difference(x, working[i])))) < 1e-7
+                )
                 if near:
                     parts.append("working (what fk returns)")
                 rows.append((", ".join(parts), x, near))
@@ -412,29 +505,59 @@ def _fk_all(args, mech, given, joints, pu, ju) -> int:
                     a[i, j] = from_si(x, pu)
             write_rows(args.output, mech.pose_names, pu, a)
         else:
-            flat = [(i + 1, j + 1, label, work, from_si(x, pu)) for i, rows in enumerate(found)
-                    for j, (label, x, work) in enumerate(rows)]
+            flat = [
+                (i + 1, j + 1, label, work, from_si(x, pu))
+                for i, rows in enumerate(found)
+                for j, (label, x, work) in enumerate(rows)
+            ]
             values = np.array([f[4] for f in flat]).reshape(-1, mech.n_pose)
-            write_rows(args.output, mech.pose_names, pu, values,
-                       lead={"input": [f[0] for f in flat], "solution": [f[1] for f in flat]},
-                       extra={"working": [f[3] for f in flat], "assembly": [f[2] for f in flat]})
-        print(f"parakin fk: {sum(counts)} real solution(s) of {len(found)} input(s) written to {args.output}",
-              file=sys.stderr)
+            write_rows(
+                args.output,
+                mech.pose_names,
+                pu,
+                values,
+                lead={"input": [f[0] for f in flat], "solution": [f[1] for f in flat]},
+                extra={"working": [f[3] for f in flat], "assembly": [f[2] for f in flat]},
+            )
+        print(
+            f"parakin fk: {sum(counts)} real solution(s) of {len(found)} input(s) written to {args.output}",
+            file=sys.stderr,
+        )
     if args.json:
-        print(_dumps({"mechanism": mech.name, "parameters": mech.parameters(), "joints": np.atleast_2d(given).tolist(),
-                      "joint_units": ju, "pose_units": pu, "n_real": counts,
-                      "solutions": [[{"assembly": label, "working": work, "x": from_si(x, pu).tolist()}
-                                     for label, x, work in rows] for rows in found]}))
+        print(
+            _dumps(
+                {
+                    "mechanism": mech.name,
+                    "parameters": mech.parameters(),
+                    "joints": np.atleast_2d(given).tolist(),
+                    "joint_units": ju,
+                    "pose_units": pu,
+                    "n_real": counts,
+                    "solutions": [
+                        [
+                            {"assembly": label, "working": work, "x": from_si(x, pu).tolist()}
+                            for label, x, work in rows
+                        ]
+                        for rows in found
+                    ],
+                }
+            )
+        )
     elif not args.output:
         q = np.atleast_2d(given)
         for i, rows in enumerate(found):
             print(f"{_fmt_vector(mech.joint_names, q[i], ju)}: {len(rows)} real solution(s)")
             for j, (label, x, _) in enumerate(rows):
-                print(f"  #{j + 1}  {_fmt_vector(mech.pose_names, from_si(x, pu), pu)}  [{label or 'real'}]")
+                print(
+                    f"  #{j + 1}  {_fmt_vector(mech.pose_names, from_si(x, pu), pu)}  [{label or 'real'}]"
+                )
     none = [i for i, c in enumerate(counts) if c == 0]
     if none:
-        print(f"parakin fk: error: no real solution for {len(none)} input(s), the first: "
-              f"{np.array2string(np.atleast_2d(given)[none[0]], precision=6)} (cannot be assembled)", file=sys.stderr)
+        print(
+            f"parakin fk: error: no real solution for {len(none)} input(s), the first: "
+            f"{np.array2string(np.atleast_2d(given)[none[0]], precision=6)} (cannot be assembled)",
+            file=sys.stderr,
+        )
         return EXIT_NOT_CONVERGED
     _units_note(mech, "fk", args.units == "paper")
     return 0
@@ -454,9 +577,13 @@ def _why(res, tol: float) -> str:
     from parakin.solvers import Status
 
     residual, joint = np.max(res.residual), np.max(res.joint_error)
-    hint = ("raise --maxiter, or the joints may be unreachable" if np.any(res.status == Status.MAXITER)
-            else "try another --x0 (the start decides the assembly)" if np.any(res.status == Status.WRONG_ASSEMBLY)
-            else "tighten --tol, or the joints may be unreachable")
+    hint = (
+        "raise --maxiter, or the joints may be unreachable"
+        if np.any(res.status == Status.MAXITER)
+        else "try another --x0 (the start decides the assembly)"
+        if np.any(res.status == Status.WRONG_ASSEMBLY)
+        else "tighten --tol, or the joints may be unreachable"
+    )
     return f"max residual {residual:.3g} (tol {tol:g}), max joint error {joint:.3g}; {hint}"
 
 
@@ -491,7 +618,9 @@ def cmd_bench(args) -> int:
     tables = []
     for name in names:
         if name not in BENCHES and name not in ("atlas", "kernels"):
-            raise ValueError(f"unknown benchmark {name!r}; known: atlas, kernels, {', '.join(BENCHES)}")
+            raise ValueError(
+                f"unknown benchmark {name!r}; known: atlas, kernels, {', '.join(BENCHES)}"
+            )
         print(f"parakin bench: {name} ...", file=sys.stderr)
         if name == "atlas":
             paths = extras.ARTEFACTS["solver_atlas"](config, root)
@@ -506,7 +635,14 @@ def cmd_bench(args) -> int:
         summary = extras.ARTEFACTS["benchmarks"](config, root)[0]
         print(f"parakin bench: wrote {summary}", file=sys.stderr)
     if args.json:
-        print(json.dumps({name: json.loads(pd.read_csv(csv).to_json(orient="records")) for name, csv in tables}))
+        print(
+            json.dumps(
+                {
+                    name: json.loads(pd.read_csv(csv).to_json(orient="records"))
+                    for name, csv in tables
+                }
+            )
+        )
     elif not args.name:
         print(summary.read_text())
     else:
@@ -516,8 +652,12 @@ def cmd_bench(args) -> int:
 
 
 #: benchmark name -> (paper key, artefact); "atlas" (every solver x every mechanism) is extras'
-BENCHES = {"fk-3p4s": ("zhao2017_3p4s", "fk_benchmark"), "indices-3p4s": ("zhao2017_3p4s", "index_benchmark"),
-           "2ups": ("li2020_2ups", "benchmark"), "fk-stewart12": ("ye_stewart12", "fk_speed")}
+BENCHES = {
+    "fk-3p4s": ("zhao2017_3p4s", "fk_benchmark"),
+    "indices-3p4s": ("zhao2017_3p4s", "index_benchmark"),
+    "2ups": ("li2020_2ups", "benchmark"),
+    "fk-stewart12": ("ye_stewart12", "fk_speed"),
+}
 
 
 def cmd_readme(args) -> int:
@@ -556,8 +696,13 @@ def cmd_reproduce(args) -> int:
     from parakin.pipeline import reproduce
 
     config = _config(args)
-    for path in reproduce(args.paper, args.artefact, config, Path(args.outdir) if args.outdir else None,
-                          module=args.module):
+    for path in reproduce(
+        args.paper,
+        args.artefact,
+        config,
+        Path(args.outdir) if args.outdir else None,
+        module=args.module,
+    ):
         print(path)
     return 0
 
@@ -599,7 +744,9 @@ def cmd_record(args) -> int:
     target = Path(args.record or config["record_dir"])
     record(results, target)
     if args.readme:
-        return cmd_readme(argparse.Namespace(readme=None, benchmarks=str(target / "benchmarks.md"), check=False))
+        return cmd_readme(
+            argparse.Namespace(readme=None, benchmarks=str(target / "benchmarks.md"), check=False)
+        )
     return 0
 
 
@@ -643,7 +790,9 @@ def _solver_help() -> str:
     width = max(map(len, METHODS))
     lines = ["solvers (--solver NAME):"]
     for name in sorted(METHODS):
-        text = SOLVER_HELP.get(name) or " ".join((METHODS[name].__doc__ or "").split(".")[0].replace("`", "").split())
+        text = SOLVER_HELP.get(name) or " ".join(
+            (METHODS[name].__doc__ or "").split(".")[0].replace("`", "").split()
+        )
         lines.append(f"  {name:<{width}}  {text}")
     return "\n".join(lines)
 
@@ -662,8 +811,11 @@ def _mechanism_help(what: str) -> str:
             if tuple(paper) != tuple(units):
                 si += " (paper: " + " ".join(u if u != "1" else "-" for u in paper) + ")"
             return si
-        lines.append(f"  {name:<10} {fmt(cls.pose_names, cls.pose_units, cls.paper_pose_units)} | "
-                     f"{fmt(cls.joint_names, cls.joint_units, cls.paper_joint_units)}")
+
+        lines.append(
+            f"  {name:<10} {fmt(cls.pose_names, cls.pose_units, cls.paper_pose_units)} | "
+            f"{fmt(cls.joint_names, cls.joint_units, cls.paper_joint_units)}"
+        )
     return "\n".join(lines)
 
 
@@ -675,96 +827,207 @@ def build_parser() -> argparse.ArgumentParser:
 
     def mech_args(p):
         p.add_argument("mechanism", choices=names, help="mechanism name")
-        p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
-                       help="override a mechanism parameter (SI, or with a unit: phi=35deg, d=120mm)")
-        p.add_argument("--units", choices=["si", "paper"], default="si", help="units of input and output")
+        p.add_argument(
+            "--param",
+            action="append",
+            default=[],
+            metavar="NAME=VALUE",
+            help="override a mechanism parameter (SI, or with a unit: phi=35deg, d=120mm)",
+        )
+        p.add_argument(
+            "--units", choices=["si", "paper"], default="si", help="units of input and output"
+        )
         p.add_argument("--json", action="store_true", help="print a JSON object")
 
     def file_args(p, what):
-        p.add_argument("--input", default=None, metavar="FILE",
-                       help=f"read many {what}s from FILE (.csv, optional header 'name [unit]', or .npy), one per row")
-        p.add_argument("--output", default=None, metavar="FILE",
-                       help="write the results to FILE (.csv with a header, or .npy) instead of printing them")
+        p.add_argument(
+            "--input",
+            default=None,
+            metavar="FILE",
+            help=f"read many {what}s from FILE (.csv, optional header 'name [unit]', or .npy), one per row",
+        )
+        p.add_argument(
+            "--output",
+            default=None,
+            metavar="FILE",
+            help="write the results to FILE (.csv with a header, or .npy) instead of printing them",
+        )
 
-    p = sub.add_parser("ik", help="inverse kinematics: joints of a pose", epilog=_mechanism_help("pose"),
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = sub.add_parser(
+        "ik",
+        help="inverse kinematics: joints of a pose",
+        epilog=_mechanism_help("pose"),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     mech_args(p)
-    p.add_argument("--pose", type=finite_float, nargs="+", default=None,
-                   help="pose value(s), n per pose (several poses: n values each, one after the other)")
+    p.add_argument(
+        "--pose",
+        type=finite_float,
+        nargs="+",
+        default=None,
+        help="pose value(s), n per pose (several poses: n values each, one after the other)",
+    )
     file_args(p, "pose")
     p.set_defaults(func=cmd_ik)
 
-    p = sub.add_parser("fk", help="forward kinematics: pose of joint values",
-                       epilog=_solver_help() + "\n\n" + _mechanism_help("joints"),
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = sub.add_parser(
+        "fk",
+        help="forward kinematics: pose of joint values",
+        epilog=_solver_help() + "\n\n" + _mechanism_help("joints"),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     mech_args(p)
-    p.add_argument("--joints", type=finite_float, nargs="+", default=None,
-                   help="joint value(s), m per pose (several inputs: m values each, one after the other)")
+    p.add_argument(
+        "--joints",
+        type=finite_float,
+        nargs="+",
+        default=None,
+        help="joint value(s), m per pose (several inputs: m values each, one after the other)",
+    )
     file_args(p, "joint vector")
-    p.add_argument("--all", action="store_true",
-                   help="list every real solution with its assembly label (mechanisms with an all-solutions "
-                        f"method: {', '.join(all_solution_mechanisms())})")
-    p.add_argument("--solver", default=None, metavar="NAME",
-                   help="solver (default: closed-form where one exists, else newton); the list is below")
-    p.add_argument("--x0", type=finite_float, nargs="+", default=None,
-                   help="initial pose (default: the mechanism's home)")
-    p.add_argument("--tol", type=nonnegative_float, default=1e-10, help="residual tolerance (default 1e-10)")
-    p.add_argument("--joint-tol", type=nonnegative_float, default=None,
-                   help="largest |ik(x) - joints| of a success (default: 100 x tol, at least 1e-8)")
-    p.add_argument("--maxiter", type=iteration_count, default=50,
-                   help=f"iteration limit (default 50, at most {MAXITER_LIMIT})")
-    p.add_argument("--network", default=None, help="trained network for --solver hybrid (default: the pipeline's)")
+    p.add_argument(
+        "--all",
+        action="store_true",
+        help="list every real solution with its assembly label (mechanisms with an all-solutions "
+        f"method: {', '.join(all_solution_mechanisms())})",
+    )
+    p.add_argument(
+        "--solver",
+        default=None,
+        metavar="NAME",
+        help="solver (default: closed-form where one exists, else newton); the list is below",
+    )
+    p.add_argument(
+        "--x0",
+        type=finite_float,
+        nargs="+",
+        default=None,
+        help="initial pose (default: the mechanism's home)",
+    )
+    p.add_argument(
+        "--tol", type=nonnegative_float, default=1e-10, help="residual tolerance (default 1e-10)"
+    )
+    p.add_argument(
+        "--joint-tol",
+        type=nonnegative_float,
+        default=None,
+        help="largest |ik(x) - joints| of a success (default: 100 x tol, at least 1e-8)",
+    )
+    p.add_argument(
+        "--maxiter",
+        type=iteration_count,
+        default=50,
+        help=f"iteration limit (default 50, at most {MAXITER_LIMIT})",
+    )
+    p.add_argument(
+        "--network",
+        default=None,
+        help="trained network for --solver hybrid (default: the pipeline's)",
+    )
     p.set_defaults(func=cmd_fk)
 
-    p = sub.add_parser("bench", help="run benchmarks (every solver, same inputs, ratios against scipy in one run)")
-    p.add_argument("name", nargs="*", help=f"benchmark(s): atlas, kernels, {', '.join(BENCHES)} (default: all, and the summary)")
+    p = sub.add_parser(
+        "bench", help="run benchmarks (every solver, same inputs, ratios against scipy in one run)"
+    )
+    p.add_argument(
+        "name",
+        nargs="*",
+        help=f"benchmark(s): atlas, kernels, {', '.join(BENCHES)} (default: all, and the summary)",
+    )
     p.add_argument("--quick", action="store_true", help="small sizes (config/quick.yaml)")
-    p.add_argument("--outdir", default=None, help="figures folder (default: figures_dir of the config)")
+    p.add_argument(
+        "--outdir", default=None, help="figures folder (default: figures_dir of the config)"
+    )
     p.add_argument("--json", action="store_true", help="print the tables as JSON records")
     p.set_defaults(func=cmd_bench)
 
-    p = sub.add_parser("readme", help="copy the benchmark summary block of figures/benchmarks.md into README.md")
+    p = sub.add_parser(
+        "readme", help="copy the benchmark summary block of figures/benchmarks.md into README.md"
+    )
     p.add_argument("--readme", default=None, help="README file (default: the project's)")
-    p.add_argument("--benchmarks", default=None, help="benchmarks.md (default: figures/benchmarks.md)")
+    p.add_argument(
+        "--benchmarks", default=None, help="benchmarks.md (default: figures/benchmarks.md)"
+    )
     p.add_argument("--check", action="store_true", help="only compare; exit 1 if they differ")
     p.set_defaults(func=cmd_readme)
 
     def config_args(p):
-        p.add_argument("--config", action="append", default=None, metavar="YAML",
-                       help="config file(s), later ones override earlier ones (default config/config.yaml)")
-        p.add_argument("--config-json", default=None, help="the whole config as JSON (what Snakemake passes)")
+        p.add_argument(
+            "--config",
+            action="append",
+            default=None,
+            metavar="YAML",
+            help="config file(s), later ones override earlier ones (default config/config.yaml)",
+        )
+        p.add_argument(
+            "--config-json", default=None, help="the whole config as JSON (what Snakemake passes)"
+        )
 
-    p = sub.add_parser("reproduce", help="compute one artefact (table or figure) of a paper or study")
-    p.add_argument("paper", help="study key, e.g. zhao2017_3p4s, or 'extra' (beyond the papers: solver atlas, benchmarks)")
+    p = sub.add_parser(
+        "reproduce", help="compute one artefact (table or figure) of a paper or study"
+    )
+    p.add_argument(
+        "paper",
+        help="study key, e.g. zhao2017_3p4s, or 'extra' (beyond the papers: solver atlas, benchmarks)",
+    )
     p.add_argument("artefact", help="artefact name, e.g. table1, or 'all'")
     p.add_argument("--outdir", default=None, help="output folder (default: <figures_dir>/<paper>)")
-    p.add_argument("--module", default=None, help="the study's module (default: those the config lists)")
+    p.add_argument(
+        "--module", default=None, help="the study's module (default: those the config lists)"
+    )
     config_args(p)
     p.set_defaults(func=cmd_reproduce)
 
-    p = sub.add_parser("check", help="check a run's outputs against the committed record, within declared tolerances")
-    p.add_argument("--results", default=None, help="the run's figures folder (default: figures_dir of the config)")
-    p.add_argument("--record", default=None, help="the record (default: record_dir of the config, figures/)")
-    p.add_argument("--out", default=None, help="output stem (default: <results>/../reproduction_check)")
-    p.add_argument("--studies", nargs="*", default=None, help="study modules (default: the config's)")
+    p = sub.add_parser(
+        "check",
+        help="check a run's outputs against the committed record, within declared tolerances",
+    )
+    p.add_argument(
+        "--results",
+        default=None,
+        help="the run's figures folder (default: figures_dir of the config)",
+    )
+    p.add_argument(
+        "--record", default=None, help="the record (default: record_dir of the config, figures/)"
+    )
+    p.add_argument(
+        "--out", default=None, help="output stem (default: <results>/../reproduction_check)"
+    )
+    p.add_argument(
+        "--studies", nargs="*", default=None, help="study modules (default: the config's)"
+    )
     p.add_argument("--config", action="append", default=None, metavar="YAML", help="config file(s)")
     p.add_argument("--strict", action="store_true", help="exit 1 if anything differs or is missing")
     p.set_defaults(func=cmd_check)
 
     p = sub.add_parser("which", help="which function and rule make a committed figure or table")
     p.add_argument("path", nargs="*", help="file(s), e.g. figures/zhao2017_3p4s/table1.csv")
-    p.add_argument("--list", action="store_true", help="list every registered output file and its artefact")
+    p.add_argument(
+        "--list", action="store_true", help="list every registered output file and its artefact"
+    )
     p.set_defaults(func=cmd_which)
 
-    p = sub.add_parser("record", help="copy a finished run (results/) into the committed record (figures/)")
-    p.add_argument("--results", default=None, help="the run's figures folder (default: figures_dir of the config)")
+    p = sub.add_parser(
+        "record", help="copy a finished run (results/) into the committed record (figures/)"
+    )
+    p.add_argument(
+        "--results",
+        default=None,
+        help="the run's figures folder (default: figures_dir of the config)",
+    )
     p.add_argument("--record", default=None, help="the record (default: record_dir of the config)")
-    p.add_argument("--no-readme", dest="readme", action="store_false",
-                   help="do not copy the benchmark block into README")
+    p.add_argument(
+        "--no-readme",
+        dest="readme",
+        action="store_false",
+        help="do not copy the benchmark block into README",
+    )
     p.set_defaults(func=cmd_record)
 
     p = sub.add_parser("report", help="write the claim-by-claim REPORT.md")
-    p.add_argument("--figures", default=None, help="figures folder (default: figures_dir of the config)")
+    p.add_argument(
+        "--figures", default=None, help="figures folder (default: figures_dir of the config)"
+    )
     p.add_argument("--out", default=None, help="output file (default: <figures>/REPORT.md)")
     config_args(p)
     p.set_defaults(func=cmd_report)

@@ -6,22 +6,36 @@ import copy
 import json
 import math
 import zlib
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any
 
 import jsonschema
 import yaml
 
 from parakin.errors import ConfigError
 
-__all__ = ["load_config", "validate", "merge", "rng", "seed_for", "ROOT", "SCHEMA_PATH", "DEFAULT_CONFIG", "QUICK_CONFIG"]
+__all__ = [
+    "load_config",
+    "validate",
+    "merge",
+    "rng",
+    "seed_for",
+    "ROOT",
+    "SCHEMA_PATH",
+    "DEFAULT_CONFIG",
+    "QUICK_CONFIG",
+]
 
 _CHECKOUT = Path(__file__).resolve().parents[2]
 #: The project tree that holds ``config/`` and ``data/reference/``: the checkout (tests, Snakemake,
 #: an editable install), or, for parakin installed from a wheel, the copy that the build ships
 #: inside the package (``parakin/_project/``, same layout; see setup.py).
-ROOT = (_CHECKOUT if (_CHECKOUT / "pyproject.toml").is_file() and (_CHECKOUT / "config" / "schema.yaml").is_file()
-        else Path(__file__).resolve().parent / "_project")
+ROOT = (
+    _CHECKOUT
+    if (_CHECKOUT / "pyproject.toml").is_file() and (_CHECKOUT / "config" / "schema.yaml").is_file()
+    else Path(__file__).resolve().parent / "_project"
+)
 SCHEMA_PATH = ROOT / "config" / "schema.yaml"
 DEFAULT_CONFIG = ROOT / "config" / "config.yaml"
 QUICK_CONFIG = ROOT / "config" / "quick.yaml"
@@ -52,8 +66,20 @@ def _describe(error: jsonschema.ValidationError) -> str:
         return f"{where}: {message} (see config/schema.yaml for the allowed keys)"
     if error.validator == "required":
         return f"{where}: {message}"
-    limits = {k: error.schema[k] for k in ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum",
-                                           "minItems", "maxItems", "type", "enum") if k in error.schema}
+    limits = {
+        k: error.schema[k]
+        for k in (
+            "minimum",
+            "maximum",
+            "exclusiveMinimum",
+            "exclusiveMaximum",
+            "minItems",
+            "maxItems",
+            "type",
+            "enum",
+        )
+        if k in error.schema
+    }
     allowed = _short(", ".join(f"{k} {v}" for k, v in limits.items()), 120)
     value = _short(json.dumps(error.instance, default=str))
     return f"{where} = {value}: {message}" + (f" (allowed: {allowed})" if allowed else "")
@@ -73,7 +99,11 @@ def _one_per_key(errors: list[jsonschema.ValidationError]) -> list[jsonschema.Va
 def _nonfinite(node: Any, path: str = "") -> list[str]:
     """Keys whose value is a non-finite number (YAML .inf / .nan pass a JSON schema's range tests)."""
     if isinstance(node, dict):
-        return [k for key, v in node.items() for k in _nonfinite(v, f"{path}.{key}" if path else str(key))]
+        return [
+            k
+            for key, v in node.items()
+            for k in _nonfinite(v, f"{path}.{key}" if path else str(key))
+        ]
     if isinstance(node, list):
         return [k for i, v in enumerate(node) for k in _nonfinite(v, f"{path}.{i}")]
     if isinstance(node, float) and not math.isfinite(node):
@@ -91,9 +121,13 @@ def _get(config: dict, dotted: str) -> Any:
 
 
 #: [low, high] pairs that must be ordered (what the code would otherwise fail on at run time)
-_ORDERED_PAIRS = ["zhao2017_3p4s.table1.fit.delta_range", "zhao2017_3p4s.table1.fit.phi_range_deg",
-                  "zhao2017_3p4s.table1.region.delta_range", "zhao2017_3p4s.table1.region.phi_range_deg",
-                  *(f"zhao2017_3p4s.optimization.bounds.{k}" for k in ("r_a", "r_b", "L", "d", "phi_deg"))]
+_ORDERED_PAIRS = [
+    "zhao2017_3p4s.table1.fit.delta_range",
+    "zhao2017_3p4s.table1.fit.phi_range_deg",
+    "zhao2017_3p4s.table1.region.delta_range",
+    "zhao2017_3p4s.table1.region.phi_range_deg",
+    *(f"zhao2017_3p4s.optimization.bounds.{k}" for k in ("r_a", "r_b", "L", "d", "phi_deg")),
+]
 #: most points of one generated grid (a tiny step would ask for petabytes)
 GRID_LIMIT = 100_000
 
@@ -106,14 +140,20 @@ def check_orderings(config: dict) -> list[str]:
         if isinstance(pair, list) and len(pair) == 2 and not pair[0] < pair[1]:
             out.append(f"config key '{key}' = {pair}: lower bound must be < upper bound")
     for i, part in enumerate(_get(config, "ye_stewart12.d_grid_pct") or []):
-        out += _grid(f"ye_stewart12.d_grid_pct.{i}", *part) if isinstance(part, list) and len(part) == 3 else []
+        out += (
+            _grid(f"ye_stewart12.d_grid_pct.{i}", *part)
+            if isinstance(part, list) and len(part) == 3
+            else []
+        )
     s = _get(config, "ye_stewart12.structures_mm")
     if isinstance(s, dict) and {"min", "max", "step"} <= set(s):
         out += _grid("ye_stewart12.structures_mm", s["min"], s["max"], s["step"])
     for i, box in enumerate(_get(config, "zhao2017_3p4s.fk.accuracy_boxes") or []):
         lo, hi = box.get("low"), box.get("high")
         if isinstance(lo, list) and isinstance(hi, list) and not all(a < b for a, b in zip(lo, hi)):
-            out.append(f"config key 'zhao2017_3p4s.fk.accuracy_boxes.{i}' low {lo} must be < high {hi} per axis")
+            out.append(
+                f"config key 'zhao2017_3p4s.fk.accuracy_boxes.{i}' low {lo} must be < high {hi} per axis"
+            )
     return out
 
 
@@ -122,8 +162,10 @@ def _grid(key: str, start: float, stop: float, step: float) -> list[str]:
         return [f"config key '{key}': start {start} must be <= stop {stop}"]
     points = (stop - start) / step + 1 if step > 0 else math.inf
     if not points <= GRID_LIMIT:
-        return [f"config key '{key}' = [{start}, {stop}, step {step}]: {points:.3g} points, more than the limit "
-                f"{GRID_LIMIT}"]
+        return [
+            f"config key '{key}' = [{start}, {stop}, step {step}]: {points:.3g} points, more than the limit "
+            f"{GRID_LIMIT}"
+        ]
     return []
 
 
@@ -161,9 +203,13 @@ def load_config(paths: str | Path | Iterable[str | Path] = DEFAULT_CONFIG) -> di
             mark = getattr(exc, "problem_mark", None)
             where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""
             what = getattr(exc, "problem", None) or "not valid YAML"
-            raise ConfigError(f"config file {str(path)!r} is not valid YAML{where}: {_short(what)}") from None
+            raise ConfigError(
+                f"config file {str(path)!r} is not valid YAML{where}: {_short(what)}"
+            ) from None
         if not isinstance(loaded, dict):
-            raise ConfigError(f"config file {str(path)!r} must hold a mapping, got {type(loaded).__name__}")
+            raise ConfigError(
+                f"config file {str(path)!r} must hold a mapping, got {type(loaded).__name__}"
+            )
         config = merge(config, loaded)
     return validate(config)
 

@@ -16,7 +16,13 @@ from numpy.typing import ArrayLike
 
 from parakin.errors import UnreachableError
 
-__all__ = ["KINEMATIC_INDEX_NAMES", "Quadrature", "kinematic_indices", "box_nodes", "global_kinematic_indices"]
+__all__ = [
+    "KINEMATIC_INDEX_NAMES",
+    "Quadrature",
+    "kinematic_indices",
+    "box_nodes",
+    "global_kinematic_indices",
+]
 
 Quadrature = Literal["gauss", "midpoint"]
 
@@ -40,15 +46,23 @@ def kinematic_indices(mech, poses: ArrayLike, *, k: float = 1.0) -> dict[str, np
     """
     if not (np.isfinite(k) and k > 0):
         raise ValueError(f"k = {k!r} must be finite and > 0")
-    s = np.linalg.svd(mech.velocity_jacobian(poses), compute_uv=False)  # (..., min(m, n)), descending
+    s = np.linalg.svd(
+        mech.velocity_jacobian(poses), compute_uv=False
+    )  # (..., min(m, n)), descending
     smin = s[..., -1]
     with np.errstate(divide="ignore"):
         speed = np.where(smin > 0, s[..., 0] / np.where(smin > 0, smin, 1.0), np.inf)
-    return {"speed": speed, "stiffness_lambda": k * smin**2, "stiffness_sqrt": np.sqrt(k) * smin,
-            "manipulability": np.prod(s, axis=-1)}
+    return {
+        "speed": speed,
+        "stiffness_lambda": k * smin**2,
+        "stiffness_sqrt": np.sqrt(k) * smin,
+        "manipulability": np.prod(s, axis=-1),
+    }
 
 
-def box_nodes(lo: ArrayLike, hi: ArrayLike, n: int, rule: Quadrature = "gauss") -> tuple[np.ndarray, np.ndarray]:
+def box_nodes(
+    lo: ArrayLike, hi: ArrayLike, n: int, rule: Quadrature = "gauss"
+) -> tuple[np.ndarray, np.ndarray]:
     """Tensor quadrature over the pose box ``[lo, hi]`` (any dimension; an axis with ``lo == hi`` is
     held fixed): points ``(N, d)`` and weights ``(N,)`` summing to 1, ``n`` nodes per free axis,
     Gauss-Legendre or midpoint (as :meth:`parakin.mechanisms.p3p4s_indices.Workspace.nodes`)."""
@@ -73,8 +87,9 @@ def box_nodes(lo: ArrayLike, hi: ArrayLike, n: int, rule: Quadrature = "gauss") 
     return grid, wt.reshape(-1)
 
 
-def global_kinematic_indices(mech, lo: ArrayLike, hi: ArrayLike, n: int, *, k: float = 1.0,
-                             rule: Quadrature = "gauss") -> dict[str, float]:
+def global_kinematic_indices(
+    mech, lo: ArrayLike, hi: ArrayLike, n: int, *, k: float = 1.0, rule: Quadrature = "gauss"
+) -> dict[str, float]:
     """Workspace means (eqs 29, 34, 37's ``int_W index dW / int_W dW``) of :func:`kinematic_indices`
     over the pose box ``[lo, hi]`` by :func:`box_nodes`. The box must lie inside the workspace: an
     unreachable node raises UnreachableError naming it (a mean over a partly unreachable box would
@@ -82,8 +97,10 @@ def global_kinematic_indices(mech, lo: ArrayLike, hi: ArrayLike, n: int, *, k: f
     x, w = box_nodes(lo, hi, n, rule)
     bad = ~mech.is_reachable(x)
     if np.any(bad):
-        raise UnreachableError(f"quadrature node {tuple(np.round(x[np.argmax(bad)], 9).tolist())} of the box "
-                               f"{np.asarray(lo).tolist()}..{np.asarray(hi).tolist()} is unreachable "
-                               f"({int(bad.sum())} of {len(x)} nodes)")
+        raise UnreachableError(
+            f"quadrature node {tuple(np.round(x[np.argmax(bad)], 9).tolist())} of the box "
+            f"{np.asarray(lo).tolist()}..{np.asarray(hi).tolist()} is unreachable "
+            f"({int(bad.sum())} of {len(x)} nodes)"
+        )
     ind = kinematic_indices(mech, x, k=k)
     return {name: float(w @ v) for name, v in ind.items()}

@@ -10,12 +10,20 @@ from __future__ import annotations
 import io
 import os
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import pandas as pd
 
-__all__ = ["is_timing_column", "atomic_write_bytes", "atomic_write_text", "atomic_writer", "write_csv", "write_table", "markdown_table"]
+__all__ = [
+    "is_timing_column",
+    "atomic_write_bytes",
+    "atomic_write_text",
+    "atomic_writer",
+    "write_csv",
+    "write_table",
+    "markdown_table",
+]
 
 
 #: words that mark a table column as a wall-clock measurement (it differs run to run; the
@@ -38,7 +46,9 @@ def atomic_writer(path: str | os.PathLike, write: Callable[[Path], None]) -> Pat
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(
+        prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent
+    )
     os.close(fd)
     try:
         write(Path(tmp))
@@ -67,6 +77,7 @@ def markdown_table(df: pd.DataFrame, floatfmt: str | dict[str, str] = ".6g") -> 
 
     ``floatfmt`` is a format spec for every float column, or a dict column -> spec.
     """
+
     def fmt(col: str, v) -> str:
         if isinstance(v, float):
             spec = floatfmt.get(col, ".6g") if isinstance(floatfmt, dict) else floatfmt
@@ -75,7 +86,10 @@ def markdown_table(df: pd.DataFrame, floatfmt: str | dict[str, str] = ".6g") -> 
 
     header = "| " + " | ".join(map(str, df.columns)) + " |"
     rule = "|" + "|".join("---" for _ in df.columns) + "|"
-    rows = ["| " + " | ".join(fmt(c, v) for c, v in zip(df.columns, row)) + " |" for row in df.itertuples(index=False)]
+    rows = [
+        "| " + " | ".join(fmt(c, v) for c, v in zip(df.columns, row)) + " |"
+        for row in df.itertuples(index=False)
+    ]
     return "\n".join([header, rule, *rows]) + "\n"
 
 
@@ -102,7 +116,10 @@ def write_table(
     """
     stem = Path(stem)
     csv_path = write_csv(df, stem.with_suffix(".csv"))
-    parts = [f"# {title}\n" if title else "", markdown_table(df if markdown is None else markdown, floatfmt)]
+    parts = [
+        f"# {title}\n" if title else "",
+        markdown_table(df if markdown is None else markdown, floatfmt),
+    ]
     if notes:
         parts.append("\n" + notes.strip() + "\n")
     md_path = atomic_write_text(stem.with_suffix(".md"), "\n".join(p for p in parts if p))

@@ -22,12 +22,16 @@ def studies(config: dict | None = None) -> list[str]:
     return list(config["studies"])
 
 
-def artefacts(names: list[str] | None = None, *, complete: bool = True) -> dict[str, registry.Artefact]:
+def artefacts(
+    names: list[str] | None = None, *, complete: bool = True
+) -> dict[str, registry.Artefact]:
     """The registry restricted to the studies ``names`` (default: the full config's)."""
     return registry.load(names or studies(), complete=complete)
 
 
-def reproduce(study: str, name: str, config: dict, outdir: Path | None, module: str | None = None) -> list[Path]:
+def reproduce(
+    study: str, name: str, config: dict, outdir: Path | None, module: str | None = None
+) -> list[Path]:
     """Run one artefact (``name == "all"``: every artefact of the study, upstream first) into ``outdir``."""
     found = artefacts([module] if module else None, complete=not module)
     if name == "all":
@@ -43,7 +47,9 @@ def reproduce(study: str, name: str, config: dict, outdir: Path | None, module: 
     return paths
 
 
-def check(results: Path, record: Path, out: Path, names: list[str] | None = None) -> tuple[Path, Path, str]:
+def check(
+    results: Path, record: Path, out: Path, names: list[str] | None = None
+) -> tuple[Path, Path, str]:
     """Write the reproduction check of ``results`` against ``record``; return its files and summary line."""
     from parakin.check import write_check
 
@@ -77,7 +83,9 @@ def describe(path: str | Path, found: dict[str, registry.Artefact] | None = None
         return f"{path}\n  made by:   {fn} ({_relative(_location(fn))})\n  rule:      {rule}"
     item = registry.which(found, path)
     if item is None:
-        raise ValueError(f"no registered artefact writes {str(path)!r} (`parakin which --list` lists every file)")
+        raise ValueError(
+            f"no registered artefact writes {str(path)!r} (`parakin which --list` lists every file)"
+        )
     tol = item.tolerance
     lines = [
         f"{path}",
@@ -102,19 +110,27 @@ def _relative(location: str) -> str:
 def which(paths: list[str], list_all: bool = False) -> str:
     found = artefacts()
     if list_all:
-        return "\n".join(f"{a.study_folder + '/' if a.study_folder else ''}{f}\t{a.key}"
-                         for a in found.values() for f in a.outputs)
+        return "\n".join(
+            f"{a.study_folder + '/' if a.study_folder else ''}{f}\t{a.key}"
+            for a in found.values()
+            for f in a.outputs
+        )
     return "\n\n".join(describe(p, found) for p in paths)
 
 
 def record(results: Path, record_dir: Path, names: list[str] | None = None) -> list[Path]:
     """Copy every registered output (and REPORT.md) of a finished run into the record."""
     copied = []
-    files = [(a.study_folder, f) for a in artefacts(names).values() for f in a.outputs] + [("", "REPORT.md"), ("", "report.csv")]
+    files = [(a.study_folder, f) for a in artefacts(names).values() for f in a.outputs] + [
+        ("", "REPORT.md"),
+        ("", "report.csv"),
+    ]
     missing = [str(Path(results) / d / f) for d, f in files if not (Path(results) / d / f).exists()]
     if missing:
-        raise FileNotFoundError(f"the run in {results} is incomplete ({len(missing)} files missing, e.g. "
-                                f"{missing[0]}): finish it with snakemake before recording")
+        raise FileNotFoundError(
+            f"the run in {results} is incomplete ({len(missing)} files missing, e.g. "
+            f"{missing[0]}): finish it with snakemake before recording"
+        )
     for folder, name in files:
         src, dst = Path(results) / folder / name, Path(record_dir) / folder / name
         dst.parent.mkdir(parents=True, exist_ok=True)
@@ -122,5 +138,8 @@ def record(results: Path, record_dir: Path, names: list[str] | None = None) -> l
         shutil.copyfile(src, tmp)
         tmp.replace(dst)
         copied.append(dst)
-    print(f"parakin record: {len(copied)} files copied from {results} to {record_dir}", file=sys.stderr)
+    print(
+        f"parakin record: {len(copied)} files copied from {results} to {record_dir}",
+        file=sys.stderr,
+    )
     return copied

@@ -202,14 +202,19 @@ def tag_figure(fig: Figure, tag: str | None) -> None:
         sup.set_text(f"{tag}: {sup.get_text()}")
         return
     with_title = [ax for ax in fig.axes if ax.get_title()]
-    if len(with_title) == 1 and len([ax for ax in fig.axes if ax.get_visible() and ax.get_label() != "<colorbar>"]) == 1:
+    if (
+        len(with_title) == 1
+        and len([ax for ax in fig.axes if ax.get_visible() and ax.get_label() != "<colorbar>"]) == 1
+    ):
         ax = with_title[0]
         ax.set_title(f"{tag}: {ax.get_title()}")
         return
     fig.suptitle(tag, fontsize="medium")
 
 
-def save_figure(fig: Figure, path: str | os.PathLike[str], *, close: bool = True, tag: bool = True) -> Path:
+def save_figure(
+    fig: Figure, path: str | os.PathLike[str], *, close: bool = True, tag: bool = True
+) -> Path:
     """Write ``fig`` to ``path`` (PNG unless the suffix says otherwise) atomically; return the path.
 
     With ``tag``, a figure named after a paper figure (``fig05_*``) or beyond the paper

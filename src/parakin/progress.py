@@ -18,7 +18,9 @@ class Progress:
     """``tick(n)`` adds ``n`` units of work; a line is printed each time another ``step`` (default
     10 %) of ``total`` is done, and once at the end: ``  <label>: 30 % (3/10 generations, 12.1 s)``."""
 
-    def __init__(self, label: str, total: int, unit: str = "steps", *, step: float = 0.1, stream=None) -> None:
+    def __init__(
+        self, label: str, total: int, unit: str = "steps", *, step: float = 0.1, stream=None
+    ) -> None:
         self.label, self.total, self.unit = label, max(int(total), 1), unit
         self.step = step
         self.stream = stream
@@ -32,8 +34,12 @@ class Progress:
         if frac + 1e-12 >= self._next or self.done == self.total:
             while self._next <= frac + 1e-12:
                 self._next += self.step
-            print(f"  {self.label}: {min(frac, 1.0):4.0%} ({self.done}/{self.total} {self.unit}, "
-                  f"{time.perf_counter() - self._t0:.1f} s)", file=self.stream or sys.stderr, flush=True)
+            print(
+                f"  {self.label}: {min(frac, 1.0):4.0%} ({self.done}/{self.total} {self.unit}, "
+                f"{time.perf_counter() - self._t0:.1f} s)",
+                file=self.stream or sys.stderr,
+                flush=True,
+            )
 
     def callback(self, *_: Any, **__: Any) -> None:
         """``tick(1)`` with any arguments (a solver's per-iteration callback)."""
@@ -43,8 +49,10 @@ class Progress:
 def counting(fn: Callable, progress: Progress, weight: int = 1) -> Callable:
     """``fn`` that ticks ``progress`` by ``weight`` on every call (an objective evaluated once per
     generation, say)."""
+
     def wrapped(*args, **kwargs):
         out = fn(*args, **kwargs)
         progress.tick(weight)
         return out
+
     return wrapped

@@ -24,11 +24,26 @@ import re
 import sys
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
-__all__ = ["Tolerance", "Artefact", "artefact", "figure", "REGISTRY", "load", "of_module", "find", "which", "prune_config",
-           "EXACT", "ROUNDING", "ITERATIVE", "DESCRIPTIVE", "TIMING"]
+__all__ = [
+    "Tolerance",
+    "Artefact",
+    "artefact",
+    "figure",
+    "REGISTRY",
+    "load",
+    "of_module",
+    "find",
+    "which",
+    "prune_config",
+    "EXACT",
+    "ROUNDING",
+    "ITERATIVE",
+    "DESCRIPTIVE",
+    "TIMING",
+]
 
 
 @dataclass(frozen=True)
@@ -81,19 +96,32 @@ KINDS = ("exact", "rounding", "iterative", "statistical", "descriptive", "timing
 
 #: closed forms, linear algebra of fixed size, symbolic counts: BLAS kernels change the
 #: summation order, so agreement to ~1e3 ulp of the largest value, never bit for bit
-EXACT = Tolerance("exact", 1e-9, 1e-12, "closed form: only the floating-point summation order differs")
+EXACT = Tolerance(
+    "exact", 1e-9, 1e-12, "closed form: only the floating-point summation order differs"
+)
 #: iterative solves converged to 1e-10 or better, quadratures, fits converged to 1e-14
-ROUNDING = Tolerance("rounding", 1e-6, 1e-9,
-                     "iterative solve or fit converged far below this; a BLAS kernel moves the last "
-                     "iterate by rounding only")
+ROUNDING = Tolerance(
+    "rounding",
+    1e-6,
+    1e-9,
+    "iterative solve or fit converged far below this; a BLAS kernel moves the last "
+    "iterate by rounding only",
+)
 #: iteration counts and success rates of iterative solvers: a step that lands within rounding of
 #: the stopping threshold may take one more iteration on another machine
-ITERATIVE = Tolerance("iterative", 1e-6, 1e-9,
-                      "converged solves; counts of iterations may move by one where a step lands at "
-                      "the threshold")
-DESCRIPTIVE = Tolerance("descriptive", 1e-9, 1e-12, "geometry echo or drawing: closed-form coordinates")
+ITERATIVE = Tolerance(
+    "iterative",
+    1e-6,
+    1e-9,
+    "converged solves; counts of iterations may move by one where a step lands at the threshold",
+)
+DESCRIPTIVE = Tolerance(
+    "descriptive", 1e-9, 1e-12, "geometry echo or drawing: closed-form coordinates"
+)
 #: speed tables: nothing in them is compared (timings and their ratios depend on the machine)
-TIMING = Tolerance("timing", 0.0, 0.0, "a speed table: timings and their ratios depend on the machine")
+TIMING = Tolerance(
+    "timing", 0.0, 0.0, "a speed table: timings and their ratios depend on the machine"
+)
 
 
 @dataclass(frozen=True)
@@ -140,7 +168,9 @@ class Artefact:
 
     def output_paths(self, figures: str | Path, generated: str | Path) -> list[str]:
         base = Path(figures) / self.study_folder
-        return [str(base / f) for f in self.outputs] + [str(Path(generated) / self.study / f) for f in self.generated]
+        return [str(base / f) for f in self.outputs] + [
+            str(Path(generated) / self.study / f) for f in self.generated
+        ]
 
     @property
     def location(self) -> str:
@@ -163,18 +193,31 @@ class Artefact:
 
 
 #: the end of a docstring's first sentence: a full stop and a space, not after "Fig.", "eq.", "e.g." ...
-_SENTENCE_END = re.compile(r"(?<!\bFig)(?<!\bFigs)(?<!\beq)(?<!\beqs)(?<!\bEq)(?<!\bvs)(?<!\be\.g)(?<!\bi\.e)"
-                           r"(?<!\bal)(?<!\bcf)(?<!\bSec)(?<!\bNo)\.\s")
+_SENTENCE_END = re.compile(
+    r"(?<!\bFig)(?<!\bFigs)(?<!\beq)(?<!\beqs)(?<!\bEq)(?<!\bvs)(?<!\be\.g)(?<!\bi\.e)"
+    r"(?<!\bal)(?<!\bcf)(?<!\bSec)(?<!\bNo)\.\s"
+)
 
 #: "study:name" -> Artefact, in declaration order (filled by the study modules' decorators)
 REGISTRY: dict[str, Artefact] = {}
 
 
-def artefact(study: str, name: str, *, outputs: Sequence[str], generated: Sequence[str] = (),
-             needs: Sequence[str] = (), config: Sequence[str] = (), tolerance: Tolerance = ROUNDING,
-             folder: str | None = None, reference: bool = True, threads: int = 1,
-             resources: dict[str, int | str] | None = None, caption: str = "",
-             draws: Sequence[tuple[str, str, Callable]] = ()) -> Callable:
+def artefact(
+    study: str,
+    name: str,
+    *,
+    outputs: Sequence[str],
+    generated: Sequence[str] = (),
+    needs: Sequence[str] = (),
+    config: Sequence[str] = (),
+    tolerance: Tolerance = ROUNDING,
+    folder: str | None = None,
+    reference: bool = True,
+    threads: int = 1,
+    resources: dict[str, int | str] | None = None,
+    caption: str = "",
+    draws: Sequence[tuple[str, str, Callable]] = (),
+) -> Callable:
     """Declare the decorated ``make(config, outdir) -> list[Path]`` as one artefact.
 
     ``outputs`` are file names in the study's figures folder, ``generated`` in its generated-data
@@ -184,26 +227,51 @@ def artefact(study: str, name: str, *, outputs: Sequence[str], generated: Sequen
     (e.g. ``{"runtime": 60, "mem_mb": 4000}``, minutes and MB) what its Snakemake job reserves (a
     long job says so: the SLURM profile schedules by them); ``caption``: its one line in the report.
     """
+
     def register(make: Callable) -> Callable:
         if not (isinstance(threads, int) and threads >= 1):
-            raise ValueError(f"artefact {study}:{name}: threads = {threads!r} must be an integer >= 1")
-        item = Artefact(study, name, make, tuple(outputs), tuple(generated), tuple(needs), tuple(config),
-                        tolerance, folder, reference, threads, tuple(sorted((resources or {}).items())), caption,
-                        tuple(draws))
+            raise ValueError(
+                f"artefact {study}:{name}: threads = {threads!r} must be an integer >= 1"
+            )
+        item = Artefact(
+            study,
+            name,
+            make,
+            tuple(outputs),
+            tuple(generated),
+            tuple(needs),
+            tuple(config),
+            tolerance,
+            folder,
+            reference,
+            threads,
+            tuple(sorted((resources or {}).items())),
+            caption,
+            tuple(draws),
+        )
         old = REGISTRY.get(item.key)
-        if old is not None and (old.module, old.make.__qualname__) != (item.module, make.__qualname__):
-            raise ValueError(f"artefact {item.key} declared twice: {old.location} and {item.location}")
+        if old is not None and (old.module, old.make.__qualname__) != (
+            item.module,
+            make.__qualname__,
+        ):
+            raise ValueError(
+                f"artefact {item.key} declared twice: {old.location} and {item.location}"
+            )
         REGISTRY[item.key] = item
         make.artefact = item
         return make
+
     return register
 
 
-def figure(study: str, name: str, stem: str, data: Callable, draw: Callable, **declaration) -> Callable:
+def figure(
+    study: str, name: str, stem: str, data: Callable, draw: Callable, **declaration
+) -> Callable:
     """Declare a figure computed apart from its drawing: ``data(config) -> DataFrame`` and
     ``draw(frame, path)``. The artefact writes ``stem.csv`` (the numbers) and ``stem.png`` drawn
     from that CSV as written, so the committed figure can always be redrawn from the committed CSV.
     ``declaration``: the other arguments of :func:`artefact`."""
+
     def make(config: dict, outdir: Path) -> list[Path]:
         import pandas as pd
 
@@ -219,7 +287,9 @@ def figure(study: str, name: str, stem: str, data: Callable, draw: Callable, **d
     make.__doc__ = data.__doc__
     make.__wrapped__ = data  # `parakin which` points at the data function
     outputs = [f"{stem}.png", f"{stem}.csv", *declaration.pop("outputs", ())]
-    return artefact(study, name, outputs=outputs, draws=[(f"{stem}.png", f"{stem}.csv", draw)], **declaration)(make)
+    return artefact(
+        study, name, outputs=outputs, draws=[(f"{stem}.png", f"{stem}.csv", draw)], **declaration
+    )(make)
 
 
 def load(studies: Iterable[str], *, complete: bool = True) -> dict[str, Artefact]:
@@ -227,10 +297,16 @@ def load(studies: Iterable[str], *, complete: bool = True) -> dict[str, Artefact
     ``complete``: every artefact they need must be among them (what the pipeline requires)."""
     modules = [importlib.import_module(m) for m in studies]
     names = {m.__name__ for m in modules}
-    picked = {k: a for k, a in REGISTRY.items() if any(a.module == n or a.module.startswith(n + ".") for n in names)}
+    picked = {
+        k: a
+        for k, a in REGISTRY.items()
+        if any(a.module == n or a.module.startswith(n + ".") for n in names)
+    }
     unknown = [a.needs for a in picked.values() for n in a.needs if n not in picked]
     if complete and unknown:
-        raise ValueError(f"artefacts need undeclared upstream artefact(s) {sorted(set(sum(map(list, unknown), [])))}")
+        raise ValueError(
+            f"artefacts need undeclared upstream artefact(s) {sorted(set(sum(map(list, unknown), [])))}"
+        )
     return picked
 
 
@@ -246,13 +322,19 @@ def find(artefacts: dict[str, Artefact], study: str, name: str) -> Artefact:
     if key not in artefacts:
         known = sorted(a.name for a in artefacts.values() if a.study == study)
         if not known:
-            raise ValueError(f"unknown study {study!r}; known: {', '.join(sorted({a.study for a in artefacts.values()}))}")
+            raise ValueError(
+                f"unknown study {study!r}; known: {', '.join(sorted({a.study for a in artefacts.values()}))}"
+            )
         raise ValueError(f"unknown artefact {name!r} of {study}; known: {', '.join(known)}")
     return artefacts[key]
 
 
-def which(artefacts: dict[str, Artefact], path: str | Path, figures: str = "figures",
-          generated: str = "data/generated") -> Artefact | None:
+def which(
+    artefacts: dict[str, Artefact],
+    path: str | Path,
+    figures: str = "figures",
+    generated: str = "data/generated",
+) -> Artefact | None:
     """The artefact that writes ``path`` (a path under the figures or generated folder), or None."""
     target = Path(path).as_posix().lstrip("./")
     for a in artefacts.values():
@@ -263,7 +345,10 @@ def which(artefacts: dict[str, Artefact], path: str | Path, figures: str = "figu
     parent = Path(path).parent.name
     for a in artefacts.values():  # the record or another results folder: match on study folder/name
         for out in a.outputs:
-            if out == name and (a.study_folder == parent or (a.study_folder == "" and parent not in _STUDY_DIRS(artefacts))):
+            if out == name and (
+                a.study_folder == parent
+                or (a.study_folder == "" and parent not in _STUDY_DIRS(artefacts))
+            ):
                 return a
     return None
 
@@ -294,12 +379,16 @@ _PACKAGE_ROOT = Path(__file__).resolve().parent
 
 
 def _module_file(name: str) -> Path | None:
-    spec = importlib.util.find_spec(name) if name not in sys.modules else getattr(sys.modules[name], "__spec__", None)
+    spec = (
+        importlib.util.find_spec(name)
+        if name not in sys.modules
+        else getattr(sys.modules[name], "__spec__", None)
+    )
     origin = getattr(spec, "origin", None)
     return Path(origin).resolve() if origin and origin.endswith(".py") else None
 
 
-@lru_cache(maxsize=None)
+@cache
 def _imports(path: Path, package: str) -> tuple[str, ...]:
     """Absolute names of the modules ``path`` imports (relative imports resolved)."""
     tree = ast.parse(path.read_text())
@@ -317,7 +406,7 @@ def _imports(path: Path, package: str) -> tuple[str, ...]:
     return tuple(found)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _closure(module: str) -> frozenset[Path]:
     """Files of ``module`` and of every module of the same top-level package it imports, transitively."""
     top = module.split(".")[0]

@@ -30,4 +30,6 @@ def parse_quantity(text: str) -> float:
     try:
         return float(s)
     except ValueError:
-        raise ValueError(f"cannot read {text!r} as a number (optionally with a unit {sorted(TO_SI)})") from None
+        raise ValueError(
+            f"cannot read {text!r} as a number (optionally with a unit {sorted(TO_SI)})"
+        ) from None

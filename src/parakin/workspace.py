@@ -36,5 +36,7 @@ def sample_reachable(
         kept.append(x)
         count += len(x)
     if count < n:
-        raise ValueError(f"only {count} of {n} poses drawn from the box {lo.tolist()}..{hi.tolist()} are reachable")
+        raise ValueError(
+            f"only {count} of {n} poses drawn from the box {lo.tolist()}..{hi.tolist()} are reachable"
+        )
     return np.concatenate(kept)[:n]

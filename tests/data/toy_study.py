@@ -35,7 +35,10 @@ class TwoLeg(Mechanism):
 
     def ik(self, pose):
         p = np.asarray(pose, dtype=float)
-        return np.stack([np.hypot(p[..., 0] + self.a, p[..., 1]), np.hypot(p[..., 0] - self.a, p[..., 1])], axis=-1)
+        return np.stack(
+            [np.hypot(p[..., 0] + self.a, p[..., 1]), np.hypot(p[..., 0] - self.a, p[..., 1])],
+            axis=-1,
+        )
 
     def residual(self, pose, joints):
         return self.ik(pose) - np.asarray(joints, dtype=float)
@@ -54,6 +57,13 @@ def table1(config: dict, outdir: Path) -> list[Path]:
     lo, hi = mech.pose_bounds()
     poses = rng(config, f"{KEY}.poses").uniform(lo, hi, size=(10, 2))
     res = solve_fk(mech, mech.ik(poses), method="newton")
-    frame = pd.DataFrame({"x": poses[:, 0], "y": poses[:, 1], "x_fk": res.x[:, 0], "y_fk": res.x[:, 1],
-                          "error_m": np.linalg.norm(res.x - poses, axis=1)})
+    frame = pd.DataFrame(
+        {
+            "x": poses[:, 0],
+            "y": poses[:, 1],
+            "x_fk": res.x[:, 0],
+            "y_fk": res.x[:, 1],
+            "error_m": np.linalg.norm(res.x - poses, axis=1),
+        }
+    )
     return write_table(frame, Path(outdir) / "table1", title="Toy FK round trip")

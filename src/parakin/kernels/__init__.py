@@ -29,7 +29,6 @@ import os
 import sys
 import tempfile
 import threading
-import time
 from functools import cache, lru_cache
 from pathlib import Path
 from types import ModuleType
@@ -37,7 +36,16 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Kernel", "build", "cache_dir", "enabled", "solve", "verify_hooks", "PARALLEL_MIN_ROWS", "METHODS"]
+__all__ = [
+    "Kernel",
+    "build",
+    "cache_dir",
+    "enabled",
+    "solve",
+    "verify_hooks",
+    "PARALLEL_MIN_ROWS",
+    "METHODS",
+]
 
 #: rows from which a batch runs on every core (below: the serial driver, no thread start-up)
 PARALLEL_MIN_ROWS = 64
@@ -98,25 +106,46 @@ def build(module: str, n_joints: int, n_pose: int) -> ModuleType:
     (numba itself only watches the file a function is defined in)."""
     import numba
 
-    if "NUMBA_THREADING_LAYER" not in os.environ:  # fork-safe (the pipeline forks worker processes);
-        numba.config.THREADING_LAYER = "workqueue"  # GNU OpenMP is not. No effect once a layer is running.
+    if (
+        "NUMBA_THREADING_LAYER" not in os.environ
+    ):  # fork-safe (the pipeline forks worker processes);
+        numba.config.THREADING_LAYER = (
+            "workqueue"  # GNU OpenMP is not. No effect once a layer is running.
+        )
     template = (Path(__file__).parent / "_loops.py").read_text()
     batch = []
     for name in (*METHODS, "verify"):
         args = "p, Q, X, flags, err" if name == "verify" else "p, Q, X0, opts, X, info, res"
-        body = ("err[i] = verify_row(p, Q[i], X[i], flags[i])" if name == "verify"
-                else f"res[i] = {name}_row(p, Q[i], X0[i], opts, X[i], info[i])")
+        body = (
+            "err[i] = verify_row(p, Q[i], X[i], flags[i])"
+            if name == "verify"
+            else f"res[i] = {name}_row(p, Q[i], X0[i], opts, X[i], info[i])"
+        )
         if name != "verify":  # one pose, solved and checked in one call (the single-call path)
-            batch.append(f"@njit(**_O)\ndef {name}_one(p, q, x0, opts, x, info, out):\n"
-                         "    if not (_finite(q) and _finite(x0)):\n        info[0] = 999\n        return\n"
-                         f"    out[0] = {name}_row(p, q, x0, opts, x, info)\n"
-                         "    out[1] = verify_row(p, q, x, info[4:])\n")
-        for kind, loop, extra in (("serial", "range", ""), ("parallel", "prange", "parallel=True, ")):
-            batch.append(f"@njit({extra}**_O)\ndef {name}_{kind}({args}):\n"
-                         f"    for i in {loop}(Q.shape[0]):\n        {body}\n")
-    text = (template.replace("__KERNEL_MODULE__", module).replace("__M__", str(int(n_joints)))
-            .replace("__N__", str(int(n_pose))) + "\n\n" + "\n\n".join(batch))
-    digest = hashlib.sha256((text + _source_of(module) + numba.__version__).encode()).hexdigest()[:16]
+            batch.append(
+                f"@njit(**_O)\ndef {name}_one(p, q, x0, opts, x, info, out):\n"
+                "    if not (_finite(q) and _finite(x0)):\n        info[0] = 999\n        return\n"
+                f"    out[0] = {name}_row(p, q, x0, opts, x, info)\n"
+                "    out[1] = verify_row(p, q, x, info[4:])\n"
+            )
+        for kind, loop, extra in (
+            ("serial", "range", ""),
+            ("parallel", "prange", "parallel=True, "),
+        ):
+            batch.append(
+                f"@njit({extra}**_O)\ndef {name}_{kind}({args}):\n"
+                f"    for i in {loop}(Q.shape[0]):\n        {body}\n"
+            )
+    text = (
+        template.replace("__KERNEL_MODULE__", module)
+        .replace("__M__", str(int(n_joints)))
+        .replace("__N__", str(int(n_pose)))
+        + "\n\n"
+        + "\n\n".join(batch)
+    )
+    digest = hashlib.sha256((text + _source_of(module) + numba.__version__).encode()).hexdigest()[
+        :16
+    ]
     name = f"parakin_loops_{module.replace('.', '_')}_{digest}"
     folder = cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
@@ -140,8 +169,10 @@ def _prune(folder: Path, prefix: str) -> None:
     """Remove the loops generated for an older version of a kernel module (and numba's cache of
     them): their hash no longer matches, they would only fill the cache."""
     for old in folder.glob(f"{prefix}_*.py"):
-        digest = old.stem[len(prefix) + 1:]
-        if len(digest) != 16 or any(c not in "0123456789abcdef" for c in digest):  # another module's
+        digest = old.stem[len(prefix) + 1 :]
+        if len(digest) != 16 or any(
+            c not in "0123456789abcdef" for c in digest
+        ):  # another module's
             continue
         for f in [old, *(folder / "__pycache__").glob(f"{old.stem}.*")]:
             try:
@@ -188,5 +219,11 @@ def verify_hooks(mech: Any, joints: np.ndarray, x: np.ndarray, *, parallel: bool
     err = np.empty(n)
     use_par = use_parallel(n, parallel)
     fn = loops.verify_parallel if use_par else loops.verify_serial
-    fn(kernel.params, np.ascontiguousarray(joints, dtype=float), np.ascontiguousarray(x, dtype=float), flags, err)
+    fn(
+        kernel.params,
+        np.ascontiguousarray(joints, dtype=float),
+        np.ascontiguousarray(x, dtype=float),
+        flags,
+        err,
+    )
     return flags[:, 0] == 1, err, flags[:, 1] == 1

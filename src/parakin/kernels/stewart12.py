@@ -24,9 +24,17 @@ def _rotation(x):
     l0sq = 1.0 - (l1 * l1 + l2 * l2 + l3 * l3)
     l0 = math.sqrt(l0sq) if l0sq > 0 else math.nan
     d = 2 * l0sq - 1
-    return l0, (d + 2 * l1 * l1, 2 * (l1 * l2 - l0 * l3), 2 * (l1 * l3 + l0 * l2),
-                2 * (l2 * l1 + l0 * l3), d + 2 * l2 * l2, 2 * (l2 * l3 - l0 * l1),
-                2 * (l3 * l1 - l0 * l2), 2 * (l3 * l2 + l0 * l1), d + 2 * l3 * l3)
+    return l0, (
+        d + 2 * l1 * l1,
+        2 * (l1 * l2 - l0 * l3),
+        2 * (l1 * l3 + l0 * l2),
+        2 * (l2 * l1 + l0 * l3),
+        d + 2 * l2 * l2,
+        2 * (l2 * l3 - l0 * l1),
+        2 * (l3 * l1 - l0 * l2),
+        2 * (l3 * l2 + l0 * l1),
+        d + 2 * l3 * l3,
+    )
 
 
 @njit(**_OPTS)
@@ -36,7 +44,14 @@ def _leg(p, x, r, k):
     w0 = r[0] * a0 + r[1] * a1 + r[2] * a2
     w1 = r[3] * a0 + r[4] * a1 + r[5] * a2
     w2 = r[6] * a0 + r[7] * a1 + r[8] * a2
-    return w0, w1, w2, x[0] + w0 - p[36 + 3 * k], x[1] + w1 - p[37 + 3 * k], x[2] + w2 - p[38 + 3 * k]
+    return (
+        w0,
+        w1,
+        w2,
+        x[0] + w0 - p[36 + 3 * k],
+        x[1] + w1 - p[37 + 3 * k],
+        x[2] + w2 - p[38 + 3 * k],
+    )
 
 
 @njit(**_OPTS)

@@ -21,9 +21,17 @@ def _rotation(x):
     ca, sa = math.cos(x[0]), math.sin(x[0])
     cb, sb = math.cos(x[1]), math.sin(x[1])
     cc, sc = math.cos(x[2]), math.sin(x[2])
-    return (ca * cb, ca * sb * sc - sa * cc, ca * sb * cc + sa * sc,
-            sa * cb, sa * sb * sc + ca * cc, sa * sb * cc - ca * sc,
-            -sb, cb * sc, cb * cc)
+    return (
+        ca * cb,
+        ca * sb * sc - sa * cc,
+        ca * sb * cc + sa * sc,
+        sa * cb,
+        sa * sb * sc + ca * cc,
+        sa * sb * cc - ca * sc,
+        -sb,
+        cb * sc,
+        cb * cc,
+    )
 
 
 @njit(**_OPTS)
@@ -33,7 +41,14 @@ def _leg(p, x, t, i):
     w0 = t[0] * a0 + t[1] * a1 + t[2] * a2
     w1 = t[3] * a0 + t[4] * a1 + t[5] * a2
     w2 = t[6] * a0 + t[7] * a1 + t[8] * a2
-    return w0, w1, w2, x[3] + w0 - p[18 + 3 * i], x[4] + w1 - p[19 + 3 * i], x[5] + w2 - p[20 + 3 * i]
+    return (
+        w0,
+        w1,
+        w2,
+        x[3] + w0 - p[18 + 3 * i],
+        x[4] + w1 - p[19 + 3 * i],
+        x[5] + w2 - p[20 + 3 * i],
+    )
 
 
 @njit(**_OPTS)

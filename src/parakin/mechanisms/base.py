@@ -56,7 +56,9 @@ def as_batch(values: ArrayLike, size: int, what: str) -> Array:
         raise ShapeError(f"{what} must have {size} values along its last axis, got shape {a.shape}")
     if not np.all(np.isfinite(a)):
         bad = np.argwhere(~np.isfinite(a))[0]
-        raise ValueError(f"{what} contains a non-finite value {a[tuple(bad)]!r} at index {tuple(bad)}")
+        raise ValueError(
+            f"{what} contains a non-finite value {a[tuple(bad)]!r} at index {tuple(bad)}"
+        )
     return a
 
 
@@ -219,7 +221,7 @@ class Mechanism(ABC):
         unless they provide their own."""
         return None
 
-    def replace(self, **changes: Any) -> "Mechanism":
+    def replace(self, **changes: Any) -> Mechanism:
         """A copy with some parameters changed (``dataclasses.replace``)."""
         return dataclasses.replace(self, **changes)  # type: ignore[type-var]
 

@@ -66,23 +66,27 @@ class P3P4S(Mechanism):
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"{key} = {value!r} m must be a positive length")
         if not self.d < 2 * self.r_a:
-            raise ValueError(f"d = {self.d} m must be < 2 r_a = {2 * self.r_a} m (theta = arcsin(d/2r_a))")
+            raise ValueError(
+                f"d = {self.d} m must be < 2 r_a = {2 * self.r_a} m (theta = arcsin(d/2r_a))"
+            )
         if not 0 < self.phi < np.pi / 2:
             raise ValueError(f"phi = {self.phi!r} rad must lie in (0, pi/2) (0 to 90 deg)")
 
     # ------------------------------------------------------------------ constructors
     @classmethod
-    def zhao2017(cls) -> "P3P4S":
+    def zhao2017(cls) -> P3P4S:
         """The parameters stated in the paper's §1.1 (Table 3, 'before')."""
         return cls()
 
     @classmethod
-    def zhao2017_optimised(cls) -> "P3P4S":
+    def zhao2017_optimised(cls) -> P3P4S:
         """The optimised design of the paper's Table 3 ('after')."""
         return cls(r_a=0.21, r_b=0.71, L=0.38, d=0.12, phi=float(np.deg2rad(35.0)))
 
     @classmethod
-    def from_delta(cls, delta: float, L: float, phi: float, r_a: float = 0.25, d: float = 0.12) -> "P3P4S":
+    def from_delta(
+        cls, delta: float, L: float, phi: float, r_a: float = 0.25, d: float = 0.12
+    ) -> P3P4S:
         """A mechanism with the given kinematic parameters ``delta = r_b - a``, ``L``, ``phi``."""
         return cls(r_a=r_a, r_b=float(delta + np.sqrt(r_a**2 - d**2 / 4)), L=L, d=d, phi=phi)
 
@@ -311,14 +315,20 @@ class P3P4S(Mechanism):
         q = as_batch(joints, 3, "joints")
         c = self.delta * self.e + q[..., :, None] * self.m  # (..., 3, 3) sphere centres
         a = c[..., 1:, :] - c[..., :1, :]  # (..., 2, 3)
-        rhs = 0.5 * (np.einsum("...ij,...ij->...i", c[..., 1:, :], c[..., 1:, :])
-                     - np.einsum("...j,...j->...", c[..., 0, :], c[..., 0, :])[..., None])
+        rhs = 0.5 * (
+            np.einsum("...ij,...ij->...i", c[..., 1:, :], c[..., 1:, :])
+            - np.einsum("...j,...j->...", c[..., 0, :], c[..., 0, :])[..., None]
+        )
         u = np.cross(a[..., 0, :], a[..., 1, :])
         uu = np.einsum("...j,...j->...", u, u)
         if np.any(uu < 1e-24):
             raise SingularityError("sphere centres C_i are collinear: closed-form FK is degenerate")
         # minimum-norm point of the line: p0 = A^T (A A^T)^-1 rhs
-        p0 = np.einsum("...ij,...i->...j", a, np.linalg.solve(a @ np.swapaxes(a, -1, -2), rhs[..., None])[..., 0])
+        p0 = np.einsum(
+            "...ij,...i->...j",
+            a,
+            np.linalg.solve(a @ np.swapaxes(a, -1, -2), rhs[..., None])[..., 0],
+        )
         s = p0 - c[..., 0, :]
         half_b = np.einsum("...j,...j->...", u, s)
         disc = half_b**2 - uu * (np.einsum("...j,...j->...", s, s) - self.L**2)

@@ -106,7 +106,9 @@ class InertialParams:
                 raise ValueError(f"{key} = {value!r} kg must be a finite mass >= 0")
         inertia = np.asarray(self.I_rod, dtype=float)
         if inertia.shape != (3,) or not np.all(np.isfinite(inertia)) or np.any(inertia < 0):
-            raise ValueError(f"I_rod = {self.I_rod!r} must be three finite principal inertias >= 0 (kg m^2)")
+            raise ValueError(
+                f"I_rod = {self.I_rod!r} must be three finite principal inertias >= 0 (kg m^2)"
+            )
         if not np.isclose(inertia[0], inertia[1], rtol=1e-12, atol=0.0):
             raise ValueError(
                 f"I_rod = {self.I_rod!r}: the equivalent-rod model needs an axisymmetric rod "
@@ -121,7 +123,7 @@ class InertialParams:
         object.__setattr__(self, "g", tuple(float(x) for x in gravity))
 
     @classmethod
-    def zhao2017(cls) -> "InertialParams":
+    def zhao2017(cls) -> InertialParams:
         """The values of the paper's §2.4 (before design) with ``g = (0, 0, -9.81)``."""
         return cls()
 
@@ -244,7 +246,9 @@ def _projector(mech: P3P4S, n: Array, nm: Array) -> Array:
 
 def _validate_h_form(h_form: str) -> None:
     if h_form not in ("corrected", "paper"):
-        raise ValueError(f"h_form = {h_form!r}: use 'corrected' (eq 13 with 1/l) or 'paper' (as printed)")
+        raise ValueError(
+            f"h_form = {h_form!r}: use 'corrected' (eq 13 with 1/l) or 'paper' (as printed)"
+        )
 
 
 # ---------------------------------------------------------------------------------------- maps
@@ -369,24 +373,61 @@ def limb_kinematics(
     v_rod = np.einsum("...kij,...j->...ki", J_v, v)  # eq 11
     a_rod = np.einsum("...kij,...j->...ki", J_v, a) + 0.5 * mech.m * vHv[..., None]  # eq 14
     r_rod = mech.r_b * mech.e + q[..., None] * mech.m + 0.5 * mech.L * n  # eq 10
-    return LimbKinematics(x, v, a, q, n, nm, J, J_omega, J_v, H, vHv, qdot, qddot, omega, alpha,
-                          r_rod, v_rod, a_rod, h_form)
+    return LimbKinematics(
+        x,
+        v,
+        a,
+        q,
+        n,
+        nm,
+        J,
+        J_omega,
+        J_v,
+        H,
+        vHv,
+        qdot,
+        qddot,
+        omega,
+        alpha,
+        r_rod,
+        v_rod,
+        a_rod,
+        h_form,
+    )
 
 
-def drive_accelerations(mech: P3P4S, pose: ArrayLike, velocity: ArrayLike, acceleration: ArrayLike,
-                        *, h_form: HForm = "corrected") -> Array:
+def drive_accelerations(
+    mech: P3P4S,
+    pose: ArrayLike,
+    velocity: ArrayLike,
+    acceleration: ArrayLike,
+    *,
+    h_form: HForm = "corrected",
+) -> Array:
     """Eq (13): ``qddot = J a + v^T H v`` (..., 3) in m/s^2."""
     return limb_kinematics(mech, pose, velocity, acceleration, h_form=h_form).qddot
 
 
-def rod_accelerations(mech: P3P4S, pose: ArrayLike, velocity: ArrayLike, acceleration: ArrayLike,
-                      *, h_form: HForm = "corrected") -> Array:
+def rod_accelerations(
+    mech: P3P4S,
+    pose: ArrayLike,
+    velocity: ArrayLike,
+    acceleration: ArrayLike,
+    *,
+    h_form: HForm = "corrected",
+) -> Array:
     """Eq (14): rod centroid accelerations ``a_di`` (..., 3 limbs, 3) in m/s^2."""
     return limb_kinematics(mech, pose, velocity, acceleration, h_form=h_form).a_rod
 
 
-def rod_angular_accelerations(mech: P3P4S, pose: ArrayLike, velocity: ArrayLike, acceleration: ArrayLike,
-                              *, h_form: HForm = "corrected") -> Array:
+def rod_angular_accelerations(
+    mech: P3P4S,
+    pose: ArrayLike,
+    velocity: ArrayLike,
+    acceleration: ArrayLike,
+    *,
+    h_form: HForm = "corrected",
+) -> Array:
     """Eq (15): rod angular accelerations ``alpha_i`` (..., 3 limbs, 3) in rad/s^2."""
     return limb_kinematics(mech, pose, velocity, acceleration, h_form=h_form).alpha
 
@@ -455,12 +496,16 @@ def force_terms(
         "sliders": params.m_slider * kin.qddot,
         "rods_translation": _solve_transpose(J, k_i * trans),
         "rods_rotation": _solve_transpose(J, k_i * rot),
-        "gravity": -(_solve_transpose(J, params.m_platform * g + k_g * grav_rods)
-                     + params.m_slider * (mech.m @ g)),
+        "gravity": -(
+            _solve_transpose(J, params.m_platform * g + k_g * grav_rods)
+            + params.m_slider * (mech.m @ g)
+        ),
     }
     if gravity_moment:
         moment = np.cross(kin.r_rod, md * g)
-        terms["gravity_moment"] = -_solve_transpose(J, k_g * np.einsum("...kji,...kj->...i", kin.J_omega, moment))
+        terms["gravity_moment"] = -_solve_transpose(
+            J, k_g * np.einsum("...kji,...kj->...i", kin.J_omega, moment)
+        )
     return terms
 
 
@@ -480,8 +525,16 @@ def inverse_dynamics(
     Defaults implement the correct physics (docs/zhao2017_3p4s.md#s1.7); the keyword options reproduce the
     paper's printed slips one by one (see :func:`force_terms`, :data:`PAPER_PRINTED`).
     """
-    terms = force_terms(mech, params, pose, velocity, acceleration, h_form=h_form,
-                        gravity_moment=gravity_moment, rod_inertia_factor=rod_inertia_factor)
+    terms = force_terms(
+        mech,
+        params,
+        pose,
+        velocity,
+        acceleration,
+        h_form=h_form,
+        gravity_moment=gravity_moment,
+        rod_inertia_factor=rod_inertia_factor,
+    )
     return sum(terms.values())
 
 
@@ -539,7 +592,9 @@ def energy(mech: P3P4S, params: InertialParams, pose: ArrayLike, velocity: Array
     k = params.rods_per_limb
     t = np.cross([0.0, 0.0, 1.0], mech.e)  # (3, 3) edge directions
     offsets = np.linspace(-0.5 * mech.d, 0.5 * mech.d, k) if k > 1 else np.zeros(1)
-    centroids = (c + 0.5 * mech.L * n)[..., None, :, :] + offsets[:, None, None] * t  # (..., k, 3, 3)
+    centroids = (c + 0.5 * mech.L * n)[..., None, :, :] + offsets[
+        :, None, None
+    ] * t  # (..., k, 3, 3)
     inertia = params.rod_inertia_world(n)
     rot = 0.5 * np.einsum("...ki,...kij,...kj->...", omega, inertia, omega)
     return Energy(
@@ -614,7 +669,9 @@ def power_balance(
     f = inverse_dynamics(mech, params, p, v, a, **variant)
     qdot = np.einsum("...ij,...j->...i", drive_jacobian(mech, p), v)
     power = np.einsum("...i,...i->...", f, qdot)
-    dEdt = time_derivative(lambda tt: energy(mech, params, motion.pose(tt), motion.velocity(tt)).total, t, h)
+    dEdt = time_derivative(
+        lambda tt: energy(mech, params, motion.pose(tt), motion.velocity(tt)).total, t, h
+    )
     return PowerBalance(t, power, dEdt)
 
 
@@ -622,7 +679,9 @@ def power_balance(
 _D2_ORDER6 = np.array([2.0, -27.0, 270.0, -490.0, 270.0, -27.0, 2.0]) / 180.0
 
 
-def ik_finite_differences(mech: P3P4S, motion: SineMotion, t: ArrayLike, step: float) -> tuple[Array, Array, Array]:
+def ik_finite_differences(
+    mech: P3P4S, motion: SineMotion, t: ArrayLike, step: float
+) -> tuple[Array, Array, Array]:
     """Strokes and their time derivatives from the IK alone (no Jacobian), along ``motion``.
 
     Returns ``(q, qdot, qddot)`` (each (..., 3)) from ``q(t + k h) = ik(pose(t + k h))``,

@@ -36,9 +36,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from parakin.errors import SingularityError, UnreachableError
 from parakin.indices import Quadrature, box_nodes, kinematic_indices  # noqa: F401 (re-exported)
 from parakin.mechanisms import p3p4s_dynamics as dyn
-from parakin.errors import SingularityError, UnreachableError
 from parakin.mechanisms.base import as_batch
 from parakin.mechanisms.p3p4s import P3P4S
 
@@ -85,19 +85,27 @@ class Workspace:
         for name in ("x", "y", "z"):
             lo, hi = (float(v) for v in getattr(self, name))
             if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
-                raise ValueError(f"workspace {name} range = ({lo}, {hi}) m must be finite with low <= high")
+                raise ValueError(
+                    f"workspace {name} range = ({lo}, {hi}) m must be finite with low <= high"
+                )
             object.__setattr__(self, name, (lo, hi))
         if self.x[0] == self.x[1] or self.y[0] == self.y[1]:
-            raise ValueError(f"workspace x range {self.x} and y range {self.y} must have non-zero width")
+            raise ValueError(
+                f"workspace x range {self.x} and y range {self.y} must have non-zero width"
+            )
 
     @classmethod
-    def square(cls, z0: float, half_width: float, z_half_height: float = 0.0) -> "Workspace":
+    def square(cls, z0: float, half_width: float, z_half_height: float = 0.0) -> Workspace:
         """``|x|, |y| <= half_width`` at height ``z0`` (+- ``z_half_height``), metres."""
         if not half_width > 0:
             raise ValueError(f"half_width = {half_width!r} m must be > 0")
         if not z_half_height >= 0:
             raise ValueError(f"z_half_height = {z_half_height!r} m must be >= 0")
-        return cls((-half_width, half_width), (-half_width, half_width), (z0 - z_half_height, z0 + z_half_height))
+        return cls(
+            (-half_width, half_width),
+            (-half_width, half_width),
+            (z0 - z_half_height, z0 + z_half_height),
+        )
 
     @property
     def planar(self) -> bool:
@@ -146,23 +154,30 @@ class Workspace:
 
 
 # ---------------------------------------------------------------------------------------- designs
-def design_arrays(r_a: ArrayLike, r_b: ArrayLike, L: ArrayLike, d: ArrayLike, phi: ArrayLike
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def design_arrays(
+    r_a: ArrayLike, r_b: ArrayLike, L: ArrayLike, d: ArrayLike, phi: ArrayLike
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Table 3's variables (m, m, m, m, rad; any broadcastable shapes) -> ``(delta, L, phi)``.
 
     ``delta = r_b - sqrt(r_a^2 - d^2/4)`` (eq 1 with ``theta = arcsin(d / 2 r_a)``). Raises
     ValueError where ``d >= 2 r_a``.
     """
-    r_a, r_b, L, d, phi = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (r_a, r_b, L, d, phi)))
+    r_a, r_b, L, d, phi = np.broadcast_arrays(
+        *(np.asarray(v, dtype=float) for v in (r_a, r_b, L, d, phi))
+    )
     bad = d >= 2 * r_a
     if np.any(bad):
         i = np.argwhere(np.atleast_1d(bad))[0]
-        raise ValueError(f"d = {np.atleast_1d(d)[tuple(i)]} m must be < 2 r_a = {2 * np.atleast_1d(r_a)[tuple(i)]} m")
+        raise ValueError(
+            f"d = {np.atleast_1d(d)[tuple(i)]} m must be < 2 r_a = {2 * np.atleast_1d(r_a)[tuple(i)]} m"
+        )
     return r_b - np.sqrt(r_a**2 - d**2 / 4), L.copy(), phi.copy()
 
 
 def _check_designs(delta, L, phi) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    delta, L, phi = np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, dtype=float)) for v in (delta, L, phi)))
+    delta, L, phi = np.broadcast_arrays(
+        *(np.atleast_1d(np.asarray(v, dtype=float)) for v in (delta, L, phi))
+    )
     if delta.ndim != 1:
         raise ValueError(f"designs must be 1-D arrays (D,), got shape {delta.shape}")
     if not np.all(np.isfinite(delta) & np.isfinite(L) & np.isfinite(phi)):
@@ -170,7 +185,9 @@ def _check_designs(delta, L, phi) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if np.any(L <= 0):
         raise ValueError(f"L = {L[L <= 0][0]} m must be > 0")
     if np.any((phi <= 0) | (phi >= np.pi / 2)):
-        raise ValueError(f"phi = {phi[(phi <= 0) | (phi >= np.pi / 2)][0]} rad must lie in (0, pi/2)")
+        raise ValueError(
+            f"phi = {phi[(phi <= 0) | (phi >= np.pi / 2)][0]} rad must lie in (0, pi/2)"
+        )
     return delta, L, phi
 
 
@@ -183,7 +200,9 @@ def mass_matrix(mech: P3P4S, params: dyn.InertialParams, pose: ArrayLike) -> np.
     :func:`mass_matrix_batched` for the design-batched closed form.
     """
     x = as_batch(pose, 3, "pose")
-    acc = np.eye(3).reshape((3,) + (1,) * (x.ndim - 1) + (3,))  # (3, ..., 3): one unit acceleration each
+    acc = np.eye(3).reshape(
+        (3,) + (1,) * (x.ndim - 1) + (3,)
+    )  # (3, ..., 3): one unit acceleration each
     terms = dyn.force_terms(mech, params, x[None], np.zeros(3), acc)
     f = sum(v for k, v in terms.items() if k not in ("gravity", "gravity_moment"))  # (3, ..., 3)
     return np.moveaxis(f, 0, -1)  # (..., 3 forces, 3 accelerations)
@@ -205,8 +224,13 @@ def _kinematics(delta, L, phi, poses):
     return n, nm, m, disc
 
 
-def mass_matrix_batched(delta: ArrayLike, L: ArrayLike, phi: ArrayLike, poses: ArrayLike,
-                        params: dyn.InertialParams | None = None) -> np.ndarray:
+def mass_matrix_batched(
+    delta: ArrayLike,
+    L: ArrayLike,
+    phi: ArrayLike,
+    poses: ArrayLike,
+    params: dyn.InertialParams | None = None,
+) -> np.ndarray:
     """Eq (24)'s ``M`` for designs (D,) x poses (N, 3) -> (D, N, 3, 3) (kg).
 
     With ``v = 0`` (so ``omega_i = 0``, ``vHv = 0``) eqs (16)-(20) give
@@ -237,9 +261,11 @@ def _mass_from_rods(n, nm, m, L, params):
     nn = n[..., :, None] * n[..., None, :]
     Id = Ixx * (np.eye(3) - nn) + Izz * nn
     k = float(params.rods_per_limb)
-    A = (params.m_platform * np.eye(3)
-         + k * params.m_rod * np.einsum("...kji,...kjl->...il", Jv, Jv)
-         + k * np.einsum("...kji,...kjm,...kml->...il", Jw, Id, Jw))
+    A = (
+        params.m_platform * np.eye(3)
+        + k * params.m_rod * np.einsum("...kji,...kjl->...il", Jv, Jv)
+        + k * np.einsum("...kji,...kjm,...kml->...il", Jw, Id, Jw)
+    )
     return np.linalg.solve(np.swapaxes(J, -1, -2), A) + params.m_slider * J
 
 
@@ -264,8 +290,15 @@ class Indices:
         return getattr(self, name)
 
 
-def local_indices(delta: ArrayLike, L: ArrayLike, phi: ArrayLike, poses: ArrayLike, *, k: float = 1.0,
-                  params: dyn.InertialParams | None = None) -> Indices:
+def local_indices(
+    delta: ArrayLike,
+    L: ArrayLike,
+    phi: ArrayLike,
+    poses: ArrayLike,
+    *,
+    k: float = 1.0,
+    params: dyn.InertialParams | None = None,
+) -> Indices:
     """The three local indices of eqs (28), (33), (36) for designs (D,) x poses (N, 3) -> (D, N).
 
     ``k`` is the actuator stiffness ``k_a`` of ``K = J^T (k_a I) J`` (eq 30; N/m). Unreachable or
@@ -280,7 +313,9 @@ def local_indices(delta: ArrayLike, L: ArrayLike, phi: ArrayLike, poses: ArrayLi
     n, nm, m, disc = _kinematics(delta, L, phi, x)
     ok = np.all((disc >= 0) & (nm > _NM_MIN), axis=-1)  # nm <= 0: the other assembly mode's side
     nm_safe = np.where(ok[..., None], nm, 1.0)
-    n_safe = np.where(ok[..., None, None], n, np.eye(3))  # placeholder rows (J = I) where infeasible
+    n_safe = np.where(
+        ok[..., None, None], n, np.eye(3)
+    )  # placeholder rows (J = I) where infeasible
     with np.errstate(all="ignore"):
         J = n_safe / nm_safe[..., None]
         sj = np.linalg.svd(J, compute_uv=False)  # (D, N, 3), descending
@@ -299,8 +334,14 @@ def local_indices(delta: ArrayLike, L: ArrayLike, phi: ArrayLike, poses: ArrayLi
     )
 
 
-def mech_indices(mech: P3P4S, poses: ArrayLike, *, k: float = 1.0, params: dyn.InertialParams | None = None,
-                 strict: bool = True) -> Indices:
+def mech_indices(
+    mech: P3P4S,
+    poses: ArrayLike,
+    *,
+    k: float = 1.0,
+    params: dyn.InertialParams | None = None,
+    strict: bool = True,
+) -> Indices:
     """:func:`local_indices` for one :class:`P3P4S`, poses of any batch shape ``(..., 3)``.
 
     With ``strict`` (default) an unreachable or singular pose raises UnreachableError /
@@ -311,18 +352,23 @@ def mech_indices(mech: P3P4S, poses: ArrayLike, *, k: float = 1.0, params: dyn.I
     if strict:
         bad = ~mech.is_reachable(flat)
         if np.any(bad):
-            raise UnreachableError(f"pose {tuple(np.round(flat[np.argmax(bad)], 6).tolist())} m is unreachable for "
-                                   f"delta = {mech.delta:.6g} m, L = {mech.L} m, phi = {np.rad2deg(mech.phi):.4g} deg")
+            raise UnreachableError(
+                f"pose {tuple(np.round(flat[np.argmax(bad)], 6).tolist())} m is unreachable for "
+                f"delta = {mech.delta:.6g} m, L = {mech.L} m, phi = {np.rad2deg(mech.phi):.4g} deg"
+            )
     ind = local_indices(mech.delta, mech.L, mech.phi, flat, k=k, params=params)
     if strict and not np.all(ind.feasible):
         i = int(np.argmin(ind.feasible[0]))
-        raise SingularityError(f"J of eq (8) is singular at pose {tuple(np.round(flat[i], 6).tolist())} m")
+        raise SingularityError(
+            f"J of eq (8) is singular at pose {tuple(np.round(flat[i], 6).tolist())} m"
+        )
     shape = x.shape[:-1]
     return Indices(*(getattr(ind, f)[0].reshape(shape) for f in (*INDEX_NAMES, "feasible")))
 
 
-def local_indices_loop(mech: P3P4S, poses: ArrayLike, *, k: float = 1.0,
-                       params: dyn.InertialParams | None = None) -> np.ndarray:
+def local_indices_loop(
+    mech: P3P4S, poses: ArrayLike, *, k: float = 1.0, params: dyn.InertialParams | None = None
+) -> np.ndarray:
     """The straightforward per-pose loop (the benchmark's baseline): ``(N, 4)`` array of
     (dynamic, stiffness_lambda, stiffness_sqrt, speed), one pose at a time through the
     mechanism's Jacobian and :func:`mass_matrix` from the dynamics module."""
@@ -355,9 +401,18 @@ class GlobalIndices:
         return self.sigma2_lambda if form == "lambda" else self.sigma2_sqrt
 
 
-def global_indices(delta: ArrayLike, L: ArrayLike, phi: ArrayLike, workspace: Workspace, n: int, *,
-                   rule: Quadrature = "gauss", k: float = 1.0, params: dyn.InertialParams | None = None,
-                   chunk: int = 200_000) -> GlobalIndices:
+def global_indices(
+    delta: ArrayLike,
+    L: ArrayLike,
+    phi: ArrayLike,
+    workspace: Workspace,
+    n: int,
+    *,
+    rule: Quadrature = "gauss",
+    k: float = 1.0,
+    params: dyn.InertialParams | None = None,
+    chunk: int = 200_000,
+) -> GlobalIndices:
     """Eqs (29), (34), (37): the means of the local indices over ``workspace`` for designs (D,),
     by ``rule`` with ``n`` nodes per axis. Designs are processed in chunks of about ``chunk``
     (design, node) pairs to bound memory."""
@@ -366,17 +421,39 @@ def global_indices(delta: ArrayLike, L: ArrayLike, phi: ArrayLike, workspace: Wo
     step = max(1, chunk // len(x))
     parts = []
     for s in range(0, len(delta), step):
-        ind = local_indices(delta[s:s + step], L[s:s + step], phi[s:s + step], x, k=k, params=params)
+        ind = local_indices(
+            delta[s : s + step], L[s : s + step], phi[s : s + step], x, k=k, params=params
+        )
         feas = np.all(ind.feasible, axis=-1)
-        parts.append((*(np.where(feas, ind[name] @ w, np.nan) for name in INDEX_NAMES), feas,
-                      np.where(feas, np.nanmax(np.where(ind.feasible, ind.speed, -np.inf), axis=-1), np.inf)))
+        parts.append(
+            (
+                *(np.where(feas, ind[name] @ w, np.nan) for name in INDEX_NAMES),
+                feas,
+                np.where(
+                    feas, np.nanmax(np.where(ind.feasible, ind.speed, -np.inf), axis=-1), np.inf
+                ),
+            )
+        )
     cols = [np.concatenate(c) for c in zip(*parts)]
-    return GlobalIndices(sigma1=cols[0], sigma2_lambda=cols[1], sigma2_sqrt=cols[2], sigma3=cols[3],
-                         feasible=cols[4], max_speed=cols[5])
+    return GlobalIndices(
+        sigma1=cols[0],
+        sigma2_lambda=cols[1],
+        sigma2_sqrt=cols[2],
+        sigma3=cols[3],
+        feasible=cols[4],
+        max_speed=cols[5],
+    )
 
 
-def convergence(delta: ArrayLike, L: ArrayLike, phi: ArrayLike, workspace: Workspace, ns=(2, 4, 8, 16, 32, 64),
-                rules: tuple[Quadrature, ...] = ("gauss", "midpoint"), **kw) -> list[dict]:
+def convergence(
+    delta: ArrayLike,
+    L: ArrayLike,
+    phi: ArrayLike,
+    workspace: Workspace,
+    ns=(2, 4, 8, 16, 32, 64),
+    rules: tuple[Quadrature, ...] = ("gauss", "midpoint"),
+    **kw,
+) -> list[dict]:
     """Global indices for each rule and node count (grid doubling): a list of rows
     ``{rule, n, nodes, design, sigma1, sigma2_lambda, sigma2_sqrt, sigma3}``."""
     delta, L, phi = _check_designs(delta, L, phi)
@@ -385,15 +462,32 @@ def convergence(delta: ArrayLike, L: ArrayLike, phi: ArrayLike, workspace: Works
         for n in ns:
             g = global_indices(delta, L, phi, workspace, int(n), rule=rule, **kw)
             for i in range(len(delta)):
-                rows.append({"rule": rule, "n": int(n), "nodes": int(n) ** (2 if workspace.planar else 3),
-                             "design": i, "sigma1": g.sigma1[i], "sigma2_lambda": g.sigma2_lambda[i],
-                             "sigma2_sqrt": g.sigma2_sqrt[i], "sigma3": g.sigma3[i]})
+                rows.append(
+                    {
+                        "rule": rule,
+                        "n": int(n),
+                        "nodes": int(n) ** (2 if workspace.planar else 3),
+                        "design": i,
+                        "sigma1": g.sigma1[i],
+                        "sigma2_lambda": g.sigma2_lambda[i],
+                        "sigma2_sqrt": g.sigma2_sqrt[i],
+                        "sigma3": g.sigma3[i],
+                    }
+                )
     return rows
 
 
-def design_objectives(designs: ArrayLike, workspace: Workspace, n: int, *, rule: Quadrature = "gauss",
-                      k: float = 1.0, stiffness: str = "lambda", max_speed: float = np.inf,
-                      params: dyn.InertialParams | None = None) -> np.ndarray:
+def design_objectives(
+    designs: ArrayLike,
+    workspace: Workspace,
+    n: int,
+    *,
+    rule: Quadrature = "gauss",
+    k: float = 1.0,
+    stiffness: str = "lambda",
+    max_speed: float = np.inf,
+    params: dyn.InertialParams | None = None,
+) -> np.ndarray:
     """``(sigma1, sigma2, sigma3)`` (P, 3) of Table 3's design vectors ``(r_a, r_b, L, d, phi)``
     (P, 5) (m, rad), NaN rows for infeasible designs: a node of ``W`` unreachable or singular, or
     ``cond(J) > max_speed`` somewhere on the nodes (the "end poses satisfying the workspace

@@ -29,19 +29,28 @@ MuJoCo is imported lazily; the rest of parakin does not need it.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable, Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from parakin.mechanisms.p3p4s_dynamics import InertialParams
 from parakin.errors import ShapeError
 from parakin.mechanisms.base import Array, as_batch
 from parakin.mechanisms.p3p4s import P3P4S
+from parakin.mechanisms.p3p4s_dynamics import InertialParams
 
-__all__ = ["RodModel", "MujocoMechanism", "MujocoResult", "TrackingResult", "mjcf", "build", "inverse_dynamics",
-           "track"]
+__all__ = [
+    "RodModel",
+    "MujocoMechanism",
+    "MujocoResult",
+    "TrackingResult",
+    "mjcf",
+    "build",
+    "inverse_dynamics",
+    "track",
+]
 
 RodModel = Literal["equivalent", "parallelogram"]
 
@@ -52,7 +61,9 @@ def _mujoco():
     try:
         import mujoco
     except ImportError as exc:  # pragma: no cover - environment.txt installs it
-        raise ImportError("the MuJoCo check needs the 'mujoco' package (pip install mujoco)") from exc
+        raise ImportError(
+            "the MuJoCo check needs the 'mujoco' package (pip install mujoco)"
+        ) from exc
     return mujoco
 
 
@@ -60,18 +71,22 @@ def _quat_z_to(u: Array) -> Array:
     """Unit quaternion (w, x, y, z) of the smallest rotation taking e_z onto unit ``u`` (..., 3)."""
     u = np.asarray(u, dtype=float)
     if np.any(u[..., 2] <= -1 + 1e-12):
-        raise ValueError("a rod points straight down (n = -e_z): its reference rotation is ambiguous")
+        raise ValueError(
+            "a rod points straight down (n = -e_z): its reference rotation is ambiguous"
+        )
     q = np.stack([1.0 + u[..., 2], -u[..., 1], u[..., 0], np.zeros_like(u[..., 0])], axis=-1)
     return q / np.linalg.norm(q, axis=-1, keepdims=True)
 
 
 def _quat_to_matrix(q: Array) -> Array:
     w, x, y, z = q
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def _vec(v: ArrayLike) -> str:
@@ -86,11 +101,18 @@ def _rod_layout(mech: P3P4S, params: InertialParams, rods: str) -> list[tuple[in
         k = params.rods_per_limb
         offsets = np.linspace(-0.5 * mech.d, 0.5 * mech.d, k) if k > 1 else np.zeros(1)
         return [(i, float(s), 1.0) for i in range(3) for s in offsets]
-    raise ValueError(f"rods = {rods!r}: use 'equivalent' (one rod per limb) or 'parallelogram' (all side rods)")
+    raise ValueError(
+        f"rods = {rods!r}: use 'equivalent' (one rod per limb) or 'parallelogram' (all side rods)"
+    )
 
 
-def mjcf(mech: P3P4S, params: InertialParams, rods: RodModel = "equivalent",
-         reference_pose: ArrayLike | None = None, timestep: float = 1e-4) -> str:
+def mjcf(
+    mech: P3P4S,
+    params: InertialParams,
+    rods: RodModel = "equivalent",
+    reference_pose: ArrayLike | None = None,
+    timestep: float = 1e-4,
+) -> str:
     """The MJCF text of the model (see the module docstring), assembled at ``reference_pose``
     (default: the mechanism's home pose; also the ``home`` keyframe).
 
@@ -126,16 +148,25 @@ def mjcf(mech: P3P4S, params: InertialParams, rods: RodModel = "equivalent",
         "  <worldbody>",
     ]
     if rods == "equivalent":
-        lines += ['    <body name="platform" pos="0 0 0">',
-                  '      <joint name="px" type="slide" axis="1 0 0"/>',
-                  '      <joint name="py" type="slide" axis="0 1 0"/>',
-                  '      <joint name="pz" type="slide" axis="0 0 1"/>']
+        lines += [
+            '    <body name="platform" pos="0 0 0">',
+            '      <joint name="px" type="slide" axis="1 0 0"/>',
+            '      <joint name="py" type="slide" axis="0 1 0"/>',
+            '      <joint name="pz" type="slide" axis="0 0 1"/>',
+        ]
     else:
-        lines += [f'    <body name="platform" pos="{_vec(p0)}">', '      <freejoint name="platform"/>']
+        lines += [
+            f'    <body name="platform" pos="{_vec(p0)}">',
+            '      <freejoint name="platform"/>',
+        ]
     lines.append(f'      <inertial pos="0 0 0" mass="{m_p!r}" diaginertia="{_vec(disc)}"/>')
-    lines.append(f'      <geom type="cylinder" size="{mech.r_a!r} 0.005" rgba="0.96 0.76 0.55 0.6"/>')
+    lines.append(
+        f'      <geom type="cylinder" size="{mech.r_a!r} 0.005" rgba="0.96 0.76 0.55 0.6"/>'
+    )
     for r, (i, s, _) in enumerate(layout):
-        lines.append(f'      <site name="top{r}" pos="{_vec(mech.a * mech.e[i] + s * t[i])}" size="0.008"/>')
+        lines.append(
+            f'      <site name="top{r}" pos="{_vec(mech.a * mech.e[i] + s * t[i])}" size="0.008"/>'
+        )
     lines.append("    </body>")
     for i in range(3):
         lines += [
@@ -207,12 +238,17 @@ class MujocoMechanism:
         n = mech.rod_directions(pose, joints)
         for r, (limb, adr) in enumerate(zip(self.rod_limb, self.rod_ball_qpos)):
             local = self.rod_ref_rot[r].T @ n[limb]
-            qpos[adr:adr + 4] = _quat_z_to(local)
+            qpos[adr : adr + 4] = _quat_z_to(local)
         return qpos
 
 
-def build(mech: P3P4S, params: InertialParams, rods: RodModel = "equivalent",
-          reference_pose: ArrayLike | None = None, timestep: float = 1e-4) -> MujocoMechanism:
+def build(
+    mech: P3P4S,
+    params: InertialParams,
+    rods: RodModel = "equivalent",
+    reference_pose: ArrayLike | None = None,
+    timestep: float = 1e-4,
+) -> MujocoMechanism:
     """Generate the MJCF (:func:`mjcf`) and compile it."""
     mujoco = _mujoco()
     xml = mjcf(mech, params, rods, reference_pose, timestep)
@@ -273,13 +309,19 @@ def _constraint_jacobians(mm: MujocoMechanism, data, with_dot: bool) -> tuple[Ar
         rows.append(jp - jp2)
         if with_dot:
             d1, d2 = np.zeros((3, nv)), np.zeros((3, nv))
-            mujoco.mj_jacDot(model, data, d1, None, data.site_xpos[s_rod], int(model.site_bodyid[s_rod]))
-            mujoco.mj_jacDot(model, data, d2, None, data.site_xpos[s_plat], int(model.site_bodyid[s_plat]))
+            mujoco.mj_jacDot(
+                model, data, d1, None, data.site_xpos[s_rod], int(model.site_bodyid[s_rod])
+            )
+            mujoco.mj_jacDot(
+                model, data, d2, None, data.site_xpos[s_plat], int(model.site_bodyid[s_plat])
+            )
             dots.append(d1 - d2)
     return np.vstack(rows), (np.vstack(dots) if with_dot else None)
 
 
-def _assemble(mm: MujocoMechanism, data, pose: Array, joints: Array, v: Array) -> tuple[Array, Array]:
+def _assemble(
+    mm: MujocoMechanism, data, pose: Array, joints: Array, v: Array
+) -> tuple[Array, Array]:
     """Set ``qpos`` (IK) and ``qvel`` (``J_c qvel = 0`` with the platform velocity ``v``), run the
     forward pass; return ``qvel`` and the loop Jacobian ``J_c``."""
     mujoco = _mujoco()
@@ -300,8 +342,9 @@ def _assemble(mm: MujocoMechanism, data, pose: Array, joints: Array, v: Array) -
     return qvel, jc
 
 
-def inverse_dynamics(mm: MujocoMechanism, pose: ArrayLike, velocity: ArrayLike,
-                     acceleration: ArrayLike) -> MujocoResult:
+def inverse_dynamics(
+    mm: MujocoMechanism, pose: ArrayLike, velocity: ArrayLike, acceleration: ArrayLike
+) -> MujocoResult:
     """Motor forces for prescribed platform motion, from MuJoCo (module docstring, steps 1-4).
 
     ``pose``, ``velocity``, ``acceleration`` are ``(..., 3)`` arrays of the same shape; MuJoCo
@@ -312,7 +355,9 @@ def inverse_dynamics(mm: MujocoMechanism, pose: ArrayLike, velocity: ArrayLike,
     v = as_batch(velocity, 3, "velocity")
     a = as_batch(acceleration, 3, "acceleration")
     if not (x.shape == v.shape == a.shape):
-        raise ShapeError(f"pose {x.shape}, velocity {v.shape} and acceleration {a.shape} must have one shape")
+        raise ShapeError(
+            f"pose {x.shape}, velocity {v.shape} and acceleration {a.shape} must have one shape"
+        )
     batch = x.shape[:-1]
     x, v, a = x.reshape(-1, 3), v.reshape(-1, 3), a.reshape(-1, 3)
     q = mm.mech.ik(x)
@@ -338,7 +383,9 @@ def inverse_dynamics(mm: MujocoMechanism, pose: ArrayLike, velocity: ArrayLike,
         a_plat[:3] = a[k]
         qacc = np.zeros(nv)
         qacc[plat] = a_plat
-        qacc[free] = np.linalg.lstsq(jc[:, free], -jdot @ qvel - jc[:, plat] @ a_plat, rcond=None)[0]
+        qacc[free] = np.linalg.lstsq(jc[:, free], -jdot @ qvel - jc[:, plat] @ a_plat, rcond=None)[
+            0
+        ]
         # 3: generalised forces of the open tree, constraints off
         model.opt.disableflags |= constraint_bit
         try:
@@ -356,8 +403,14 @@ def inverse_dynamics(mm: MujocoMechanism, pose: ArrayLike, velocity: ArrayLike,
         qddot[k] = qacc[sliders]
         spin[k] = _max_spin(mm, qvel)
     shape = batch + (3,)
-    return MujocoResult(force.reshape(shape), qdot.reshape(shape), qddot.reshape(shape),
-                        loop_error.reshape(batch), residual.reshape(batch), spin.reshape(batch))
+    return MujocoResult(
+        force.reshape(shape),
+        qdot.reshape(shape),
+        qddot.reshape(shape),
+        loop_error.reshape(batch),
+        residual.reshape(batch),
+        spin.reshape(batch),
+    )
 
 
 @dataclass(frozen=True)
@@ -375,7 +428,9 @@ class TrackingResult:
         return np.max(np.abs(self.pose - self.target), axis=-1)
 
 
-def track(mm: MujocoMechanism, motion, t_end: float, force: Callable[[float], ArrayLike]) -> TrackingResult:
+def track(
+    mm: MujocoMechanism, motion, t_end: float, force: Callable[[float], ArrayLike]
+) -> TrackingResult:
     """Drive the MuJoCo model open loop with motor forces ``force(t)`` (N, along +m_i) and record
     where the platform goes: a forward-dynamics check through MuJoCo's constraint solver.
 
@@ -394,7 +449,11 @@ def track(mm: MujocoMechanism, motion, t_end: float, force: Callable[[float], Ar
     n = int(round(t_end / dt))
     plat = list(mm.platform_qpos)[:3]
     n_loop_rows = 3 * len(mm.site_pairs)
-    ts, poses, loops = [0.0], [data.qpos[plat].copy()], [float(np.max(np.abs(data.efc_pos[:n_loop_rows])))]
+    ts, poses, loops = (
+        [0.0],
+        [data.qpos[plat].copy()],
+        [float(np.max(np.abs(data.efc_pos[:n_loop_rows])))],
+    )
     for _ in range(n):
         f = np.asarray(force(data.time + 0.5 * dt), dtype=float)
         if f.shape != (3,) or not np.all(np.isfinite(f)):
@@ -405,7 +464,9 @@ def track(mm: MujocoMechanism, motion, t_end: float, force: Callable[[float], Ar
         poses.append(data.qpos[plat].copy())
         loops.append(float(np.max(np.abs(data.efc_pos[:n_loop_rows]))) if data.nefc else 0.0)
     t = np.asarray(ts)
-    return TrackingResult(t, np.asarray(poses), np.asarray(motion.pose(t), dtype=float), np.asarray(loops))
+    return TrackingResult(
+        t, np.asarray(poses), np.asarray(motion.pose(t), dtype=float), np.asarray(loops)
+    )
 
 
 def _max_spin(mm: MujocoMechanism, qvel: Array) -> float:

@@ -40,14 +40,25 @@ from parakin.errors import UnreachableError
 from parakin.kernels import Kernel
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
-__all__ = ["Stewart12", "DriveMode", "ActiveLegs", "CONVENTIONS", "NESTED_PASSIVE", "rotation_matrix"]
+__all__ = [
+    "Stewart12",
+    "DriveMode",
+    "ActiveLegs",
+    "CONVENTIONS",
+    "NESTED_PASSIVE",
+    "rotation_matrix",
+]
 
 CONVENTIONS = ("euler_parameters", "cayley", "euler_xyz")
 
 #: the nested passive-leg sets per redundancy R (Fig. 9 lost; ASSUMED, docs/ye_stewart12.md#s2.3)
 NESTED_PASSIVE: dict[int, tuple[int, ...]] = {
-    0: (7, 8, 9, 10, 11, 12), 1: (8, 9, 10, 11, 12), 2: (9, 10, 11, 12),
-    3: (10, 11, 12), 4: (11, 12), 5: (12,),
+    0: (7, 8, 9, 10, 11, 12),
+    1: (8, 9, 10, 11, 12),
+    2: (9, 10, 11, 12),
+    3: (10, 11, 12),
+    4: (11, 12),
+    5: (12,),
 }
 
 _H = 1e-30  # complex-step size: derivatives exact to rounding
@@ -55,11 +66,14 @@ _H = 1e-30  # complex-step size: derivatives exact to rounding
 
 def _skew(v: Array) -> Array:
     z = np.zeros_like(v[..., 0])
-    return np.stack([
-        np.stack([z, -v[..., 2], v[..., 1]], -1),
-        np.stack([v[..., 2], z, -v[..., 0]], -1),
-        np.stack([-v[..., 1], v[..., 0], z], -1),
-    ], -2)
+    return np.stack(
+        [
+            np.stack([z, -v[..., 2], v[..., 1]], -1),
+            np.stack([v[..., 2], z, -v[..., 0]], -1),
+            np.stack([-v[..., 1], v[..., 0], z], -1),
+        ],
+        -2,
+    )
 
 
 def rotation_matrix(lam: Array, convention: str) -> Array:
@@ -69,8 +83,9 @@ def rotation_matrix(lam: Array, convention: str) -> Array:
         l0sq = 1.0 - np.einsum("...i,...i->...", lam, lam)
         l0 = np.sqrt(l0sq)
         eye = np.broadcast_to(np.eye(3), lam.shape[:-1] + (3, 3))
-        return ((2 * l0sq - 1)[..., None, None] * eye
-                + 2 * (lam[..., :, None] * lam[..., None, :] + l0[..., None, None] * _skew(lam)))
+        return (2 * l0sq - 1)[..., None, None] * eye + 2 * (
+            lam[..., :, None] * lam[..., None, :] + l0[..., None, None] * _skew(lam)
+        )
     if convention == "cayley":
         s = _skew(lam)
         k = 2.0 / (1.0 + np.einsum("...i,...i->...", lam, lam))
@@ -78,12 +93,30 @@ def rotation_matrix(lam: Array, convention: str) -> Array:
     if convention == "euler_xyz":
         c, s = np.cos(lam), np.sin(lam)
         one, zero = np.ones_like(c[..., 0]), np.zeros_like(c[..., 0])
-        rx = np.stack([np.stack([one, zero, zero], -1), np.stack([zero, c[..., 0], -s[..., 0]], -1),
-                       np.stack([zero, s[..., 0], c[..., 0]], -1)], -2)
-        ry = np.stack([np.stack([c[..., 1], zero, s[..., 1]], -1), np.stack([zero, one, zero], -1),
-                       np.stack([-s[..., 1], zero, c[..., 1]], -1)], -2)
-        rz = np.stack([np.stack([c[..., 2], -s[..., 2], zero], -1), np.stack([s[..., 2], c[..., 2], zero], -1),
-                       np.stack([zero, zero, one], -1)], -2)
+        rx = np.stack(
+            [
+                np.stack([one, zero, zero], -1),
+                np.stack([zero, c[..., 0], -s[..., 0]], -1),
+                np.stack([zero, s[..., 0], c[..., 0]], -1),
+            ],
+            -2,
+        )
+        ry = np.stack(
+            [
+                np.stack([c[..., 1], zero, s[..., 1]], -1),
+                np.stack([zero, one, zero], -1),
+                np.stack([-s[..., 1], zero, c[..., 1]], -1),
+            ],
+            -2,
+        )
+        rz = np.stack(
+            [
+                np.stack([c[..., 2], -s[..., 2], zero], -1),
+                np.stack([s[..., 2], c[..., 2], zero], -1),
+                np.stack([zero, zero, one], -1),
+            ],
+            -2,
+        )
         return rx @ ry @ rz
     raise ValueError(f"convention = {convention!r} must be one of {CONVENTIONS}")
 
@@ -96,16 +129,25 @@ def _orientation_from_matrix(r: Array, convention: str) -> Array:
         c = np.arctan2(-r[..., 0, 1], r[..., 0, 0])
         return np.stack([a, b, c], -1)
     # Shepperd's method: the largest of 4 w^2, 4 x^2, 4 y^2, 4 z^2 picks the stable branch
-    t = np.stack([1 + r[..., 0, 0] + r[..., 1, 1] + r[..., 2, 2], 1 + r[..., 0, 0] - r[..., 1, 1] - r[..., 2, 2],
-                  1 - r[..., 0, 0] + r[..., 1, 1] - r[..., 2, 2], 1 - r[..., 0, 0] - r[..., 1, 1] + r[..., 2, 2]], -1)
+    t = np.stack(
+        [
+            1 + r[..., 0, 0] + r[..., 1, 1] + r[..., 2, 2],
+            1 + r[..., 0, 0] - r[..., 1, 1] - r[..., 2, 2],
+            1 - r[..., 0, 0] + r[..., 1, 1] - r[..., 2, 2],
+            1 - r[..., 0, 0] - r[..., 1, 1] + r[..., 2, 2],
+        ],
+        -1,
+    )
     k = np.argmax(t, axis=-1)
     d = 0.5 * np.sqrt(np.maximum(np.take_along_axis(t, k[..., None], -1)[..., 0], 1e-300))
     a, b, c = r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]
     e, f, g = r[..., 0, 1] + r[..., 1, 0], r[..., 0, 2] + r[..., 2, 0], r[..., 1, 2] + r[..., 2, 1]
-    cand = [np.stack([d, a / (4 * d), b / (4 * d), c / (4 * d)], -1),
-            np.stack([a / (4 * d), d, e / (4 * d), f / (4 * d)], -1),
-            np.stack([b / (4 * d), e / (4 * d), d, g / (4 * d)], -1),
-            np.stack([c / (4 * d), f / (4 * d), g / (4 * d), d], -1)]
+    cand = [
+        np.stack([d, a / (4 * d), b / (4 * d), c / (4 * d)], -1),
+        np.stack([a / (4 * d), d, e / (4 * d), f / (4 * d)], -1),
+        np.stack([b / (4 * d), e / (4 * d), d, g / (4 * d)], -1),
+        np.stack([c / (4 * d), f / (4 * d), g / (4 * d), d], -1),
+    ]
     quat = np.choose(k[..., None], cand)
     quat = quat * np.where(quat[..., :1] < 0, -1.0, 1.0)
     if convention == "euler_parameters":
@@ -162,7 +204,9 @@ class Stewart12(Mechanism):
     def base_points(self) -> Array:
         """b1..b12 (12, 3) on the static cube (b1, b3, b5 from eqs 12-14; the rest ASSUMED)."""
         n, a = self.n, self.n + self.L
-        b = np.array([[0, a, -n], [0, n, -a], [-n, a, 0], [-a, n, 0], [n, 0, -a], [a, 0, -n]], dtype=float)
+        b = np.array(
+            [[0, a, -n], [0, n, -a], [-n, a, 0], [-a, n, 0], [n, 0, -a], [a, 0, -n]], dtype=float
+        )
         return np.concatenate([b, -b])
 
     @cached_property
@@ -174,11 +218,19 @@ class Stewart12(Mechanism):
         # M . d_i = [-(q_{2i-1} - q_{2i}) + (q_{2i+5} - q_{2i+6})] / 4
         rm = np.zeros((3, 12))
         for i in range(3):
-            rm[i, 2 * i], rm[i, 2 * i + 1], rm[i, 2 * i + 6], rm[i, 2 * i + 7] = -0.25, 0.25, 0.25, -0.25
+            rm[i, 2 * i], rm[i, 2 * i + 1], rm[i, 2 * i + 6], rm[i, 2 * i + 7] = (
+                -0.25,
+                0.25,
+                0.25,
+                -0.25,
+            )
         am = np.linalg.solve(d, rm)  # M = am @ q
         # unknowns U = (u1, u2); u3 = u1 - u2 (eq. 4: p3 = p1 - p2)
-        sel = [np.hstack([np.eye(3), np.zeros((3, 3))]), np.hstack([np.zeros((3, 3)), np.eye(3)]),
-               np.hstack([np.eye(3), -np.eye(3)])]
+        sel = [
+            np.hstack([np.eye(3), np.zeros((3, 3))]),
+            np.hstack([np.zeros((3, 3)), np.eye(3)]),
+            np.hstack([np.eye(3), -np.eye(3)]),
+        ]
         a = np.zeros((6, 6))
         qm = np.zeros((6, 12))
         s_coef = np.zeros(6)
@@ -195,8 +247,14 @@ class Stewart12(Mechanism):
         ainv = np.linalg.inv(a)
         p = self.platform_points_local
         pm = np.column_stack([p[0], p[1], np.cross(p[0], p[1])])
-        return {"am": am, "uq": ainv @ qm, "us": ainv @ s_coef, "u0": ainv @ const,
-                "pinv": np.linalg.inv(pm), "c": np.array(c)}
+        return {
+            "am": am,
+            "uq": ainv @ qm,
+            "us": ainv @ s_coef,
+            "u0": ainv @ const,
+            "pinv": np.linalg.inv(pm),
+            "c": np.array(c),
+        }
 
     def home(self) -> Array:
         """Both cubes concentric and parallel: all legs of length L."""
@@ -221,7 +279,8 @@ class Stewart12(Mechanism):
                 idx = tuple(np.argwhere(bad)[0])
                 raise UnreachableError(
                     f"|lambda|^2 = {s[idx]:.6g} must be < 1 for Euler parameters "
-                    f"(lambda0 = sqrt(1 - |lambda|^2)){describe_first(bad, x.shape[:-1])}")
+                    f"(lambda0 = sqrt(1 - |lambda|^2)){describe_first(bad, x.shape[:-1])}"
+                )
 
     def joint_centres(self, pose: ArrayLike) -> Array:
         """B1..B6 (..., 6, 3) in the inertial frame."""
@@ -287,13 +346,21 @@ class Stewart12(Mechanism):
             # angular velocity of the unit quaternion (l0, lam)), so e . d(R p)/d lambda_i = omega_i . (R p x e)
             l0 = np.sqrt(1.0 - np.einsum("...i,...i->...", lam, lam))[..., None, None]
             omega = 2 * (l0 * np.eye(3) + lam[..., :, None] * lam[..., None, :] / l0 + _skew(lam))
-            c = np.stack([w[..., 1] * e[..., 2] - w[..., 2] * e[..., 1], w[..., 2] * e[..., 0] - w[..., 0] * e[..., 2],
-                          w[..., 0] * e[..., 1] - w[..., 1] * e[..., 0]], -1)
+            c = np.stack(
+                [
+                    w[..., 1] * e[..., 2] - w[..., 2] * e[..., 1],
+                    w[..., 2] * e[..., 0] - w[..., 0] * e[..., 2],
+                    w[..., 0] * e[..., 1] - w[..., 1] * e[..., 0],
+                ],
+                -1,
+            )
             return np.concatenate([e, c @ omega], -1)
         cols = [e[..., :, 0], e[..., :, 1], e[..., :, 2]]
         dr = self._rotation_derivatives(lam)  # (..., 3, 3, 3): d R / d lambda_i
         for i in range(3):
-            cols.append(np.einsum("...kc,...kc->...k", e, np.einsum("...cj,kj->...kc", dr[..., i, :, :], p)))
+            cols.append(
+                np.einsum("...kc,...kc->...k", e, np.einsum("...cj,kj->...kc", dr[..., i, :, :], p))
+            )
         return np.stack(cols, -1)
 
     def _rotation_derivatives(self, lam: Array) -> Array:
@@ -313,8 +380,12 @@ class Stewart12(Mechanism):
         out = []
         for i in range(3):
             outer = eye[i][:, None] * lam[..., None, :] + lam[..., :, None] * eye[i][None, :]
-            out.append(-4 * lam[..., i, None, None] * eye + 2 * outer
-                       - 2 * (lam[..., i] / l0)[..., None, None] * sk + 2 * l0[..., None, None] * _skew(eye[i]))
+            out.append(
+                -4 * lam[..., i, None, None] * eye
+                + 2 * outer
+                - 2 * (lam[..., i] / l0)[..., None, None] * sk
+                + 2 * l0[..., None, None] * _skew(eye[i])
+            )
         return np.stack(out, -3)
 
     def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
@@ -378,18 +449,35 @@ class Stewart12(Mechanism):
         def sq(v: Array) -> Array:
             return np.einsum("...i,...i->...", v, v)
 
-        return np.stack([
-            sq(b1 - bp[0]) - q[..., 0], sq(b2 - bp[2]) - q[..., 2], sq(b3 - bp[4]) - q[..., 4],
-            sq(b1 - m) - p[0] @ p[0], sq(b2 - m) - p[1] @ p[1], sq(b3 - m) - p[2] @ p[2],
-            sq(b1 - b2) - sq(p[0] - p[1]), sq(b2 - b3) - sq(p[1] - p[2]), sq(b1 - b3) - sq(p[0] - p[2]),
-        ], -1)
+        return np.stack(
+            [
+                sq(b1 - bp[0]) - q[..., 0],
+                sq(b2 - bp[2]) - q[..., 2],
+                sq(b3 - bp[4]) - q[..., 4],
+                sq(b1 - m) - p[0] @ p[0],
+                sq(b2 - m) - p[1] @ p[1],
+                sq(b3 - m) - p[2] @ p[2],
+                sq(b1 - b2) - sq(p[0] - p[1]),
+                sq(b2 - b3) - sq(p[1] - p[2]),
+                sq(b1 - b3) - sq(p[0] - p[2]),
+            ],
+            -1,
+        )
 
     def compatibility(self, joints: ArrayLike) -> Array:
         """``F = (f, g, v, u, w, h)`` of eqs (21)-(26) (..., 6), m^2; zero on assemblable lengths."""
         e = self.constraints(joints)
-        return np.stack([e[..., 0] - e[..., 3], e[..., 1] - e[..., 4], e[..., 2] - e[..., 5],
-                         -(e[..., 0] + e[..., 1] - e[..., 6]), -(e[..., 1] + e[..., 2] - e[..., 7]),
-                         -(e[..., 0] + e[..., 2] - e[..., 8])], -1)
+        return np.stack(
+            [
+                e[..., 0] - e[..., 3],
+                e[..., 1] - e[..., 4],
+                e[..., 2] - e[..., 5],
+                -(e[..., 0] + e[..., 1] - e[..., 6]),
+                -(e[..., 1] + e[..., 2] - e[..., 7]),
+                -(e[..., 0] + e[..., 2] - e[..., 8]),
+            ],
+            -1,
+        )
 
     def compatibility_jacobian(self, joints: ArrayLike, columns: ArrayLike | None = None) -> Array:
         """``dF / dl`` (..., 6, k) for the leg indices ``columns`` (0-based, default all 12), by
@@ -410,8 +498,10 @@ class Stewart12(Mechanism):
         bad = q <= 0
         if np.any(bad):
             idx = tuple(np.argwhere(bad)[0])
-            raise UnreachableError(f"leg length l{idx[-1] + 1} = {q[idx]:.6g} m must be > 0"
-                                   f"{describe_first(np.any(bad, -1), q.shape[:-1])}")
+            raise UnreachableError(
+                f"leg length l{idx[-1] + 1} = {q[idx]:.6g} m must be > 0"
+                f"{describe_first(np.any(bad, -1), q.shape[:-1])}"
+            )
         f = np.max(np.abs(self.compatibility(q)), axis=-1)
         limit = self.compat_tol * (self.n + self.L) ** 2
         bad = ~(f <= limit)
@@ -420,7 +510,8 @@ class Stewart12(Mechanism):
             raise UnreachableError(
                 f"leg lengths do not assemble: max |F| of the compatibility equations (21)-(26) = "
                 f"{f[idx]:.6g} m^2 exceeds the limit {limit:.3g} m^2 (compat_tol = {self.compat_tol:g} of "
-                f"(n+L)^2){describe_first(bad, q.shape[:-1])}")
+                f"(n+L)^2){describe_first(bad, q.shape[:-1])}"
+            )
 
     # ------------------------------------------------------------------ drawing
     def skeleton(self, pose: ArrayLike, passive: tuple[int, ...] = ()) -> Skeleton:
@@ -433,17 +524,33 @@ class Stewart12(Mechanism):
         bj = self.joint_centres(x)
         pts = {f"B_{i + 1}": bj[i] for i in range(6)}
         pts.update({f"b_{k + 1}": self.base_points[k] for k in range(12)})
-        segments = [("passive" if (k + 1) in passive else "actuator",
-                     np.stack([self.base_points[k], bj[self.leg_joint[k]]])) for k in range(12)]
+        segments = [
+            (
+                "passive" if (k + 1) in passive else "actuator",
+                np.stack([self.base_points[k], bj[self.leg_joint[k]]]),
+            )
+            for k in range(12)
+        ]
         a, n = self.n + self.L, self.n
-        corners = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], dtype=float)
-        edges = [(i, j) for i in range(8) for j in range(i + 1, 8) if np.sum(corners[i] != corners[j]) == 1]
+        corners = np.array(
+            [[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], dtype=float
+        )
+        edges = [
+            (i, j)
+            for i in range(8)
+            for j in range(i + 1, 8)
+            if np.sum(corners[i] != corners[j]) == 1
+        ]
         for i, j in edges:
             segments.append(("base", a * np.stack([corners[i], corners[j]])))
             moving = x[:3] + n * np.stack([corners[i], corners[j]]) @ r.T
             segments.append(("platform", moving))
-        return Skeleton(points=pts, segments=segments, polygons=[],
-                        frames={"O": (np.zeros(3), np.eye(3)), "M": (x[:3].copy(), r)})
+        return Skeleton(
+            points=pts,
+            segments=segments,
+            polygons=[],
+            frames={"O": (np.zeros(3), np.eye(3)), "M": (x[:3].copy(), r)},
+        )
 
 
 @dataclass(frozen=True)
@@ -472,7 +579,9 @@ class DriveMode(Mechanism):
     def __post_init__(self) -> None:
         p = tuple(int(k) for k in self.passive)
         if len(set(p)) != len(p) or not (1 <= len(p) <= 6) or not all(1 <= k <= 12 for k in p):
-            raise ValueError(f"passive = {self.passive!r} must be 1..6 distinct leg numbers in 1..12")
+            raise ValueError(
+                f"passive = {self.passive!r} must be 1..6 distinct leg numbers in 1..12"
+            )
         object.__setattr__(self, "passive", tuple(sorted(p)))
 
     @property
@@ -531,7 +640,9 @@ class DriveMode(Mechanism):
 
     def _pad(self, f: Array) -> Array:
         r = self.redundancy
-        return f if r == 0 else np.concatenate([f, np.zeros(f.shape[:-1] + (r,), dtype=f.dtype)], -1)
+        return (
+            f if r == 0 else np.concatenate([f, np.zeros(f.shape[:-1] + (r,), dtype=f.dtype)], -1)
+        )
 
     def residual(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """``F(X, l_active)`` (..., 6 + R): the six compatibility functions, then R zeros."""

@@ -72,7 +72,9 @@ class Stewart36(Mechanism):
     def top_points(self) -> Array:
         """A1, A2, A3 in the moving frame, rows of (3, 3) (docs/li2017_stewart36.md#s1.2)."""
         a = self.a
-        return np.array([[-a / (2 * _SQ3), a / 2, 0.0], [-a / (2 * _SQ3), -a / 2, 0.0], [a / _SQ3, 0.0, 0.0]])
+        return np.array(
+            [[-a / (2 * _SQ3), a / 2, 0.0], [-a / (2 * _SQ3), -a / 2, 0.0], [a / _SQ3, 0.0, 0.0]]
+        )
 
     @cached_property
     def base_points(self) -> Array:
@@ -88,8 +90,10 @@ class Stewart36(Mechanism):
         """The PSO search box of docs/li2017_stewart36.md#s2.3 (ASSUMED, the paper states none): alpha, gamma in [-pi, pi],
         beta in [-pi/2, pi/2], X, Y in [-2, 2] (scaled by max(1, b/2)), Z in [0, 3 max(1, b/3)]."""
         s = max(1.0, self.b / 2)
-        return (np.array([-np.pi, -np.pi / 2, -np.pi, -2 * s, -2 * s, 0.0]),
-                np.array([np.pi, np.pi / 2, np.pi, 2 * s, 2 * s, 3.0 * max(1.0, self.b / 3)]))
+        return (
+            np.array([-np.pi, -np.pi / 2, -np.pi, -2 * s, -2 * s, 0.0]),
+            np.array([np.pi, np.pi / 2, np.pi, 2 * s, 2 * s, 3.0 * max(1.0, self.b / 3)]),
+        )
 
     # ------------------------------------------------------------------ kinematics
     def rotation(self, pose: ArrayLike) -> Array:
@@ -138,7 +142,9 @@ class Stewart36(Mechanism):
         ``u_beta = Rz(alpha) y``, ``u_gamma = T x``. One cross product, no 3x3 products."""
         x = as_batch(pose, 6, "pose")
         r = euler_zyx(x[..., 0], x[..., 1], x[..., 2])
-        w = self.top_points[LEG_TOP] @ np.swapaxes(r, -1, -2)  # T a_i, (..., 6, 3) (matmul: 4x einsum's speed)
+        w = self.top_points[LEG_TOP] @ np.swapaxes(
+            r, -1, -2
+        )  # T a_i, (..., 6, 3) (matmul: 4x einsum's speed)
         v = x[..., None, 3:] + w - self.base_points  # leg vectors
         c0 = w[..., 1] * v[..., 2] - w[..., 2] * v[..., 1]  # w x v
         c1 = w[..., 2] * v[..., 0] - w[..., 0] * v[..., 2]
@@ -162,13 +168,17 @@ class Stewart36(Mechanism):
         neg = q <= 0
         if np.any(neg):
             idx = tuple(np.argwhere(neg)[0])
-            raise UnreachableError(f"leg length L{idx[-1] + 1} = {float(q[idx]):g} must be > 0"
-                                   f"{describe_first(np.any(neg, -1), q.shape[:-1])}")
+            raise UnreachableError(
+                f"leg length L{idx[-1] + 1} = {float(q[idx]):g} must be > 0"
+                f"{describe_first(np.any(neg, -1), q.shape[:-1])}"
+            )
         l1, l2 = q[..., 0::2], q[..., 1::2]
         far = np.abs(l1 - l2) > self.b
         near = l1 + l2 < self.b
-        for bad, what in ((far, "|L{i} - L{j}| = {v:.6g} exceeds the base edge b = {b}"),
-                          (near, "L{i} + L{j} = {v:.6g} is shorter than the base edge b = {b}")):
+        for bad, what in (
+            (far, "|L{i} - L{j}| = {v:.6g} exceeds the base edge b = {b}"),
+            (near, "L{i} + L{j} = {v:.6g} is shorter than the base edge b = {b}"),
+        ):
             if np.any(bad):
                 idx = tuple(np.argwhere(bad)[0])
                 k = idx[-1]
@@ -176,7 +186,8 @@ class Stewart36(Mechanism):
                 raise UnreachableError(
                     what.format(i=2 * k + 1, j=2 * k + 2, v=val, b=self.b)
                     + f": legs {2 * k + 1}, {2 * k + 2} cannot meet at A{k + 1}"
-                    + describe_first(np.any(bad, -1), q.shape[:-1]))
+                    + describe_first(np.any(bad, -1), q.shape[:-1])
+                )
 
     # ------------------------------------------------------------------ drawing
     def skeleton(self, pose: ArrayLike) -> Skeleton:
@@ -188,9 +199,12 @@ class Stewart36(Mechanism):
         pts = {f"B_{k + 1}": self.base_points[k] for k in range(6)}
         pts.update({f"A_{k + 1}": top[k] for k in range(3)})
         segs = [("actuator", np.stack([top[LEG_TOP[i]], self.base_points[i]])) for i in range(6)]
-        return Skeleton(points=pts, segments=segs,
-                        polygons=[("base", self.base_points.copy()), ("platform", top.copy())],
-                        frames={"O": (np.zeros(3), np.eye(3)), "o": (x[3:].copy(), self.rotation(x))})
+        return Skeleton(
+            points=pts,
+            segments=segs,
+            polygons=[("base", self.base_points.copy()), ("platform", top.copy())],
+            frames={"O": (np.zeros(3), np.eye(3)), "o": (x[3:].copy(), self.rotation(x))},
+        )
 
     # ------------------------------------------------------------------ all forward solutions
     def circles(self, joints: ArrayLike) -> tuple[Array, Array, Array]:
@@ -238,20 +252,24 @@ class Stewart36(Mechanism):
         g = self._biquadratics(c, r, u)  # (..., 3, 3, 3)
         t = np.exp(2j * np.pi * np.arange(samples) / samples)  # (S,)
         tp = t[:, None] ** np.arange(3)  # (S, 3)
-        a12 = np.einsum("...pq,sp->...sq", g[..., 0, :, :], tp)  # E12 as quadratic in t2, (..., S, 3)
+        a12 = np.einsum(
+            "...pq,sp->...sq", g[..., 0, :, :], tp
+        )  # E12 as quadratic in t2, (..., S, 3)
         e13 = np.einsum("...pq,sp->...sq", g[..., 2, :, :], tp)  # E13 as quadratic in t3
         cc = g[..., 1, None, :, :]  # E23: row p = power of t2, col q = power of t3 -> c_p(t3)
         a0, a1, a2 = (a12[..., k][..., None] for k in range(3))
         c0, c1, c2 = (cc[..., k, :] for k in range(3))
         pm = _pmul
-        res = pm(a2 * c0 - a0 * c2, a2 * c0 - a0 * c2) - pm(a2 * c1 - a1 * c2, a1 * c0 - a0 * c1)  # deg 4 in t3
+        res = pm(a2 * c0 - a0 * c2, a2 * c0 - a0 * c2) - pm(
+            a2 * c1 - a1 * c2, a1 * c0 - a0 * c1
+        )  # deg 4 in t3
         syl = np.zeros(res.shape[:-1] + (6, 6), dtype=complex)
         rr = res[..., ::-1]  # descending
         ee = e13[..., ::-1]
         for row in range(2):
-            syl[..., row, row:row + 5] = rr
+            syl[..., row, row : row + 5] = rr
         for row in range(4):
-            syl[..., 2 + row, row:row + 3] = ee
+            syl[..., 2 + row, row : row + 3] = ee
         vals = np.linalg.det(syl)  # (..., S)
         coef = np.fft.fft(vals, axis=-1) / samples
         return coef
@@ -276,8 +294,13 @@ class Stewart36(Mechanism):
         c, r, u = self.circles(qf)
         ok = np.all(np.isfinite(r), axis=-1)
         out = np.full((n, 16, 6), np.nan)
-        info = {"n_complex": np.zeros(n, int), "n_real": np.zeros(n, int), "n_above": np.zeros(n, int),
-                "ik_error": np.full(n, np.nan), "tail": np.full(n, np.nan)}
+        info = {
+            "n_complex": np.zeros(n, int),
+            "n_real": np.zeros(n, int),
+            "n_above": np.zeros(n, int),
+            "ik_error": np.full(n, np.nan),
+            "tail": np.full(n, np.nan),
+        }
         idx = np.flatnonzero(ok)
         if idx.size:
             coef = self.fk_poly(qf[idx])
@@ -289,10 +312,13 @@ class Stewart36(Mechanism):
             t = _back_substitute(g, roots)  # (m, 16, 3) complex
             t = _newton_t(g, t, newton_steps)
             t = _recover_merged(g, t, newton_steps)
-            real = np.all(np.abs(t.imag) <= 1e-6 * (1 + np.abs(t)), axis=-1) & np.all(np.isfinite(t), -1)
+            real = np.all(np.abs(t.imag) <= 1e-6 * (1 + np.abs(t)), axis=-1) & np.all(
+                np.isfinite(t), -1
+            )
             theta = 2 * np.arctan(t.real)
             pts = c[idx][:, None, :, :] + r[idx][:, None, :, None] * (
-                np.cos(theta)[..., None] * u + np.sin(theta)[..., None] * np.array([0.0, 0.0, 1.0]))
+                np.cos(theta)[..., None] * u + np.sin(theta)[..., None] * np.array([0.0, 0.0, 1.0])
+            )
             poses = self.pose_from_points(pts)
             tgt = np.broadcast_to(qf[idx][:, None, :], poses.shape)
             poses = np.where(real[..., None], poses, self.home())
@@ -302,7 +328,9 @@ class Stewart36(Mechanism):
                     jac = self.jacobian_pose(poses, tgt)
                     step = np.linalg.solve(jac, f[..., None])[..., 0]
                 good = np.all(np.isfinite(step), -1) & real
-                poses = np.where(good[..., None], poses - np.where(good[..., None], step, 0.0), poses)
+                poses = np.where(
+                    good[..., None], poses - np.where(good[..., None], step, 0.0), poses
+                )
             poses[..., :3] = (poses[..., :3] + np.pi) % (2 * np.pi) - np.pi
             err = np.max(np.abs(self.ik(poses) - tgt), axis=-1)
             keep = real & (err <= 1e-9)
@@ -316,8 +344,11 @@ class Stewart36(Mechanism):
             info["n_real"][idx] = fin.sum(-1)
             info["n_above"][idx] = (fin & (np.nan_to_num(poses[..., 5]) > 0)).sum(-1)
             with np.errstate(invalid="ignore"):
-                e = np.where(np.isfinite(poses[..., 0]), np.max(np.abs(self.ik(np.nan_to_num(poses)) - qf[idx][:, None]),
-                                                                  axis=-1), -np.inf)
+                e = np.where(
+                    np.isfinite(poses[..., 0]),
+                    np.max(np.abs(self.ik(np.nan_to_num(poses)) - qf[idx][:, None]), axis=-1),
+                    -np.inf,
+                )
             info["ik_error"][idx] = np.where(fin.any(-1), e.max(-1), np.nan)
         out = out.reshape(*batch, 16, 6)
         if return_info:
@@ -350,8 +381,10 @@ class Stewart36(Mechanism):
         ok = np.isfinite(dist) & (np.nan_to_num(sols[..., 5]) > 0)
         none = ~np.any(ok, axis=-1)
         if np.any(none):
-            raise UnreachableError("leg lengths have no real forward solution above the base"
-                                   f"{describe_first(none, none.shape)}")
+            raise UnreachableError(
+                "leg lengths have no real forward solution above the base"
+                f"{describe_first(none, none.shape)}"
+            )
         best = np.argmin(np.where(ok, dist, np.inf), axis=-1)
         return np.take_along_axis(sols, best[..., None, None], axis=-2)[..., 0, :]
 
@@ -396,7 +429,7 @@ def _pmul(p: Array, q: Array) -> Array:
     shape = np.broadcast_shapes(p.shape[:-1], q.shape[:-1]) + (n,)
     out = np.zeros(shape, dtype=np.result_type(p, q))
     for i in range(p.shape[-1]):
-        out[..., i:i + q.shape[-1]] += p[..., i:i + 1] * q
+        out[..., i : i + q.shape[-1]] += p[..., i : i + 1] * q
     return out
 
 
@@ -446,12 +479,20 @@ def _back_substitute(g: Array, roots: Array) -> Array:
     c13 = np.einsum("...pq,...p->...q", gg[..., 2, :, :], tp)
     t2 = _quad_roots(c12)  # (m, 16, 2)
     t3 = _quad_roots(c13)
-    e23 = np.abs(_eval_bq(gg[..., 1, None, None, :, :], t2[..., :, None], t3[..., None, :]))  # (m,16,2,2)
+    e23 = np.abs(
+        _eval_bq(gg[..., 1, None, None, :, :], t2[..., :, None], t3[..., None, :])
+    )  # (m,16,2,2)
     e23 = np.where(np.isfinite(e23), e23, np.inf).reshape(*e23.shape[:-2], 4)
     best = np.argmin(e23, axis=-1)
     i2, i3 = best // 2, best % 2
-    out = np.stack([t1, np.take_along_axis(t2, i2[..., None], -1)[..., 0],
-                    np.take_along_axis(t3, i3[..., None], -1)[..., 0]], axis=-1)
+    out = np.stack(
+        [
+            t1,
+            np.take_along_axis(t2, i2[..., None], -1)[..., 0],
+            np.take_along_axis(t3, i3[..., None], -1)[..., 0],
+        ],
+        axis=-1,
+    )
     out[~np.isfinite(roots)] = np.nan
     return out
 
@@ -469,10 +510,16 @@ def _newton_t(g: Array, t: Array, steps: int) -> Array:
             for row, (i, j, k) in enumerate(((0, 1, 0), (1, 2, 1), (0, 2, 2))):
                 gk = gg[..., k, :, :]
                 f[..., row] = np.einsum("...pq,...p,...q->...", gk, p[..., i, :], p[..., j, :])
-                jac[..., row, i] = np.einsum("...pq,...p,...q->...", gk, dp[..., i, :], p[..., j, :])
-                jac[..., row, j] = np.einsum("...pq,...p,...q->...", gk, p[..., i, :], dp[..., j, :])
+                jac[..., row, i] = np.einsum(
+                    "...pq,...p,...q->...", gk, dp[..., i, :], p[..., j, :]
+                )
+                jac[..., row, j] = np.einsum(
+                    "...pq,...p,...q->...", gk, p[..., i, :], dp[..., j, :]
+                )
             fin = np.all(np.isfinite(jac), axis=(-1, -2)) & np.all(np.isfinite(f), -1)
-            ok = fin & (np.abs(np.linalg.det(np.where(fin[..., None, None], jac, np.eye(3)))) > 1e-300)
+            ok = fin & (
+                np.abs(np.linalg.det(np.where(fin[..., None, None], jac, np.eye(3)))) > 1e-300
+            )
             jj = np.where(ok[..., None, None], jac, np.eye(3))
             step = np.linalg.solve(jj, np.where(ok[..., None], f, 0)[..., None])[..., 0]
         t = np.where(ok[..., None], t - step, t)
@@ -480,7 +527,9 @@ def _newton_t(g: Array, t: Array, steps: int) -> Array:
 
 
 def _is_real_t(t: Array) -> Array:
-    return np.all(np.isfinite(t), axis=-1) & np.all(np.abs(t.imag) <= 1e-6 * (1 + np.abs(t)), axis=-1)
+    return np.all(np.isfinite(t), axis=-1) & np.all(
+        np.abs(t.imag) <= 1e-6 * (1 + np.abs(t)), axis=-1
+    )
 
 
 #: half-width (relative, times 1 + |t1|) and grid size of the 1-D scan that recovers a root lost when two
@@ -500,14 +549,24 @@ def _recover_merged(g: Array, t: Array, steps: int) -> Array:
     real = _is_real_t(t)
     with np.errstate(all="ignore"):
         d = np.max(np.abs(t[:, :, None] - t[:, None, :]), axis=-1)  # (m, 16, 16)
-    close = (d < 1e-7 * (1 + np.max(np.abs(np.nan_to_num(t)), axis=-1))[:, None, :]) & real[:, :, None] & real[:, None, :]
+    close = (
+        (d < 1e-7 * (1 + np.max(np.abs(np.nan_to_num(t)), axis=-1))[:, None, :])
+        & real[:, :, None]
+        & real[:, None, :]
+    )
     close &= np.tri(t.shape[1], k=-1, dtype=bool)  # pairs (j, earlier)
     for i in np.flatnonzero(close.any(axis=(-1, -2))):
         ti = t[i]
         real = _is_real_t(ti)
         idx = np.flatnonzero(real)
-        dup = [ja for a, ja in enumerate(idx)
-               if any(np.max(np.abs(ti[ja] - ti[jb])) < 1e-7 * (1 + np.max(np.abs(ti[jb]))) for jb in idx[:a])]
+        dup = [
+            ja
+            for a, ja in enumerate(idx)
+            if any(
+                np.max(np.abs(ti[ja] - ti[jb])) < 1e-7 * (1 + np.max(np.abs(ti[jb])))
+                for jb in idx[:a]
+            )
+        ]
         for j in dup:
             c0 = float(ti[j, 0].real)
             w = RECOVER_WIDTH * (1 + abs(c0))
@@ -520,18 +579,26 @@ def _recover_merged(g: Array, t: Array, steps: int) -> Array:
                 for b in range(2):
                     with np.errstate(all="ignore"):
                         h = _eval_bq(g[i, 1], t2[:, a], t3[:, b])
-                    ok = (np.abs(h.imag) <= 1e-9 * (1 + np.abs(h.real))) & (np.abs(t2[:, a].imag) < 1e-12) & \
-                        (np.abs(t3[:, b].imag) < 1e-12)
+                    ok = (
+                        (np.abs(h.imag) <= 1e-9 * (1 + np.abs(h.real)))
+                        & (np.abs(t2[:, a].imag) < 1e-12)
+                        & (np.abs(t3[:, b].imag) < 1e-12)
+                    )
                     hr = h.real
                     k = np.flatnonzero(ok[:-1] & ok[1:] & (np.sign(hr[:-1]) != np.sign(hr[1:])))
                     for kk in k:
                         f = hr[kk] / (hr[kk] - hr[kk + 1])
-                        cands.append([grid[kk] + f * (grid[kk + 1] - grid[kk]), t2[kk, a], t3[kk, b]])
+                        cands.append(
+                            [grid[kk] + f * (grid[kk + 1] - grid[kk]), t2[kk, a], t3[kk, b]]
+                        )
             if not cands:
                 continue
             cand = _newton_t(g[i : i + 1], np.array(cands, dtype=complex)[None], steps)[0]
             for cnd in cand:
-                if _is_real_t(cnd) and not np.any(np.max(np.abs(ti[_is_real_t(ti)] - cnd), axis=-1) < 1e-7 * (1 + np.max(np.abs(cnd)))):
+                if _is_real_t(cnd) and not np.any(
+                    np.max(np.abs(ti[_is_real_t(ti)] - cnd), axis=-1)
+                    < 1e-7 * (1 + np.max(np.abs(cnd)))
+                ):
                     ti[j] = cnd
                     break
         t[i] = ti

@@ -35,21 +35,38 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 
+import parakin.mechanisms.stewart66_homotopy as hc
 from parakin.errors import UnreachableError
 from parakin.geometry import euler_zyx, euler_zyx_from_matrix
-import parakin.mechanisms.stewart66_homotopy as hc
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
-__all__ = ["Stewart66", "DIETMAIER_BASE", "DIETMAIER_PLATFORM", "DIETMAIER_LENGTHS", "FKAll", "load_start"]
+__all__ = [
+    "Stewart66",
+    "DIETMAIER_BASE",
+    "DIETMAIER_PLATFORM",
+    "DIETMAIER_LENGTHS",
+    "FKAll",
+    "load_start",
+]
 
 #: Dietmaier (1998) base points A1..A6 (rows), as printed
-DIETMAIER_BASE = ((0.0, 0.0, 0.0), (1.107915, 0.0, 0.0), (0.549094, 0.756063, 0.0),
-                  (0.735077, -0.223935, 0.525991), (0.514188, -0.526063, -0.368418),
-                  (0.590473, 0.094733, -0.205018))
+DIETMAIER_BASE = (
+    (0.0, 0.0, 0.0),
+    (1.107915, 0.0, 0.0),
+    (0.549094, 0.756063, 0.0),
+    (0.735077, -0.223935, 0.525991),
+    (0.514188, -0.526063, -0.368418),
+    (0.590473, 0.094733, -0.205018),
+)
 #: Dietmaier (1998) platform points B1..B6 (rows), as printed
-DIETMAIER_PLATFORM = ((0.0, 0.0, 0.0), (0.542805, 0.0, 0.0), (0.956919, -0.528915, 0.0),
-                      (0.665885, -0.353482, 1.402538), (0.478359, 1.158742, 0.107672),
-                      (-0.137087, -0.235121, 0.353913))
+DIETMAIER_PLATFORM = (
+    (0.0, 0.0, 0.0),
+    (0.542805, 0.0, 0.0),
+    (0.956919, -0.528915, 0.0),
+    (0.665885, -0.353482, 1.402538),
+    (0.478359, 1.158742, 0.107672),
+    (-0.137087, -0.235121, 0.353913),
+)
 #: Dietmaier (1998) leg lengths with 40 real forward solutions
 DIETMAIER_LENGTHS = (1.0, 0.645275, 1.086284, 1.503439, 1.281933, 0.771071)
 
@@ -60,12 +77,20 @@ RETRIES = 3
 #: step control of the once-per-geometry tracking from the stored generic start (cautious)
 START_TRACK: dict[str, float] = {"h0": 0.02, "tau": 5e-4, "hmin": 1e-13, "max_steps": 3000}
 #: step control of the per-input tracking (see :func:`parakin.mechanisms.stewart66_homotopy.track`)
-TRACK_OPTIONS: dict[str, float] = {"h0": 0.2, "hmax": 1.0, "tau": 0.1, "hmin": 1e-13, "max_steps": 1500}
+TRACK_OPTIONS: dict[str, float] = {
+    "h0": 0.2,
+    "hmax": 1.0,
+    "tau": 0.1,
+    "hmin": 1e-13,
+    "max_steps": 1500,
+}
 
 
 def load_start() -> dict[str, np.ndarray]:
     """The stored generic start system (``base``, ``platform``, ``c``, ``patch``, ``solutions``)."""
-    with resources.files("parakin.mechanisms").joinpath("data/stewart66_start.npz").open("rb") as fh:
+    with (
+        resources.files("parakin.mechanisms").joinpath("data/stewart66_start.npz").open("rb") as fh
+    ):
         with np.load(fh) as z:
             return {k: z[k] for k in z.files}
 
@@ -148,21 +173,30 @@ class Stewart66(Mechanism):
         tol = 1e-9 * size
         cb, cp = _coincident(ba, tol), _coincident(pa, tol)
         if (cb or cp) and not self.allow_coincident:
-            kind = {(3, 0): "3-6", (0, 3): "6-3", (3, 3): "3-3"}.get((len(cp), len(cb)), "degenerate")
-            where = "; ".join(f"{what} points {', '.join(f'{i + 1}={j + 1}' for i, j in pairs)}"
-                              for what, pairs in (("platform", cp), ("base", cb)) if pairs)
-            raise ValueError(f"coincident anchors ({where}): a {kind} layout, not a general 6-6 platform; "
-                             "use Stewart36 for the 3-6, or pass allow_coincident=True (fk_all then finds "
-                             "the fewer solutions of that layout)")
+            kind = {(3, 0): "3-6", (0, 3): "6-3", (3, 3): "3-3"}.get(
+                (len(cp), len(cb)), "degenerate"
+            )
+            where = "; ".join(
+                f"{what} points {', '.join(f'{i + 1}={j + 1}' for i, j in pairs)}"
+                for what, pairs in (("platform", cp), ("base", cb))
+                if pairs
+            )
+            raise ValueError(
+                f"coincident anchors ({where}): a {kind} layout, not a general 6-6 platform; "
+                "use Stewart36 for the 3-6, or pass allow_coincident=True (fk_all then finds "
+                "the fewer solutions of that layout)"
+            )
         # architecture singularity: the 6x6 Jacobian singular at random poses
         rng = np.random.default_rng(0)
         poses = np.concatenate([rng.uniform(-1, 1, (3, 3)), rng.normal(size=(3, 3)) * size], -1)
         with np.errstate(all="ignore"):
             cond = np.linalg.cond(self.jacobian_pose(poses))
         if np.all(~np.isfinite(cond) | (cond > 1e11)):
-            raise ValueError(f"architecturally singular layout: the Jacobian is singular at every pose tried "
-                             f"(condition numbers {np.round(cond, 1).tolist()}), e.g. collinear or "
-                             "similar planar anchor sets")
+            raise ValueError(
+                f"architecturally singular layout: the Jacobian is singular at every pose tried "
+                f"(condition numbers {np.round(cond, 1).tolist()}), e.g. collinear or "
+                "similar planar anchor sets"
+            )
 
     # ------------------------------------------------------------------ geometry
     @cached_property
@@ -184,14 +218,21 @@ class Stewart66(Mechanism):
 
     def home(self) -> Array:
         """Platform parallel to the base frame, its anchor centroid one ``size`` above the base's."""
-        o = self.base_points.mean(0) - self.platform_points.mean(0) + np.array([0.0, 0.0, 1.5 * self.size])
+        o = (
+            self.base_points.mean(0)
+            - self.platform_points.mean(0)
+            + np.array([0.0, 0.0, 1.5 * self.size])
+        )
         return np.concatenate([np.zeros(3), o])
 
     def pose_bounds(self) -> tuple[Array, Array]:
         """Angles ``[-pi, pi] x [-pi/2, pi/2] x [-pi, pi]``; origin within ``3 size`` of :meth:`home`'s."""
         o = self.home()[3:]
         s = 3 * self.size
-        return (np.concatenate([[-np.pi, -np.pi / 2, -np.pi], o - s]), np.concatenate([[np.pi, np.pi / 2, np.pi], o + s]))
+        return (
+            np.concatenate([[-np.pi, -np.pi / 2, -np.pi], o - s]),
+            np.concatenate([[np.pi, np.pi / 2, np.pi], o + s]),
+        )
 
     # ------------------------------------------------------------------ kinematics
     def rotation(self, pose: ArrayLike) -> Array:
@@ -243,8 +284,10 @@ class Stewart66(Mechanism):
         neg = q <= 0
         if np.any(neg):
             idx = tuple(np.argwhere(neg)[0])
-            raise UnreachableError(f"leg length L{idx[-1] + 1} = {float(q[idx]):g} must be > 0"
-                                   f"{describe_first(np.any(neg, -1), q.shape[:-1])}")
+            raise UnreachableError(
+                f"leg length L{idx[-1] + 1} = {float(q[idx]):g} must be > 0"
+                f"{describe_first(np.any(neg, -1), q.shape[:-1])}"
+            )
 
     def skeleton(self, pose: ArrayLike) -> Skeleton:
         x = as_batch(pose, 6, "pose")
@@ -254,9 +297,12 @@ class Stewart66(Mechanism):
         pts = {f"B_{k + 1}": self.base_points[k] for k in range(6)}
         pts.update({f"P_{k + 1}": top[k] for k in range(6)})
         segs = [("actuator", np.stack([top[i], self.base_points[i]])) for i in range(6)]
-        return Skeleton(points=pts, segments=segs,
-                        polygons=[("base", self.base_points.copy()), ("platform", top.copy())],
-                        frames={"O": (np.zeros(3), np.eye(3)), "o": (x[3:].copy(), self.rotation(x))})
+        return Skeleton(
+            points=pts,
+            segments=segs,
+            polygons=[("base", self.base_points.copy()), ("platform", top.copy())],
+            frames={"O": (np.zeros(3), np.eye(3)), "o": (x[3:].copy(), self.rotation(x))},
+        )
 
     # ------------------------------------------------------------------ all forward solutions
     @cached_property
@@ -275,7 +321,9 @@ class Stewart66(Mechanism):
         st = load_start()
         b, p, *_ = self._scaled
         rng = np.random.default_rng(FIBER_SEED)
-        c1 = (rng.normal(size=6) + 1j * rng.normal(size=6)) * 0.5 + (np.sum(b * b, -1) + np.sum(p * p, -1) - 2.0)
+        c1 = (rng.normal(size=6) + 1j * rng.normal(size=6)) * 0.5 + (
+            np.sum(b * b, -1) + np.sum(p * p, -1) - 2.0
+        )
         m = len(st["solutions"])
         q1 = hc.quadrics(b, p, c1)
         best = np.zeros((0, 8), dtype=complex)
@@ -341,7 +389,9 @@ class Stewart66(Mechanism):
         if bend_seed is not None:  # a bent path, in another random patch
             rng = np.random.default_rng(bend_seed)
             d = rng.normal(size=(n, 1, 6)) + 1j * rng.normal(size=(n, 1, 6))
-            bend = np.broadcast_to(d * (1 + np.abs(c1 - st["c"]))[:, None, :], (n, m, 6)).reshape(-1, 6)
+            bend = np.broadcast_to(d * (1 + np.abs(c1 - st["c"]))[:, None, :], (n, m, 6)).reshape(
+                -1, 6
+            )
             patch = (rng.normal(size=8) + 1j * rng.normal(size=8)) / 4
             x0 = x0 / (x0 @ patch)[:, None]
         hom = hc.FiberHomotopy(st["q0"], patch, c0, cc, bend)
@@ -353,8 +403,13 @@ class Stewart66(Mechanism):
         q = np.broadcast_to(self._quadrics_for(c1)[:, None], (n, m, 7, 8, 8)).reshape(-1, 7, 8, 8)
         x, beta, jn = hc.newton_refine(q, st["patch"], x, iters=3)
         alpha = hc.certify(q, beta, jn)
-        return (x.reshape(n, m, 8), beta.reshape(n, m), alpha.reshape(n, m), ok.reshape(n, m),
-                steps.reshape(n, m).sum(-1))
+        return (
+            x.reshape(n, m, 8),
+            beta.reshape(n, m),
+            alpha.reshape(n, m),
+            ok.reshape(n, m),
+            steps.reshape(n, m).sum(-1),
+        )
 
     def _quadrics_for(self, c1: Array) -> np.ndarray:
         q = np.broadcast_to(self.fk_start["q0"], (len(c1), 7, 8, 8)).copy()
@@ -405,8 +460,12 @@ class Stewart66(Mechanism):
             keep[bad] = np.take_along_axis(kk, order, 1)
         info = self._package(qf, x, alpha, keep, steps, retried)
         if return_info:
-            return FKAll(**{k: (v.reshape(batch + v.shape[1:]) if isinstance(v, np.ndarray) else v)
-                            for k, v in dataclasses.asdict(info).items()})
+            return FKAll(
+                **{
+                    k: (v.reshape(batch + v.shape[1:]) if isinstance(v, np.ndarray) else v)
+                    for k, v in dataclasses.asdict(info).items()
+                }
+            )
         return info.poses.reshape(batch + info.poses.shape[1:])
 
     @staticmethod
@@ -458,11 +517,21 @@ class Stewart66(Mechanism):
 
         nf = keep.sum(-1)
         ik_err = np.where(good.any(-1), np.where(good, err, -np.inf).max(-1), np.nan)
-        return FKAll(poses=out, study=pad(xs, np.nan), rotation=pad(rot, np.nan), translation=pad(origin, np.nan),
-                     is_real=pad(good, False), alpha=pad(np.where(keep, alpha, np.nan), np.nan),
-                     n_found=nf, n_expected=self.expected_count, complete=nf == self.expected_count,
-                     n_real=good.sum(-1), ik_error=ik_err,
-                     steps=steps, retries=retried)
+        return FKAll(
+            poses=out,
+            study=pad(xs, np.nan),
+            rotation=pad(rot, np.nan),
+            translation=pad(origin, np.nan),
+            is_real=pad(good, False),
+            alpha=pad(np.where(keep, alpha, np.nan), np.nan),
+            n_found=nf,
+            n_expected=self.expected_count,
+            complete=nf == self.expected_count,
+            n_real=good.sum(-1),
+            ik_error=ik_err,
+            steps=steps,
+            retries=retried,
+        )
 
     def fk(self, joints: ArrayLike, near: ArrayLike | None = None) -> Array:
         """One forward solution: the certified real solution nearest ``near`` (default :meth:`home`;
@@ -477,6 +546,8 @@ class Stewart66(Mechanism):
         ok = np.isfinite(dist)
         none = ~np.any(ok, -1)
         if np.any(none):
-            raise UnreachableError(f"leg lengths have no real forward solution{describe_first(none, none.shape)}")
+            raise UnreachableError(
+                f"leg lengths have no real forward solution{describe_first(none, none.shape)}"
+            )
         best = np.argmin(np.where(ok, dist, np.inf), -1)
         return np.take_along_axis(sols, best[..., None, None], -2)[..., 0, :]

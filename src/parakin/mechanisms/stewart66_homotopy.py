@@ -23,9 +23,21 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["GAMMA", "ALPHA0", "quadrics", "quat_rotation", "quat_from_matrix", "pose_to_study",
-           "study_to_rt", "FiberHomotopy", "GeneralHomotopy", "track", "newton_refine", "certify",
-           "generate_start"]
+__all__ = [
+    "GAMMA",
+    "ALPHA0",
+    "quadrics",
+    "quat_rotation",
+    "quat_from_matrix",
+    "pose_to_study",
+    "study_to_rt",
+    "FiberHomotopy",
+    "GeneralHomotopy",
+    "track",
+    "newton_refine",
+    "certify",
+    "generate_start",
+]
 
 #: Smale's alpha-theory constant: alpha < ALPHA0 makes x an approximate zero (Blum et al. 1998, Ch. 8)
 ALPHA0 = (13.0 - 3.0 * np.sqrt(17.0)) / 4.0
@@ -35,10 +47,14 @@ def quat_rotation(e: np.ndarray) -> np.ndarray:
     """Unnormalised rotation matrix ``R(e)`` (``e p e'`` as a matrix), (..., 3, 3); ``R(e)/(e.e)`` is a
     rotation for real ``e``. Works for complex ``e`` (no conjugation)."""
     w, x, y, z = (e[..., k] for k in range(4))
-    return np.stack([
-        np.stack([w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z], -1)], -2)
+    return np.stack(
+        [
+            np.stack([w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z], -1),
+        ],
+        -2,
+    )
 
 
 def _gamma() -> np.ndarray:
@@ -59,8 +75,14 @@ _E = np.diag([1.0, 1, 1, 1, 0, 0, 0, 0])  # x^T E x = e.e
 
 def _skew(v: np.ndarray) -> np.ndarray:
     z = np.zeros_like(v[..., 0])
-    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1), np.stack([v[..., 2], z, -v[..., 0]], -1),
-                     np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
+    return np.stack(
+        [
+            np.stack([z, -v[..., 2], v[..., 1]], -1),
+            np.stack([v[..., 2], z, -v[..., 0]], -1),
+            np.stack([-v[..., 1], v[..., 0], z], -1),
+        ],
+        -2,
+    )
 
 
 def quadrics(base: np.ndarray, platform: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -98,17 +120,45 @@ def quat_from_matrix(r: np.ndarray) -> np.ndarray:
     # four formulae; pick per row
     with np.errstate(all="ignore"):
         w0 = 0.5 * np.sqrt(np.maximum(1 + tr, 0))
-        q0 = np.stack([w0, (r[..., 2, 1] - r[..., 1, 2]) / (4 * w0), (r[..., 0, 2] - r[..., 2, 0]) / (4 * w0),
-                       (r[..., 1, 0] - r[..., 0, 1]) / (4 * w0)], -1)
+        q0 = np.stack(
+            [
+                w0,
+                (r[..., 2, 1] - r[..., 1, 2]) / (4 * w0),
+                (r[..., 0, 2] - r[..., 2, 0]) / (4 * w0),
+                (r[..., 1, 0] - r[..., 0, 1]) / (4 * w0),
+            ],
+            -1,
+        )
         x1 = 0.5 * np.sqrt(np.maximum(1 + r[..., 0, 0] - r[..., 1, 1] - r[..., 2, 2], 0))
-        q1 = np.stack([(r[..., 2, 1] - r[..., 1, 2]) / (4 * x1), x1, (r[..., 0, 1] + r[..., 1, 0]) / (4 * x1),
-                       (r[..., 0, 2] + r[..., 2, 0]) / (4 * x1)], -1)
+        q1 = np.stack(
+            [
+                (r[..., 2, 1] - r[..., 1, 2]) / (4 * x1),
+                x1,
+                (r[..., 0, 1] + r[..., 1, 0]) / (4 * x1),
+                (r[..., 0, 2] + r[..., 2, 0]) / (4 * x1),
+            ],
+            -1,
+        )
         y2 = 0.5 * np.sqrt(np.maximum(1 - r[..., 0, 0] + r[..., 1, 1] - r[..., 2, 2], 0))
-        q2 = np.stack([(r[..., 0, 2] - r[..., 2, 0]) / (4 * y2), (r[..., 0, 1] + r[..., 1, 0]) / (4 * y2), y2,
-                       (r[..., 1, 2] + r[..., 2, 1]) / (4 * y2)], -1)
+        q2 = np.stack(
+            [
+                (r[..., 0, 2] - r[..., 2, 0]) / (4 * y2),
+                (r[..., 0, 1] + r[..., 1, 0]) / (4 * y2),
+                y2,
+                (r[..., 1, 2] + r[..., 2, 1]) / (4 * y2),
+            ],
+            -1,
+        )
         z3 = 0.5 * np.sqrt(np.maximum(1 - r[..., 0, 0] - r[..., 1, 1] + r[..., 2, 2], 0))
-        q3 = np.stack([(r[..., 1, 0] - r[..., 0, 1]) / (4 * z3), (r[..., 0, 2] + r[..., 2, 0]) / (4 * z3),
-                       (r[..., 1, 2] + r[..., 2, 1]) / (4 * z3), z3], -1)
+        q3 = np.stack(
+            [
+                (r[..., 1, 0] - r[..., 0, 1]) / (4 * z3),
+                (r[..., 0, 2] + r[..., 2, 0]) / (4 * z3),
+                (r[..., 1, 2] + r[..., 2, 1]) / (4 * z3),
+                z3,
+            ],
+            -1,
+        )
     for j, qj in enumerate((q0, q1, q2, q3)):
         sel = k == j
         out[sel] = qj[sel]
@@ -165,8 +215,15 @@ class FiberHomotopy:
     term) with ``c(t) = c0 + t (c1 - c0) + t (1 - t) d`` per path (``d`` a complex bend, 0 for a
     straight segment). Evaluation is one (K, 8) x (8, 56) product plus the ``c_i e.e`` terms."""
 
-    def __init__(self, q0: np.ndarray, patch: np.ndarray, c0: np.ndarray, c1: np.ndarray, bend=None,
-                 dtype=np.complex128):
+    def __init__(
+        self,
+        q0: np.ndarray,
+        patch: np.ndarray,
+        c0: np.ndarray,
+        c1: np.ndarray,
+        bend=None,
+        dtype=np.complex128,
+    ):
         self.dtype = np.dtype(dtype)
         self.q0 = q0  # (7, 8, 8) with c = 0
         qf = q0.transpose(2, 0, 1).reshape(8, 56)
@@ -196,7 +253,11 @@ class FiberHomotopy:
     def ht(self, x, t, rows):
         e = x[:, :4]
         ee = (e[:, None, :] @ e[:, :, None])[:, 0]
-        d = self.dc[rows] if self.bend is None else self.dc[rows] + (1 - 2 * t[:, None]) * self.bend[rows]
+        d = (
+            self.dc[rows]
+            if self.bend is None
+            else self.dc[rows] + (1 - 2 * t[:, None]) * self.bend[rows]
+        )
         out = np.zeros((len(x), 8), dtype=self.dtype)
         out[:, 1:7] = d * ee
         return out
@@ -236,7 +297,9 @@ class GeneralHomotopy:
         qa, qm, qb = (quadrics(*[u + s * (w - u) for u, w in zip(p0, p1)]) for s in (0.0, 0.5, 1.0))
         c2 = 2 * (qa + qb) - 4 * qm
         c1 = qb - qa - c2
-        self.coef = [np.ascontiguousarray(q.transpose(2, 0, 1).reshape(8, 56)) for q in (qa, c1, c2)]
+        self.coef = [
+            np.ascontiguousarray(q.transpose(2, 0, 1).reshape(8, 56)) for q in (qa, c1, c2)
+        ]
         self.q1 = qb
 
     def _y(self, x, t):
@@ -274,8 +337,17 @@ class GeneralHomotopy:
 
 
 # ------------------------------------------------------------------------------------------ tracking
-def track(hom, x0: np.ndarray, *, h0: float = 0.05, hmax: float = 0.5, hmin: float = 1e-7,
-          max_steps: int = 400, tau: float = 2e-3, blowup: float = 1e7) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def track(
+    hom,
+    x0: np.ndarray,
+    *,
+    h0: float = 0.05,
+    hmax: float = 0.5,
+    hmin: float = 1e-7,
+    max_steps: int = 400,
+    tau: float = 2e-3,
+    blowup: float = 1e7,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Track every path of ``hom`` from ``t = 0`` (``x0`` (K, 8)) to ``t = 1``.
 
     Predictor: cubic Hermite extrapolation through the last two points and their tangents (Euler on
@@ -329,8 +401,13 @@ def track(hom, x0: np.ndarray, *, h0: float = 0.05, hmax: float = 0.5, hmin: flo
             norms.append(np.linalg.norm(d, axis=-1))
         n1, n2, n3 = norms
         with np.errstate(all="ignore"):
-            good = (okinv & np.isfinite(n3) & (n1 < 0.1 * scale) & (n2 <= 0.2 * n1 + floor * scale)
-                    & (n3 <= 0.2 * n2 + floor * scale))
+            good = (
+                okinv
+                & np.isfinite(n3)
+                & (n1 < 0.1 * scale)
+                & (n2 <= 0.2 * n1 + floor * scale)
+                & (n3 <= 0.2 * n2 + floor * scale)
+            )
         steps[active] += 1
         # accepted: move, new tangent (inverse at the predicted point: error O(|d1|), fine for a predictor)
         ga = active[good]
@@ -350,7 +427,11 @@ def track(hom, x0: np.ndarray, *, h0: float = 0.05, hmax: float = 0.5, hmin: flo
         h[ba] = ha[~good] * 0.5
         done = t[active] >= 1.0
         reached[active[done]] = True
-        lost = (h[active] < hmin) | (steps[active] >= max_steps) | ~(np.linalg.norm(x[active], axis=-1) < blowup)
+        lost = (
+            (h[active] < hmin)
+            | (steps[active] >= max_steps)
+            | ~(np.linalg.norm(x[active], axis=-1) < blowup)
+        )
         failed[active[lost & ~done]] = True
         active = active[~done & ~lost]
     return x, reached & ~failed, steps
@@ -455,5 +536,12 @@ def generate_start(seed: int = 20250611, *, expected: int = 40, max_loops: int =
             break
     q = np.broadcast_to(quadrics(b0, p0, c0), (len(sols), 7, 8, 8))
     sols, _, _ = newton_refine(q, patch, sols, iters=3)
-    return {"base": b0, "platform": p0, "c": c0, "patch": patch, "solutions": sols, "loops": loops,
-            "seed": seed}
+    return {
+        "base": b0,
+        "platform": p0,
+        "c": c0,
+        "patch": patch,
+        "solutions": sols,
+        "loops": loops,
+        "seed": seed,
+    }

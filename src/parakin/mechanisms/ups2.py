@@ -77,14 +77,18 @@ class UPS2(Mechanism):
                 raise ValueError(f"{key} = {value!r} m must be a positive length")
         lim = tuple(float(v) for v in self.stroke_limits)
         if len(lim) != 3 or not all(np.isfinite(v) and v > 0 for v in lim):
-            raise ValueError(f"stroke_limits = {self.stroke_limits!r} must be three positive lengths (m)")
+            raise ValueError(
+                f"stroke_limits = {self.stroke_limits!r} must be three positive lengths (m)"
+            )
         object.__setattr__(self, "stroke_limits", lim)
         if self.branch not in (1, -1):
-            raise ValueError(f"branch = {self.branch!r} must be +1 (the paper's, rho > 0) or -1 (rho < 0)")
+            raise ValueError(
+                f"branch = {self.branch!r} must be +1 (the paper's, rho > 0) or -1 (rho < 0)"
+            )
 
     # ------------------------------------------------------------------ constructors
     @classmethod
-    def li2020(cls) -> "UPS2":
+    def li2020(cls) -> UPS2:
         """The nominal geometry of the reproduction (a, b, c = 150, 100, 300 mm, ASSUMED)."""
         return cls()
 
@@ -125,8 +129,10 @@ class UPS2(Mechanism):
 
     def pose_bounds(self) -> tuple[Array, Array]:
         """Table 1's PSO search box: beta in [-30, 30] deg, gamma in [-60, 60] deg, Y in [-20, 110] mm."""
-        return (np.array([np.deg2rad(-30.0), np.deg2rad(-60.0), -0.020]),
-                np.array([np.deg2rad(30.0), np.deg2rad(60.0), 0.110]))
+        return (
+            np.array([np.deg2rad(-30.0), np.deg2rad(-60.0), -0.020]),
+            np.array([np.deg2rad(30.0), np.deg2rad(60.0), 0.110]),
+        )
 
     # ------------------------------------------------------------------ kinematics
     def rotation(self, pose: ArrayLike) -> Array:
@@ -151,13 +157,17 @@ class UPS2(Mechanism):
         r = self.rotation(x)
         b = p[..., None, :] + np.einsum("...ij,kj->...ki", r, self.platform_points_local)
         out = {f"A{i}": self.base_points[i] for i in range(4)}
-        out.update({"B0": self.link_ratio * p, "B1": b[..., 0, :], "B2": b[..., 1, :], "B3": b[..., 2, :]})
+        out.update(
+            {"B0": self.link_ratio * p, "B1": b[..., 0, :], "B2": b[..., 1, :], "B3": b[..., 2, :]}
+        )
         return out
 
     def leg_vectors(self, pose: ArrayLike) -> Array:
         """Vectors l1 = B0 - A1, l2 = B2 - A2, l3 = B3 - A3 (eqs 9-11), shape (..., 3, 3)."""
         pts = self.points(pose)
-        return np.stack([pts["B0"] - pts["A1"], pts["B2"] - pts["A2"], pts["B3"] - pts["A3"]], axis=-2)
+        return np.stack(
+            [pts["B0"] - pts["A1"], pts["B2"] - pts["A2"], pts["B3"] - pts["A3"]], axis=-2
+        )
 
     def lengths(self, pose: ArrayLike) -> Array:
         """Absolute leg lengths |l_j| (m), shape (..., 3); no reachability check."""
@@ -174,7 +184,12 @@ class UPS2(Mechanism):
         a, k = self.a, self.k
         rho = self._rho(y)
         u = rho + k * np.sin(gamma)
-        q = u * u + (k * k + a * a / 4) + (k * np.cos(gamma) + y - self.h) ** 2 - a * k * np.cos(beta)
+        q = (
+            u * u
+            + (k * k + a * a / 4)
+            + (k * np.cos(gamma) + y - self.h) ** 2
+            - a * k * np.cos(beta)
+        )
         s = a * u * np.sin(beta)
         l1 = 4 * self.c**2 / 9 + 0.75 * a * a - (2 / _SQ3) * a * y
         return np.sqrt(np.maximum(np.stack([l1, q - s, q + s], axis=-1), 0.0))
@@ -236,11 +251,14 @@ class UPS2(Mechanism):
         zero, one = np.zeros_like(beta), np.ones_like(beta)
         with np.errstate(divide="ignore", invalid="ignore"):
             drho = -y / rho
-        dp = np.stack([
-            np.stack([rho * cb, zero, -rho * sb], axis=-1),  # d P / d beta
-            np.stack([zero, zero, zero], axis=-1),  # d P / d gamma
-            np.stack([drho * sb, one, drho * cb], axis=-1),  # d P / d Y
-        ], axis=-1)  # (..., 3 coords, 3 pose)
+        dp = np.stack(
+            [
+                np.stack([rho * cb, zero, -rho * sb], axis=-1),  # d P / d beta
+                np.stack([zero, zero, zero], axis=-1),  # d P / d gamma
+                np.stack([drho * sb, one, drho * cb], axis=-1),  # d P / d Y
+            ],
+            axis=-1,
+        )  # (..., 3 coords, 3 pose)
         ry, rx = rot_y(beta), rot_x(gamma)
         ey = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])  # skew(e_y)
         ex = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # skew(e_x)
@@ -283,8 +301,10 @@ class UPS2(Mechanism):
         return Skeleton(
             points={name: np.asarray(p, dtype=float) for name, p in pts.items()},
             segments=segments,
-            polygons=[("base", np.stack([pts["A0"], pts["A2"], pts["A3"]])),
-                      ("platform", np.stack([pts["B1"], pts["B2"], pts["B3"]]))],
+            polygons=[
+                ("base", np.stack([pts["A0"], pts["A2"], pts["A3"]])),
+                ("platform", np.stack([pts["B1"], pts["B2"], pts["B3"]])),
+            ],
             frames={"A_0": (np.zeros(3), np.eye(3)), "B_1": (pts["B1"], self.rotation(x))},
         )
 
@@ -318,18 +338,26 @@ class UPS2(Mechanism):
         if not np.any(ok):
             return out.reshape(*batch, 8, 3)
         yy = y[ok]
-        rho = self.branch * np.sqrt(self.c**2 - yy**2)  # the polynomial holds for either sign (docs/li2020_2ups.md#s7.1)
+        rho = self.branch * np.sqrt(
+            self.c**2 - yy**2
+        )  # the polynomial holds for either sign (docs/li2020_2ups.md#s7.1)
         d = (sq[ok, 2] - sq[ok, 1]) / (2 * a)
         e = 0.5 * (sq[ok, 1] + sq[ok, 2]) - rho**2 - 2 * k**2 - a**2 / 4 - (yy - h) ** 2
         m = len(yy)
         one_t2 = np.broadcast_to(np.array([1.0, 0.0, 1.0]), (m, 3))  # 1 + t^2 (ascending powers)
         at = rho[:, None] * one_t2 + np.array([0.0, 2 * k, 0.0])
-        bt = (4 * rho[:, None] * np.array([0.0, 1.0, 0.0]) + 2 * (yy - h)[:, None] * np.array([1.0, 0.0, -1.0])
-              - (e / k)[:, None] * one_t2)
+        bt = (
+            4 * rho[:, None] * np.array([0.0, 1.0, 0.0])
+            + 2 * (yy - h)[:, None] * np.array([1.0, 0.0, -1.0])
+            - (e / k)[:, None] * one_t2
+        )
         s2 = _polymul(one_t2, one_t2)
         at2 = _polymul(at, at)
-        coeffs = (a**2 * d[:, None] ** 2 * _polymul(s2, s2) + _polymul(_polymul(bt, bt), at2)
-                  - a**2 * _polymul(at2, s2))
+        coeffs = (
+            a**2 * d[:, None] ** 2 * _polymul(s2, s2)
+            + _polymul(_polymul(bt, bt), at2)
+            - a**2 * _polymul(at2, s2)
+        )
         roots = _poly_roots(coeffs)  # (m, 8) complex
         real = np.abs(roots.imag) <= 1e-6 * (1 + np.abs(roots.real))
         t = np.where(real, roots.real, np.nan)
@@ -355,7 +383,11 @@ class UPS2(Mechanism):
                 poses[..., 1] -= np.where(good, step1, 0.0)
             poses[..., :2] = np.angle(np.exp(1j * poses[..., :2]))  # wrap to (-pi, pi]
             fin = np.all(np.isfinite(poses), axis=-1)
-            res = np.abs(self.residual(np.where(fin[..., None], poses, 0.0), np.broadcast_to(target, poses.shape)))
+            res = np.abs(
+                self.residual(
+                    np.where(fin[..., None], poses, 0.0), np.broadcast_to(target, poses.shape)
+                )
+            )
             keep = fin & (np.max(res, axis=-1) <= 1e-7 * max(1.0, self.c))
         poses[~keep] = np.nan
         # drop duplicates (a double root reported twice)
@@ -365,7 +397,9 @@ class UPS2(Mechanism):
         for j in range(1, 8):
             same = np.all(np.abs(poses[:, j] - poses[:, j - 1]) < 1e-9, axis=-1)
             poses[same, j] = np.nan
-        key = np.where(np.all(np.isfinite(poses), -1), np.abs(poses[..., 0]) + np.abs(poses[..., 1]), np.inf)
+        key = np.where(
+            np.all(np.isfinite(poses), -1), np.abs(poses[..., 0]) + np.abs(poses[..., 1]), np.inf
+        )
         poses = np.take_along_axis(poses, np.argsort(key, axis=-1)[..., None], axis=1)
         out[ok] = poses
         return out.reshape(*batch, 8, 3)
@@ -386,7 +420,9 @@ class UPS2(Mechanism):
         return Kernel("parakin.kernels.ups2", self._kernel_params(), 3, 3, self.home())
 
     def _kernel_params(self) -> Array:
-        return np.concatenate([[self.a, self.k, self.c, self.h, float(self.branch)], self.home_lengths])
+        return np.concatenate(
+            [[self.a, self.k, self.c, self.h, float(self.branch)], self.home_lengths]
+        )
 
     def fk(self, joints: ArrayLike) -> Array:
         """The working-branch FK solution: the real solution with |beta|, |gamma| < 90 deg closest
@@ -395,9 +431,16 @@ class UPS2(Mechanism):
         sols = self.fk_all(q)
         lo, hi = self.pose_bounds()
         with np.errstate(invalid="ignore"):
-            inside = np.all(np.isfinite(sols), -1) & (np.abs(sols[..., 0]) < np.pi / 2) \
+            inside = (
+                np.all(np.isfinite(sols), -1)
+                & (np.abs(sols[..., 0]) < np.pi / 2)
                 & (np.abs(sols[..., 1]) < np.pi / 2)
-            dist = np.where(inside, np.linalg.norm(np.nan_to_num(sols - self.home()) / (hi - lo), axis=-1), np.inf)
+            )
+            dist = np.where(
+                inside,
+                np.linalg.norm(np.nan_to_num(sols - self.home()) / (hi - lo), axis=-1),
+                np.inf,
+            )
         none = ~np.any(inside, axis=-1)
         if np.any(none):
             idx = tuple(np.argwhere(none)[0]) if none.ndim else ()

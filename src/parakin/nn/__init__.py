@@ -8,5 +8,12 @@ that ships with parakin (:mod:`parakin.nn.packaged`).
 from parakin.nn.bp import BPNetwork, residual_jacobian, residuals, torch_forward, train_lm
 from parakin.nn.packaged import load_network, packaged_network_path
 
-__all__ = ["BPNetwork", "train_lm", "torch_forward", "residuals", "residual_jacobian", "load_network",
-           "packaged_network_path"]
+__all__ = [
+    "BPNetwork",
+    "train_lm",
+    "torch_forward",
+    "residuals",
+    "residual_jacobian",
+    "load_network",
+    "packaged_network_path",
+]

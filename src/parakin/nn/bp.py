@@ -26,9 +26,10 @@ import json
 import math
 import os
 import time
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Iterator, Mapping
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -117,13 +118,23 @@ class BPNetwork:
         if W2.ndim != 2 or W2.shape[1] != hidden:
             raise ShapeError(f"W2 must be a (n_out, {hidden}) matrix, got shape {W2.shape}")
         n_out = W2.shape[0]
-        shapes = {"W1": (hidden, n_in), "b1": (hidden,), "W2": (n_out, hidden), "b2": (n_out,),
-                  "x_min": (n_in,), "x_max": (n_in,), "y_min": (n_out,), "y_max": (n_out,)}
+        shapes = {
+            "W1": (hidden, n_in),
+            "b1": (hidden,),
+            "W2": (n_out, hidden),
+            "b2": (n_out,),
+            "x_min": (n_in,),
+            "x_max": (n_in,),
+            "y_min": (n_out,),
+            "y_max": (n_out,),
+        }
         for name, shape in shapes.items():
             object.__setattr__(self, name, _readonly(getattr(self, name), shape, name))
         for lo, hi in (("x_min", "x_max"), ("y_min", "y_max")):
             if np.any(getattr(self, lo) > getattr(self, hi)):
-                raise ValueError(f"{lo} = {getattr(self, lo)} must be <= {hi} = {getattr(self, hi)}")
+                raise ValueError(
+                    f"{lo} = {getattr(self, lo)} must be <= {hi} = {getattr(self, hi)}"
+                )
         object.__setattr__(self, "meta", dict(self.meta))
         # fold mapminmax into the two affine layers: x_n = gx * x + cx, y = gy * y_n + cy
         gx = 2.0 / _span(self.x_min, self.x_max)
@@ -166,7 +177,9 @@ class BPNetwork:
         """
         x = np.asarray(inputs, dtype=np.float64)
         if x.ndim == 0 or x.shape[-1] != self._A.shape[0]:
-            raise ShapeError(f"inputs must have {self._A.shape[0]} values along the last axis, got shape {x.shape}")
+            raise ShapeError(
+                f"inputs must have {self._A.shape[0]} values along the last axis, got shape {x.shape}"
+            )
         return np.tanh(x @ self._A + self._a) @ self._B + self._b
 
     __call__ = predict
@@ -184,9 +197,16 @@ class BPNetwork:
     def save(self, path: str | os.PathLike) -> Path:
         """Write the network to ``path`` (.npz) atomically; returns the path."""
         arrays = {name: getattr(self, name) for name in _ARRAYS}
-        meta = json.dumps({"format_version": FORMAT_VERSION, "kind": "parakin.nn.BPNetwork",
-                           "hidden_activation": "tansig", "output_activation": "purelin",
-                           "meta": self.meta}, sort_keys=True)
+        meta = json.dumps(
+            {
+                "format_version": FORMAT_VERSION,
+                "kind": "parakin.nn.BPNetwork",
+                "hidden_activation": "tansig",
+                "output_activation": "purelin",
+                "meta": self.meta,
+            },
+            sort_keys=True,
+        )
 
         def write(tmp: Path) -> None:
             with open(tmp, "wb") as fh:
@@ -195,7 +215,7 @@ class BPNetwork:
         return atomic_writer(path, write)
 
     @classmethod
-    def load(cls, path: str | os.PathLike, *, hint: str | None = None) -> "BPNetwork":
+    def load(cls, path: str | os.PathLike, *, hint: str | None = None) -> BPNetwork:
         """Read a network written by :meth:`save`.
 
         Raises FileNotFoundError when ``path`` does not exist and ValueError when it is not a
@@ -205,7 +225,9 @@ class BPNetwork:
         path = Path(path)
         how = hint or _DEFAULT_HINT
         if not path.is_file():
-            raise FileNotFoundError(f"BP network weights file {str(path)!r} does not exist; to create it, {how}")
+            raise FileNotFoundError(
+                f"BP network weights file {str(path)!r} does not exist; to create it, {how}"
+            )
         try:
             with np.load(path, allow_pickle=False) as data:
                 missing = [k for k in (*_ARRAYS, "header") if k not in data.files]
@@ -214,16 +236,24 @@ class BPNetwork:
                 header = json.loads(str(data["header"]))
                 arrays = {k: data[k] for k in _ARRAYS}
             if header.get("kind") != "parakin.nn.BPNetwork":
-                raise ValueError(f"header kind {header.get('kind')!r} is not 'parakin.nn.BPNetwork'")
+                raise ValueError(
+                    f"header kind {header.get('kind')!r} is not 'parakin.nn.BPNetwork'"
+                )
             if header.get("format_version") != FORMAT_VERSION:
-                raise ValueError(f"format version {header.get('format_version')!r}, expected {FORMAT_VERSION}")
+                raise ValueError(
+                    f"format version {header.get('format_version')!r}, expected {FORMAT_VERSION}"
+                )
             return cls(**arrays, meta=header.get("meta", {}))
         except (ValueError, OSError, KeyError, TypeError, json.JSONDecodeError, EOFError) as exc:
             # np.load raises OSError/ValueError/EOFError/BadZipFile(=Exception) on a corrupt file
-            raise ValueError(f"{str(path)!r} is not a valid BP network weights file ({exc}); to recreate it, {how}") from exc
+            raise ValueError(
+                f"{str(path)!r} is not a valid BP network weights file ({exc}); to recreate it, {how}"
+            ) from exc
         except Exception as exc:  # zipfile.BadZipFile and friends
-            raise ValueError(f"{str(path)!r} is not a valid BP network weights file ({type(exc).__name__}: {exc}); "
-                             f"to recreate it, {how}") from exc
+            raise ValueError(
+                f"{str(path)!r} is not a valid BP network weights file ({type(exc).__name__}: {exc}); "
+                f"to recreate it, {how}"
+            ) from exc
 
 
 # ====================================================================== torch side (training)
@@ -231,16 +261,18 @@ def _shapes(n_in: int, hidden: int, n_out: int) -> list[tuple[str, tuple[int, ..
     return [("W1", (hidden, n_in)), ("b1", (hidden,)), ("W2", (n_out, hidden)), ("b2", (n_out,))]
 
 
-def _unflatten(w: "torch.Tensor", n_in: int, hidden: int, n_out: int) -> dict[str, "torch.Tensor"]:
+def _unflatten(w: torch.Tensor, n_in: int, hidden: int, n_out: int) -> dict[str, torch.Tensor]:
     out, i = {}, 0
     for name, shape in _shapes(n_in, hidden, n_out):
         k = math.prod(shape)
-        out[name] = w[i:i + k].reshape(shape)
+        out[name] = w[i : i + k].reshape(shape)
         i += k
     return out
 
 
-def _net_normalised(w: "torch.Tensor", x: "torch.Tensor", n_in: int, hidden: int, n_out: int) -> "torch.Tensor":
+def _net_normalised(
+    w: torch.Tensor, x: torch.Tensor, n_in: int, hidden: int, n_out: int
+) -> torch.Tensor:
     """The network in normalised units: ``W2 tanh(W1 x + b1) + b2`` with flat weights ``w``."""
     import torch
 
@@ -248,7 +280,7 @@ def _net_normalised(w: "torch.Tensor", x: "torch.Tensor", n_in: int, hidden: int
     return torch.tanh(x @ p["W1"].T + p["b1"]) @ p["W2"].T + p["b2"]
 
 
-def residuals(w: "torch.Tensor", x: "torch.Tensor", t: "torch.Tensor", hidden: int) -> "torch.Tensor":
+def residuals(w: torch.Tensor, x: torch.Tensor, t: torch.Tensor, hidden: int) -> torch.Tensor:
     """LM residual vector ``e = vec(net(x; w) - t)`` (normalised units), length ``N * n_out``.
 
     ``w`` is the flat weight vector (order of :meth:`BPNetwork.flat_weights`), ``x`` (N, n_in)
@@ -257,7 +289,9 @@ def residuals(w: "torch.Tensor", x: "torch.Tensor", t: "torch.Tensor", hidden: i
     return (_net_normalised(w, x, x.shape[-1], hidden, t.shape[-1]) - t).reshape(-1)
 
 
-def residual_jacobian(w: "torch.Tensor", x: "torch.Tensor", t: "torch.Tensor", hidden: int) -> "torch.Tensor":
+def residual_jacobian(
+    w: torch.Tensor, x: torch.Tensor, t: torch.Tensor, hidden: int
+) -> torch.Tensor:
     """``d residuals / d w``, shape ``(N * n_out, n_weights)``, rows in the order of :func:`residuals`.
 
     Built with ``torch.func``: reverse mode (``jacrev``, ``n_out`` VJPs) of the one-sample
@@ -269,13 +303,13 @@ def residual_jacobian(w: "torch.Tensor", x: "torch.Tensor", t: "torch.Tensor", h
 
     n_in, n_out = x.shape[-1], t.shape[-1]
 
-    def one(w: "torch.Tensor", xi: "torch.Tensor", ti: "torch.Tensor") -> "torch.Tensor":
+    def one(w: torch.Tensor, xi: torch.Tensor, ti: torch.Tensor) -> torch.Tensor:
         return _net_normalised(w, xi, n_in, hidden, n_out) - ti
 
     return vmap(jacrev(one), in_dims=(None, 0, 0))(w, x, t).reshape(-1, w.numel())
 
 
-def torch_forward(net: BPNetwork, inputs: "torch.Tensor | ArrayLike") -> "torch.Tensor":
+def torch_forward(net: BPNetwork, inputs: torch.Tensor | ArrayLike) -> torch.Tensor:
     """The network evaluated in torch float64, normalisation NOT folded (the training graph).
 
     Reference for :meth:`BPNetwork.predict` (they agree to ~1e-15).
@@ -289,7 +323,9 @@ def torch_forward(net: BPNetwork, inputs: "torch.Tensor | ArrayLike") -> "torch.
     return (yn + 1.0) * 0.5 * t(_span(net.y_min, net.y_max)) + t(net.y_min)
 
 
-def nguyen_widrow_init(n_in: int, hidden: int, n_out: int, generator: "torch.Generator") -> "torch.Tensor":
+def nguyen_widrow_init(
+    n_in: int, hidden: int, n_out: int, generator: torch.Generator
+) -> torch.Tensor:
     """Initial flat weights as MATLAB ``initnw`` for a tansig hidden and a purelin output layer.
 
     Hidden layer (inputs already in [-1, 1], tansig active region [-2, 2]):
@@ -303,7 +339,11 @@ def nguyen_widrow_init(n_in: int, hidden: int, n_out: int, generator: "torch.Gen
     d = 2.0 * torch.rand(hidden, n_in, generator=generator, dtype=torch.float64) - 1.0
     d = d / torch.linalg.vector_norm(d, dim=1, keepdim=True)
     W1 = 2.0 * mag * d
-    spread = torch.linspace(-1.0, 1.0, hidden, dtype=torch.float64) if hidden > 1 else torch.zeros(1, dtype=torch.float64)
+    spread = (
+        torch.linspace(-1.0, 1.0, hidden, dtype=torch.float64)
+        if hidden > 1
+        else torch.zeros(1, dtype=torch.float64)
+    )
     b1 = 2.0 * mag * spread * torch.sign(W1[:, 0])
     W2 = 2.0 * torch.rand(n_out, hidden, generator=generator, dtype=torch.float64) - 1.0
     b2 = 2.0 * torch.rand(n_out, generator=generator, dtype=torch.float64) - 1.0
@@ -332,15 +372,23 @@ def _torch_session(seed: int, num_threads: int | None) -> Iterator[None]:
             torch.set_num_threads(prev_threads)
 
 
-def _split(n: int, val_fraction: float, test_fraction: float, seed: int) -> tuple[Array, Array, Array]:
+def _split(
+    n: int, val_fraction: float, test_fraction: float, seed: int
+) -> tuple[Array, Array, Array]:
     """Random train/val/test index sets (MATLAB ``dividerand``) from a numpy Generator."""
     perm = np.random.default_rng(seed).permutation(n)
     n_val = int(round(val_fraction * n))
     n_test = int(round(test_fraction * n))
     n_train = n - n_val - n_test
     if n_train < 1:
-        raise ValueError(f"no training samples left: n = {n}, val_fraction = {val_fraction}, test_fraction = {test_fraction}")
-    return np.sort(perm[:n_train]), np.sort(perm[n_train:n_train + n_val]), np.sort(perm[n_train + n_val:])
+        raise ValueError(
+            f"no training samples left: n = {n}, val_fraction = {val_fraction}, test_fraction = {test_fraction}"
+        )
+    return (
+        np.sort(perm[:n_train]),
+        np.sort(perm[n_train : n_train + n_val]),
+        np.sort(perm[n_train + n_val :]),
+    )
 
 
 def _position_errors(pred: Array, target: Array) -> dict[str, float]:
@@ -377,7 +425,7 @@ def train_lm(
     goal: float = 0.0,
     progress: Callable[[int, float, float], None] | None = None,
     num_threads: int | None = 1,
-) -> tuple[BPNetwork, "pd.DataFrame", dict[str, Any]]:
+) -> tuple[BPNetwork, pd.DataFrame, dict[str, Any]]:
     """Train a ``n_in -> hidden (tanh) -> n_out`` network by Levenberg-Marquardt (MATLAB ``trainlm``).
 
     ``inputs`` (N, n_in) and ``targets`` (N, n_out) in SI units (for the 3-P(4S) FK: strokes and
@@ -414,17 +462,25 @@ def train_lm(
     X = np.asarray(inputs, dtype=np.float64)
     Y = np.asarray(targets, dtype=np.float64)
     if X.ndim != 2 or Y.ndim != 2 or len(X) != len(Y):
-        raise ShapeError(f"inputs and targets must be (N, n_in) and (N, n_out) arrays, got {X.shape} and {Y.shape}")
+        raise ShapeError(
+            f"inputs and targets must be (N, n_in) and (N, n_out) arrays, got {X.shape} and {Y.shape}"
+        )
     for name, arr in (("inputs", X), ("targets", Y)):
         if not np.all(np.isfinite(arr)):
-            raise ValueError(f"{name} contain non-finite values (first at {tuple(np.argwhere(~np.isfinite(arr))[0])})")
+            raise ValueError(
+                f"{name} contain non-finite values (first at {tuple(np.argwhere(~np.isfinite(arr))[0])})"
+            )
     if hidden < 1:
         raise ValueError(f"hidden = {hidden} must be >= 1")
     if not (0 <= val_fraction < 1 and 0 <= test_fraction < 1 and val_fraction + test_fraction < 1):
-        raise ValueError(f"val_fraction = {val_fraction} and test_fraction = {test_fraction} must be >= 0 with sum < 1")
+        raise ValueError(
+            f"val_fraction = {val_fraction} and test_fraction = {test_fraction} must be >= 0 with sum < 1"
+        )
     if not (mu > 0 and 0 < mu_dec < 1 < mu_inc and mu_max >= mu):
-        raise ValueError(f"need mu > 0, 0 < mu_dec < 1 < mu_inc and mu_max >= mu; got mu = {mu}, "
-                         f"mu_dec = {mu_dec}, mu_inc = {mu_inc}, mu_max = {mu_max}")
+        raise ValueError(
+            f"need mu > 0, 0 < mu_dec < 1 < mu_inc and mu_max >= mu; got mu = {mu}, "
+            f"mu_dec = {mu_dec}, mu_inc = {mu_inc}, mu_max = {mu_max}"
+        )
     if max_epochs < 0 or max_fail < 1:
         raise ValueError(f"max_epochs = {max_epochs} must be >= 0 and max_fail = {max_fail} >= 1")
 
@@ -438,13 +494,22 @@ def train_lm(
 
     def make_net(w: torch.Tensor, meta: Mapping[str, Any] | None = None) -> BPNetwork:
         p = _unflatten(w, n_in, hidden, n_out)
-        return BPNetwork(**{k: v.numpy().copy() for k, v in p.items()},
-                         x_min=x_min, x_max=x_max, y_min=y_min, y_max=y_max, meta=meta or {})
+        return BPNetwork(
+            **{k: v.numpy().copy() for k, v in p.items()},
+            x_min=x_min,
+            x_max=x_max,
+            y_min=y_min,
+            y_max=y_max,
+            meta=meta or {},
+        )
 
     rows: list[dict[str, float]] = []
     with _torch_session(seed, num_threads):
         tt = lambda a: torch.from_numpy(np.ascontiguousarray(a))  # noqa: E731
-        sets = {name: (tt(Xn[idx]), tt(Yn[idx])) for name, idx in (("train", itr), ("val", iva), ("test", ite))}
+        sets = {
+            name: (tt(Xn[idx]), tt(Yn[idx]))
+            for name, idx in (("train", itr), ("val", iva), ("test", ite))
+        }
         x_tr, t_tr = sets["train"]
         m = t_tr.numel()
         scale = tt(y_scale)
@@ -470,12 +535,25 @@ def train_lm(
             JtJ = J.T @ J
             Jte = J.T @ e
             grad_norm = float(2.0 * torch.linalg.vector_norm(Jte) / m)
-            train_mse, train_rms = sse / m, float(torch.sqrt(torch.mean(torch.sum((e.reshape(-1, n_out) * scale) ** 2, 1))))
+            train_mse, train_rms = (
+                sse / m,
+                float(torch.sqrt(torch.mean(torch.sum((e.reshape(-1, n_out) * scale) ** 2, 1)))),
+            )
             val_mse, val_rms = evaluate(w, "val")
             test_mse, test_rms = evaluate(w, "test")
-            rows.append({"epoch": epoch, "mu": mu, "train_mse": train_mse, "val_mse": val_mse, "test_mse": test_mse,
-                         "train_rms_m": train_rms, "val_rms_m": val_rms, "test_rms_m": test_rms,
-                         "grad_norm": grad_norm})
+            rows.append(
+                {
+                    "epoch": epoch,
+                    "mu": mu,
+                    "train_mse": train_mse,
+                    "val_mse": val_mse,
+                    "test_mse": test_mse,
+                    "train_rms_m": train_rms,
+                    "val_rms_m": val_rms,
+                    "test_rms_m": test_rms,
+                    "grad_norm": grad_norm,
+                }
+            )
             if progress is not None:
                 progress(epoch, train_mse, val_mse)
             # early-stopping bookkeeping (MATLAB: a failure is an epoch that does not beat the best)
@@ -515,20 +593,47 @@ def train_lm(
                 mu *= mu_inc
             epoch += 1
 
-    log = pd.DataFrame(rows, columns=["epoch", "mu", "train_mse", "val_mse", "test_mse",
-                                      "train_rms_m", "val_rms_m", "test_rms_m", "grad_norm"])
+    log = pd.DataFrame(
+        rows,
+        columns=[
+            "epoch",
+            "mu",
+            "train_mse",
+            "val_mse",
+            "test_mse",
+            "train_rms_m",
+            "val_rms_m",
+            "test_rms_m",
+            "grad_norm",
+        ],
+    )
     net = make_net(best_w)
     summary: dict[str, Any] = {
         "epochs": epoch,
         "stop_reason": stop_reason,
         "best_epoch": best_epoch,
-        "n_train": len(itr), "n_val": len(iva), "n_test": len(ite),
-        "n_in": n_in, "hidden": hidden, "n_out": n_out, "n_weights": net.n_weights,
-        "seed": seed, "init": "nguyen-widrow (MATLAB initnw)", "algorithm": "levenberg-marquardt (MATLAB trainlm)",
-        "mu_final": mu, "max_epochs": max_epochs, "max_fail": max_fail, "min_grad": min_grad, "goal": goal,
+        "n_train": len(itr),
+        "n_val": len(iva),
+        "n_test": len(ite),
+        "n_in": n_in,
+        "hidden": hidden,
+        "n_out": n_out,
+        "n_weights": net.n_weights,
+        "seed": seed,
+        "init": "nguyen-widrow (MATLAB initnw)",
+        "algorithm": "levenberg-marquardt (MATLAB trainlm)",
+        "mu_final": mu,
+        "max_epochs": max_epochs,
+        "max_fail": max_fail,
+        "min_grad": min_grad,
+        "goal": goal,
     }
     for name, idx in (("train", itr), ("val", iva), ("test", ite)):
-        errs = _position_errors(net.predict(X[idx]), Y[idx]) if len(idx) else _position_errors(Y[:0], Y[:0])
+        errs = (
+            _position_errors(net.predict(X[idx]), Y[idx])
+            if len(idx)
+            else _position_errors(Y[:0], Y[:0])
+        )
         summary.update({f"{name}_{k}": v for k, v in errs.items()})
     summary["wall_time_s"] = time.perf_counter() - start
     net = make_net(best_w, meta={k: v for k, v in summary.items() if k != "wall_time_s"})

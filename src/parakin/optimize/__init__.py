@@ -4,5 +4,13 @@ and NSGA-II through pymoo for the Pareto front (beyond the paper)."""
 from parakin.optimize.ga import GAOptions, GAResult, ga, normalised_sum, rank_expectation
 from parakin.optimize.pareto import ParetoResult, non_dominated, nsga2
 
-__all__ = ["GAOptions", "GAResult", "ga", "normalised_sum", "rank_expectation", "ParetoResult", "non_dominated",
-           "nsga2"]
+__all__ = [
+    "GAOptions",
+    "GAResult",
+    "ga",
+    "normalised_sum",
+    "rank_expectation",
+    "ParetoResult",
+    "non_dominated",
+    "nsga2",
+]

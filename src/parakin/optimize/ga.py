@@ -26,8 +26,8 @@ passed in, so a seed reproduces a run bit for bit.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
@@ -85,8 +85,13 @@ def _roulette(expectation: np.ndarray, k: int, rng: np.random.Generator) -> np.n
     return np.minimum(np.searchsorted(wheel, rng.random(k), side="right"), len(expectation) - 1)
 
 
-def ga(objective: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upper: np.ndarray,
-       rng: np.random.Generator, options: GAOptions = GAOptions()) -> GAResult:
+def ga(
+    objective: Callable[[np.ndarray], np.ndarray],
+    lower: np.ndarray,
+    upper: np.ndarray,
+    rng: np.random.Generator,
+    options: GAOptions = GAOptions(),
+) -> GAResult:
     """Minimise ``objective`` over the box ``[lower, upper]`` with the GA described in the module.
 
     ``objective`` maps ``(P, n)`` -> ``(P,)``; non-finite values mean infeasible.
@@ -94,7 +99,9 @@ def ga(objective: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upper: 
     t0 = time.perf_counter()
     lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     if lo.shape != hi.shape or lo.ndim != 1 or not np.all(lo <= hi):
-        raise ValueError(f"bounds must be 1-D arrays of equal length with lower <= upper: {lo} / {hi}")
+        raise ValueError(
+            f"bounds must be 1-D arrays of equal length with lower <= upper: {lo} / {hi}"
+        )
     P, n = options.population, len(lo)
     span = hi - lo
 
@@ -124,17 +131,19 @@ def ga(objective: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upper: 
         exp = rank_expectation(f, 2 * n_x + n_m)
         parents = _roulette(exp, 2 * n_x + n_m, rng)
         elite = np.argsort(f, kind="stable")[: options.elite]
-        p1, p2 = X[parents[:n_x]], X[parents[n_x:2 * n_x]]
+        p1, p2 = X[parents[:n_x]], X[parents[n_x : 2 * n_x]]
         r = rng.random((n_x, 1))
         kids_x = r * p1 + (1 - r) * p2  # crossoverarithmetic
-        base = X[parents[2 * n_x:]]
+        base = X[parents[2 * n_x :]]
         d = rng.standard_normal((n_m, n))
         d *= span > 0  # fixed variables (lower == upper) do not move
         d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-300)
         move = step * span * d
         # largest t in (0, 1] keeping base + t move inside the box (mutationadaptfeasible)
         with np.errstate(divide="ignore", invalid="ignore"):
-            room = np.where(move > 0, (hi - base) / move, np.where(move < 0, (lo - base) / move, np.inf))
+            room = np.where(
+                move > 0, (hi - base) / move, np.where(move < 0, (lo - base) / move, np.inf)
+            )
         t = np.clip(np.min(room, axis=1, keepdims=True), 0.0, 1.0) * rng.random((n_m, 1))
         kids_m = np.clip(base + t * move, lo, hi)
         X_new = np.concatenate([X[elite], kids_x, kids_m])
@@ -144,12 +153,22 @@ def ga(objective: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upper: 
         X, f = X_new, f_new
         record()
     i = int(np.argmin(f))
-    return GAResult(x=X[i].copy(), fun=float(f[i]), best=np.array(hist_best), mean=np.array(hist_mean),
-                    best_x=np.array(hist_x), nfev=nfev, wall_time=time.perf_counter() - t0,
-                    population=X, scores=f)
+    return GAResult(
+        x=X[i].copy(),
+        fun=float(f[i]),
+        best=np.array(hist_best),
+        mean=np.array(hist_mean),
+        best_x=np.array(hist_x),
+        nfev=nfev,
+        wall_time=time.perf_counter() - t0,
+        population=X,
+        scores=f,
+    )
 
 
-def normalised_sum(values: np.ndarray, vmin: np.ndarray, vmax: np.ndarray, maximise: np.ndarray) -> np.ndarray:
+def normalised_sum(
+    values: np.ndarray, vmin: np.ndarray, vmax: np.ndarray, maximise: np.ndarray
+) -> np.ndarray:
     """Eqs (38)-(40): ``f = sum_i f_i`` with ``f_i = (sigma_i - min_i)/(max_i - min_i)`` for an index
     to minimise and ``(max_i - sigma_i)/(max_i - min_i)`` for one to maximise.
 

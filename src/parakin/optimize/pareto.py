@@ -10,8 +10,8 @@ constraint, so NSGA-II's constrained domination ranks them behind every feasible
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -40,8 +40,16 @@ def non_dominated(F: np.ndarray) -> np.ndarray:
     return ~dominated
 
 
-def nsga2(objectives: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upper: np.ndarray, n_obj: int, *,
-          population: int = 100, generations: int = 100, seed: int = 0) -> ParetoResult:
+def nsga2(
+    objectives: Callable[[np.ndarray], np.ndarray],
+    lower: np.ndarray,
+    upper: np.ndarray,
+    n_obj: int,
+    *,
+    population: int = 100,
+    generations: int = 100,
+    seed: int = 0,
+) -> ParetoResult:
     """NSGA-II (pymoo 0.6: SBX crossover, polynomial mutation, its defaults) over the box."""
     from pymoo.algorithms.moo.nsga2 import NSGA2
     from pymoo.core.problem import Problem
@@ -50,7 +58,9 @@ def nsga2(objectives: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
 
     lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     if lo.shape != hi.shape or lo.ndim != 1 or not np.all(lo < hi):
-        raise ValueError(f"bounds must be 1-D arrays of equal length with lower < upper: {lo} / {hi}")
+        raise ValueError(
+            f"bounds must be 1-D arrays of equal length with lower < upper: {lo} / {hi}"
+        )
     counter = {"nfev": 0}
 
     class _Problem(Problem):
@@ -65,12 +75,22 @@ def nsga2(objectives: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
             out["G"] = np.where(bad, 1.0, -1.0)[:, None]
 
     t0 = time.perf_counter()
-    res = minimize(_Problem(), NSGA2(pop_size=population), get_termination("n_gen", generations), seed=seed,
-                   verbose=False)
+    res = minimize(
+        _Problem(),
+        NSGA2(pop_size=population),
+        get_termination("n_gen", generations),
+        seed=seed,
+        verbose=False,
+    )
     X = np.atleast_2d(res.X) if res.X is not None else np.empty((0, len(lo)))
     F = np.atleast_2d(res.F) if res.F is not None else np.empty((0, n_obj))
     keep = np.all(F < 1e8, axis=1)
     X, F = X[keep], F[keep]
     mask = non_dominated(F)
-    return ParetoResult(X=X[mask], F=F[mask], n_gen=generations, nfev=counter["nfev"],
-                        wall_time=time.perf_counter() - t0)
+    return ParetoResult(
+        X=X[mask],
+        F=F[mask],
+        n_gen=generations,
+        nfev=counter["nfev"],
+        wall_time=time.perf_counter() - t0,
+    )

@@ -18,7 +18,9 @@ from parakin.registry import of_module
 
 def combine(sections: Sequence[ModuleType]) -> tuple[dict[str, Callable], Callable, Callable]:
     """``(ARTEFACTS, claims, summary)`` of a paper made of ``sections`` (in the paper's order)."""
-    artefacts: dict[str, Callable] = {name: make for s in sections for name, make in of_module(s).items()}
+    artefacts: dict[str, Callable] = {
+        name: make for s in sections for name, make in of_module(s).items()
+    }
 
     def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
         """Claims of the paper that the pipeline outputs in ``figdir`` cover so far."""

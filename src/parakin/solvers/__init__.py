@@ -33,9 +33,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from parakin.solvers import compiled
 from parakin.errors import ShapeError
 from parakin.mechanisms.base import Array, Mechanism
+from parakin.solvers import compiled
 from parakin.solvers.baseline import scipy_root
 from parakin.solvers.closed import all_solutions, closed_form
 from parakin.solvers.gauss_newton import broyden_ls, gauss_newton
@@ -48,7 +48,16 @@ from parakin.solvers.registry import METHODS, Method, register
 from parakin.solvers.result import FKResult, Status, summarize
 from parakin.solvers.verify import default_joint_tol, verify
 
-__all__ = ["MAXITER_LIMIT", "METHODS", "FKResult", "Method", "Status", "flatten_problem", "register", "solve_fk"]
+__all__ = [
+    "MAXITER_LIMIT",
+    "METHODS",
+    "FKResult",
+    "Method",
+    "Status",
+    "flatten_problem",
+    "register",
+    "solve_fk",
+]
 
 #: largest ``maxiter`` accepted (a bound on the work one call may ask for)
 MAXITER_LIMIT = 10_000_000
@@ -113,11 +122,15 @@ def flatten_problem(
     return batch, flat_q, flat_x
 
 
-def _mark_bad_rows(mech: Mechanism, result: FKResult, bad: NDArray[np.bool_], maxiter: int) -> FKResult:
+def _mark_bad_rows(
+    mech: Mechanism, result: FKResult, bad: NDArray[np.bool_], maxiter: int
+) -> FKResult:
     """``result`` with the rows ``bad`` (non-finite joints or start) set to :attr:`Status.BAD_INPUT`,
     ``x = home``, no iterations, infinite residual and joint error."""
-    fields = {f: getattr(result, f).copy() for f in ("x", "success", "status", "nit", "nfev", "njev", "residual",
-                                                      "joint_error")}
+    fields = {
+        f: getattr(result, f).copy()
+        for f in ("x", "success", "status", "nit", "nfev", "njev", "residual", "joint_error")
+    }
     fields["x"][bad] = mech.home()
     fields["success"][bad] = False
     fields["status"][bad] = Status.BAD_INPUT
@@ -168,7 +181,9 @@ def solve_fk(
     start = time.perf_counter()
     _check_settings(tol, maxiter, joint_tol)
     if fn is _COMPILED.get(method) and "callback" not in options:  # one pose, compiled: one call
-        one = compiled.solve_one(mech, method, joints, x0, tol, int(maxiter), options, joint_tol, start)
+        one = compiled.solve_one(
+            mech, method, joints, x0, tol, int(maxiter), options, joint_tol, start
+        )
         if one is not None:
             return one
     batch, flat_q, flat_x = flatten_problem(mech, joints, x0, tol, maxiter)
@@ -203,6 +218,16 @@ def _nothing(mech: Mechanism, joints: Array, x0: Array, method: str) -> FKResult
     """A result with no solve at all (every row is bad input): fields to be marked."""
     n = len(joints)
     zeros = np.zeros(n, dtype=np.int64)
-    return FKResult(x=x0.copy(), success=np.zeros(n, dtype=bool), status=zeros.copy(), nit=zeros, nfev=zeros.copy(),
-                    njev=zeros.copy(), residual=np.full(n, np.inf), wall_time=0.0, method=method, message="",
-                    joint_error=np.full(n, np.inf))
+    return FKResult(
+        x=x0.copy(),
+        success=np.zeros(n, dtype=bool),
+        status=zeros.copy(),
+        nit=zeros,
+        nfev=zeros.copy(),
+        njev=zeros.copy(),
+        residual=np.full(n, np.inf),
+        wall_time=0.0,
+        method=method,
+        message="",
+        joint_error=np.full(n, np.inf),
+    )

@@ -20,8 +20,14 @@ __all__ = ["scipy_root"]
 
 
 def scipy_root(
-    mech: Mechanism, joints: Array, x0: Array, *, tol: float, maxiter: int, root_method: str | None = None,
-    **options: Any
+    mech: Mechanism,
+    joints: Array,
+    x0: Array,
+    *,
+    tol: float,
+    maxiter: int,
+    root_method: str | None = None,
+    **options: Any,
 ) -> FKResult:
     """``scipy.optimize.root(residual, x0, jac=jacobian_pose)`` pose by pose (a Python loop).
 
@@ -47,8 +53,12 @@ def scipy_root(
         try:
             with np.errstate(all="ignore"):
                 sol = root(
-                    lambda p: mech.residual(p, q), x0[i], jac=lambda p: mech.jacobian_pose(p, q),
-                    method=kind, tol=tol, options={**budget, **options},
+                    lambda p, q=q: mech.residual(p, q),
+                    x0[i],
+                    jac=lambda p, q=q: mech.jacobian_pose(p, q),
+                    method=kind,
+                    tol=tol,
+                    options={**budget, **options},
                 )
         except (ValueError, ArithmeticError):  # MINPACK stepped to a pose the mechanism refused
             nonfinite[i] = True
@@ -60,8 +70,18 @@ def scipy_root(
         njev[i] = sol.get("njev", 0)
     res = inf_norm(rowwise(mech.residual, x, joints, tail=(joints.shape[-1],)))
     ok = np.isfinite(res) & (res <= max(tol, 1e-12)) & ~nonfinite
-    status = np.where(ok, Status.CONVERGED, np.where(nonfinite, Status.NONFINITE, Status.MAXITER)).astype(np.int64)
+    status = np.where(
+        ok, Status.CONVERGED, np.where(nonfinite, Status.NONFINITE, Status.MAXITER)
+    ).astype(np.int64)
     return FKResult(
-        x=x, success=ok, status=status, nit=nfev.copy(), nfev=nfev, njev=njev, residual=res,
-        wall_time=time.perf_counter() - start, method="scipy-root", message=summarize(status, maxiter),
+        x=x,
+        success=ok,
+        status=status,
+        nit=nfev.copy(),
+        nfev=nfev,
+        njev=njev,
+        residual=res,
+        wall_time=time.perf_counter() - start,
+        method="scipy-root",
+        message=summarize(status, maxiter),
     )

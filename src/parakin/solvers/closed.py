@@ -15,16 +15,27 @@ from parakin.solvers.result import ROW_ERRORS, FKResult, Status, inf_norm, rowwi
 __all__ = ["all_solutions", "closed_form"]
 
 
-def _result(mech: Mechanism, joints: Array, x: Array, ok: Array, tol: float, start: float, method: str) -> FKResult:
+def _result(
+    mech: Mechanism, joints: Array, x: Array, ok: Array, tol: float, start: float, method: str
+) -> FKResult:
     """Success where the closed form gave a pose (``ok``) whose residual inf-norm is ``<= tol``."""
     with np.errstate(all="ignore"):
         res = rowwise(mech.residual, x, joints, tail=(joints.shape[-1],))
     res = inf_norm(res)
     status = np.where(ok & (res <= tol), Status.CONVERGED, Status.NO_SOLUTION).astype(np.int64)
     zeros = np.zeros(len(joints), dtype=np.int64)
-    return FKResult(x=x, success=status >= 0, status=status, nit=zeros, nfev=zeros.copy(), njev=zeros.copy(),
-                    residual=res, wall_time=time.perf_counter() - start, method=method,
-                    message=summarize(status))
+    return FKResult(
+        x=x,
+        success=status >= 0,
+        status=status,
+        nit=zeros,
+        nfev=zeros.copy(),
+        njev=zeros.copy(),
+        residual=res,
+        wall_time=time.perf_counter() - start,
+        method=method,
+        message=summarize(status),
+    )
 
 
 def _others(name: str) -> str:
@@ -42,7 +53,9 @@ def closed_form(
     bisected around it). ``x0`` and ``maxiter`` are otherwise unused.
     """
     if getattr(mech, "fk", None) is None:
-        raise ValueError(f"{type(mech).__name__} has no closed-form fk; use one of {_others('closed-form')}")
+        raise ValueError(
+            f"{type(mech).__name__} has no closed-form fk; use one of {_others('closed-form')}"
+        )
     start = time.perf_counter()
     x = rowwise(lambda q: mech.fk(q, **options), joints, tail=(mech.n_pose,))
     ok = np.all(np.isfinite(x), axis=-1)
@@ -60,7 +73,9 @@ def _fk_all(mech: Mechanism, joints: Array, options: dict[str, Any]) -> Array:
         for q in joints:  # rare path: isolate the rows that raise
             try:
                 with np.errstate(all="ignore"):
-                    rows.append(np.asarray(mech.fk_all(q[None], **options), dtype=float).reshape(-1, n_pose))
+                    rows.append(
+                        np.asarray(mech.fk_all(q[None], **options), dtype=float).reshape(-1, n_pose)
+                    )
             except ROW_ERRORS:
                 rows.append(np.full((1, n_pose), np.nan))
         k = max(len(r) for r in rows)
@@ -91,7 +106,9 @@ def all_solutions(
     ``fk_all``; ``maxiter`` is unused (``nit = nfev = njev = 0``).
     """
     if not hasattr(mech, "fk_all"):
-        raise ValueError(f"{type(mech).__name__} has no all-solutions fk_all; use one of {_others('all-solutions')}")
+        raise ValueError(
+            f"{type(mech).__name__} has no all-solutions fk_all; use one of {_others('all-solutions')}"
+        )
     start = time.perf_counter()
     n = len(joints)
     sols = _fk_all(mech, joints, options)

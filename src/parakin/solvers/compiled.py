@@ -17,8 +17,17 @@ from parakin.solvers.verify import default_joint_tol, judge_one
 __all__ = ["solve", "solve_one"]
 
 
-def solve(mech: Any, method: str, joints: np.ndarray, x0: np.ndarray, tol: float, maxiter: int,
-          options: dict[str, Any], *, parallel: bool | None = None):
+def solve(
+    mech: Any,
+    method: str,
+    joints: np.ndarray,
+    x0: np.ndarray,
+    tol: float,
+    maxiter: int,
+    options: dict[str, Any],
+    *,
+    parallel: bool | None = None,
+):
     """The compiled solve of the flat batch (``joints (N, m)``, ``x0 (N, n)``) as an
     :class:`~parakin.solvers.result.FKResult` (not yet verified), or ``None`` where the compiled
     path does not apply. ``parallel``: None = by batch size (:data:`PARALLEL_MIN_ROWS`)."""
@@ -31,7 +40,12 @@ def solve(mech: Any, method: str, joints: np.ndarray, x0: np.ndarray, tol: float
     if kernel is None:
         return None
     start = time.perf_counter()
-    values = {**allowed, **{k: v for k, v in options.items() if k != "callback"}, "tol": tol, "maxiter": maxiter}
+    values = {
+        **allowed,
+        **{k: v for k, v in options.items() if k != "callback"},
+        "tol": tol,
+        "maxiter": maxiter,
+    }
     try:
         opts = np.array([float(values.get(k, 0.0)) for k in _OPTION_ORDER])
     except (TypeError, ValueError):  # let the numpy solver report a bad option
@@ -46,14 +60,27 @@ def solve(mech: Any, method: str, joints: np.ndarray, x0: np.ndarray, tol: float
     info = np.zeros((n, 4), dtype=np.int64)
     res = np.empty(n)
     use_par = use_parallel(n, parallel)
-    getattr(loops, f"{method}_{'parallel' if use_par else 'serial'}")(kernel.params, q, x0, opts, x, info, res)
+    getattr(loops, f"{method}_{'parallel' if use_par else 'serial'}")(
+        kernel.params, q, x0, opts, x, info, res
+    )
     status = info[:, 0].copy()
-    return FKResult(x=x, success=status >= 0, status=status, nit=info[:, 1].copy(), nfev=info[:, 2].copy(),
-                    njev=info[:, 3].copy(), residual=res, wall_time=time.perf_counter() - start, method=method,
-                    message=summarize(status, maxiter))
+    return FKResult(
+        x=x,
+        success=status >= 0,
+        status=status,
+        nit=info[:, 1].copy(),
+        nfev=info[:, 2].copy(),
+        njev=info[:, 3].copy(),
+        residual=res,
+        wall_time=time.perf_counter() - start,
+        method=method,
+        message=summarize(status, maxiter),
+    )
 
 
-_OPTS: dict[tuple, np.ndarray] = {}  # (method, tol, maxiter, options) -> options vector (single-call path)
+_OPTS: dict[
+    tuple, np.ndarray
+] = {}  # (method, tol, maxiter, options) -> options vector (single-call path)
 _ONE: dict[tuple[str, str], Any] = {}  # (kernel module, method) -> compiled single-pose solve
 
 
@@ -77,8 +104,17 @@ def _options(method: str, tol: float, maxiter: int, options: dict[str, Any]) -> 
     return opts
 
 
-def solve_one(mech: Any, method: str, joints: Any, x0: Any, tol: float, maxiter: int, options: dict[str, Any],
-              joint_tol: float | None, start: float):
+def solve_one(
+    mech: Any,
+    method: str,
+    joints: Any,
+    x0: Any,
+    tol: float,
+    maxiter: int,
+    options: dict[str, Any],
+    joint_tol: float | None,
+    start: float,
+):
     """The single-call path of :func:`parakin.solvers.solve_fk`: one joint vector (1-D) from one
     start (1-D or None = home), solved and verified in one compiled call, the status then decided
     by :func:`parakin.solvers.verify.judge_one` (the rules of :func:`~parakin.solvers.verify.verify`).
@@ -114,7 +150,16 @@ def solve_one(mech: Any, method: str, joints: Any, x0: Any, tol: float, maxiter:
     jtol = default_joint_tol(tol, options) if joint_tol is None else float(joint_tol)
     status = judge_one(int(info[0]), bool(info[4]), bool(info[5]), float(out[1]), jtol)
     message = "converged" if status >= 0 else summarize(np.array([status]), maxiter)
-    return FKResult(x=x, success=np.array(status >= 0), status=np.array(status, dtype=np.int64),
-                             nit=info[1, ...].copy(), nfev=info[2, ...].copy(), njev=info[3, ...].copy(),
-                             residual=out[0, ...].copy(), wall_time=time.perf_counter() - start, method=method,
-                             message=message, joint_error=out[1, ...].copy())
+    return FKResult(
+        x=x,
+        success=np.array(status >= 0),
+        status=np.array(status, dtype=np.int64),
+        nit=info[1, ...].copy(),
+        nfev=info[2, ...].copy(),
+        njev=info[3, ...].copy(),
+        residual=out[0, ...].copy(),
+        wall_time=time.perf_counter() - start,
+        method=method,
+        message=message,
+        joint_error=out[1, ...].copy(),
+    )

@@ -39,7 +39,9 @@ def lstsq_step(a: Array, r: Array) -> Array:
             out[ok] = np.linalg.solve(aa, rr[..., None])[..., 0]
         else:
             at = np.swapaxes(aa, -1, -2)
-            out[ok] = np.linalg.solve(at @ aa, np.einsum("...ij,...j->...i", at, rr)[..., None])[..., 0]
+            out[ok] = np.linalg.solve(at @ aa, np.einsum("...ij,...j->...i", at, rr)[..., None])[
+                ..., 0
+            ]
     except np.linalg.LinAlgError:
         try:
             out[ok] = np.einsum("...ij,...j->...i", np.linalg.pinv(aa), rr)
@@ -58,13 +60,30 @@ def _gn_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, St
     return {"x": x, "r": ev.residual(x, rows)}, StepInfo(step=inf_norm(dx))
 
 
-def gauss_newton(mech: Mechanism, joints: Array, x0: Array, *, tol: float, maxiter: int, xtol: float = 0.0,
-                 callback: Callback | None = None) -> FKResult:
+def gauss_newton(
+    mech: Mechanism,
+    joints: Array,
+    x0: Array,
+    *,
+    tol: float,
+    maxiter: int,
+    xtol: float = 0.0,
+    callback: Callback | None = None,
+) -> FKResult:
     """Gauss-Newton: ``x <- x - pinv(J) r`` (full step, no line search; Dennis & Schnabel 1996,
     §10.2). One Jacobian and one residual evaluation per iteration; ``m >= n`` allowed. Options
     ``xtol`` (step inf-norm stop, 0 = off) and ``callback`` as for ``newton``."""
-    return iterate(mech, joints, x0, step=_gn_step, tol=tol, maxiter=maxiter, xtol=xtol, callback=callback,
-                   method="gauss-newton")
+    return iterate(
+        mech,
+        joints,
+        x0,
+        step=_gn_step,
+        tol=tol,
+        maxiter=maxiter,
+        xtol=xtol,
+        callback=callback,
+        method="gauss-newton",
+    )
 
 
 def _bls_init(ev: Evaluator, rows: NDArray[np.intp], s: State) -> State:
@@ -82,10 +101,28 @@ def _bls_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, S
     return {"x": x, "r": r, "B": b}, StepInfo(step=inf_norm(d))
 
 
-def broyden_ls(mech: Mechanism, joints: Array, x0: Array, *, tol: float, maxiter: int, xtol: float = 0.0,
-               callback: Callback | None = None) -> FKResult:
+def broyden_ls(
+    mech: Mechanism,
+    joints: Array,
+    x0: Array,
+    *,
+    tol: float,
+    maxiter: int,
+    xtol: float = 0.0,
+    callback: Callback | None = None,
+) -> FKResult:
     """Broyden's good rank-one secant update of a rectangular ``B`` (``m x n``; Broyden 1965),
     started at the analytic Jacobian at ``x0``, with the least-squares step ``d = -pinv(B) r``.
     One residual evaluation per iteration; for square regular ``B`` identical to ``broyden``."""
-    return iterate(mech, joints, x0, init=_bls_init, step=_bls_step, tol=tol, maxiter=maxiter, xtol=xtol,
-                   callback=callback, method="broyden-ls")
+    return iterate(
+        mech,
+        joints,
+        x0,
+        init=_bls_init,
+        step=_bls_step,
+        tol=tol,
+        maxiter=maxiter,
+        xtol=xtol,
+        callback=callback,
+        method="broyden-ls",
+    )

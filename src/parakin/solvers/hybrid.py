@@ -57,7 +57,9 @@ def hybrid(
     :attr:`Status.UNREACHABLE` (``x = x0``), the others are solved.
     """
     if network is None:
-        raise ValueError("the hybrid method needs network=... (e.g. parakin.nn.BPNetwork.load(path))")
+        raise ValueError(
+            "the hybrid method needs network=... (e.g. parakin.nn.BPNetwork.load(path))"
+        )
     if refine == "hybrid" or refine not in METHODS:
         raise ValueError(f"refine = {refine!r} must be one of {sorted(set(METHODS) - {'hybrid'})}")
     reachable = np.ones(len(joints), dtype=bool)
@@ -65,7 +67,9 @@ def hybrid(
         reachable = rowwise(lambda q: _passes(mech, q), joints, tail=(), fill=0.0) > 0.5
     with np.errstate(all="ignore"):
         guess = np.broadcast_to(np.asarray(network.predict(joints), dtype=float), x0.shape).copy()
-    guess = np.where(reachable[:, None] & np.all(np.isfinite(guess), axis=-1, keepdims=True), guess, x0)
+    guess = np.where(
+        reachable[:, None] & np.all(np.isfinite(guess), axis=-1, keepdims=True), guess, x0
+    )
     res = METHODS[refine](mech, joints, guess, tol=tol, maxiter=maxiter, xtol=eps, **options)
     # a step below eps counts only where the residual is at the level of eps too
     ok = (res.residual <= tol) | ((res.status == Status.SMALL_STEP) & (res.residual <= 10 * eps))
@@ -73,7 +77,12 @@ def hybrid(
     status[~reachable] = Status.UNREACHABLE
     x = np.where(reachable[:, None], res.x, x0)
     return dataclasses.replace(
-        res, x=x, success=status >= 0, status=status, method="hybrid", message=summarize(status, maxiter)
+        res,
+        x=x,
+        success=status >= 0,
+        status=status,
+        method="hybrid",
+        message=summarize(status, maxiter),
     )
 
 

@@ -27,7 +27,12 @@ def _lm_init(tau: float) -> Callable[[Evaluator, NDArray[np.intp], State], State
         a, g = _gram(jac, s["r"])
         mu = tau * np.max(np.diagonal(a, axis1=-2, axis2=-1), axis=-1)
         # J itself is not kept: a step needs only J^T J and J^T r (less state to copy per iteration)
-        return {"A": a, "g": g, "mu": np.maximum(mu, np.finfo(float).tiny), "nu": np.full(len(rows), 2.0)}
+        return {
+            "A": a,
+            "g": g,
+            "mu": np.maximum(mu, np.finfo(float).tiny),
+            "nu": np.full(len(rows), 2.0),
+        }
 
     return init
 
@@ -50,7 +55,9 @@ def _lm_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, St
     if ok.all():  # the usual case near a solution: no row bookkeeping
         x, r = x_try, r_try
         a, g = _gram(ev.jacobian(x, rows), r)
-    elif ok.any():  # in place: ``iterate`` hands each step its own copy of the rows' state (``_take``)
+    elif (
+        ok.any()
+    ):  # in place: ``iterate`` hands each step its own copy of the rows' state (``_take``)
         x[ok], r[ok] = x_try[ok], r_try[ok]
         a[ok], g[ok] = _gram(ev.jacobian(x[ok], rows[ok]), r[ok])
     # Nielsen (1999): shrink mu smoothly on success, grow it geometrically on failure

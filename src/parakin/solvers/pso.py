@@ -40,12 +40,22 @@ from numpy.typing import ArrayLike, NDArray
 from parakin.mechanisms.base import Array, Mechanism
 from parakin.solvers.result import FKResult, Status, inf_norm, rowwise, summarize
 
-__all__ = ["pso", "PSOResult", "ChaoticLogistic", "linear_inertia", "inertia_schedule", "check_size", "MEMORY_LIMIT"]
+__all__ = [
+    "pso",
+    "PSOResult",
+    "ChaoticLogistic",
+    "linear_inertia",
+    "inertia_schedule",
+    "check_size",
+    "MEMORY_LIMIT",
+]
 
 Schedule = Callable[[int, int, NDArray[np.intp]], "float | Array"]
 Fitness = Callable[[Array, Array], Array]
 
-_BLOCK = 64  # iterations of random numbers drawn per generator call (fixed: part of reproducibility)
+_BLOCK = (
+    64  # iterations of random numbers drawn per generator call (fixed: part of reproducibility)
+)
 #: most bytes the swarms of one call may hold (positions, velocities, bests, random block, history)
 MEMORY_LIMIT = 2 * 1024**3
 
@@ -67,9 +77,11 @@ def check_size(runs: int, swarm: int, maxiter: int, n: int) -> None:
     :data:`MEMORY_LIMIT` bytes."""
     need = memory_needed(runs, swarm, maxiter, n)
     if need > MEMORY_LIMIT:
-        raise ValueError(f"pso with {runs} run(s) x swarm = {swarm} particles x maxiter = {maxiter} needs "
-                         f"{need / 1024**3:.3g} GiB, more than the limit of {MEMORY_LIMIT / 1024**3:g} GiB: "
-                         "use fewer particles, iterations or rows per call")
+        raise ValueError(
+            f"pso with {runs} run(s) x swarm = {swarm} particles x maxiter = {maxiter} needs "
+            f"{need / 1024**3:.3g} GiB, more than the limit of {MEMORY_LIMIT / 1024**3:g} GiB: "
+            "use fewer particles, iterations or rows per call"
+        )
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -77,13 +89,19 @@ class PSOResult(FKResult):
     """:class:`FKResult` plus the swarm's record."""
 
     fitness: Array = dataclasses.field(default_factory=lambda: np.zeros(0))  #: best fitness per run
-    history: Array = dataclasses.field(default_factory=lambda: np.zeros((0, 1)))  #: (..., maxiter + 1)
-    inertia: Array = dataclasses.field(default_factory=lambda: np.zeros(0))  #: w_k used, (maxiter + 1,) (k = 0: NaN)
+    history: Array = dataclasses.field(
+        default_factory=lambda: np.zeros((0, 1))
+    )  #: (..., maxiter + 1)
+    inertia: Array = dataclasses.field(
+        default_factory=lambda: np.zeros(0)
+    )  #: w_k used, (maxiter + 1,) (k = 0: NaN)
 
-    def reshape(self, shape: tuple[int, ...]) -> "PSOResult":
+    def reshape(self, shape: tuple[int, ...]) -> PSOResult:
         base = super().reshape(shape)
         return dataclasses.replace(
-            base, fitness=self.fitness.reshape(shape), history=self.history.reshape(*shape, self.history.shape[-1])
+            base,
+            fitness=self.fitness.reshape(shape),
+            history=self.history.reshape(*shape, self.history.shape[-1]),
         )
 
 
@@ -106,13 +124,23 @@ class ChaoticLogistic:
     per solve (``z0`` may be a scalar or one value per run).
     """
 
-    def __init__(self, w_start: float = 0.9, w_end: float = 0.4, z0: float | ArrayLike = 0.37, mu: float = 4.0,
-                 combine: Callable[[Array, int, int], Array] | None = None) -> None:
+    def __init__(
+        self,
+        w_start: float = 0.9,
+        w_end: float = 0.4,
+        z0: float | ArrayLike = 0.37,
+        mu: float = 4.0,
+        combine: Callable[[Array, int, int], Array] | None = None,
+    ) -> None:
         self.w_start, self.w_end, self.mu = w_start, w_end, mu
         self.z0 = np.asarray(z0, dtype=float)
         if np.any((self.z0 <= 0) | (self.z0 >= 1)) or np.any(np.isin(self.z0, [0.25, 0.5, 0.75])):
-            raise ValueError(f"z0 = {z0!r} must lie in (0, 1) and avoid the map's fixed/periodic points")
-        self.combine = combine or (lambda z, k, K: (self.w_start - self.w_end) * (K - k) / K + self.w_end * z)
+            raise ValueError(
+                f"z0 = {z0!r} must lie in (0, 1) and avoid the map's fixed/periodic points"
+            )
+        self.combine = combine or (
+            lambda z, k, K: (self.w_start - self.w_end) * (K - k) / K + self.w_end * z
+        )
         self._z: Array | None = None
 
     def __call__(self, k: int, maxiter: int, rows: NDArray[np.intp]) -> Array:
@@ -131,7 +159,9 @@ def inertia_schedule(inertia: str | Schedule, w: float, w_end: float) -> Schedul
         return lambda k, maxiter, rows: w
     if inertia == "linear":
         return linear_inertia(w, w_end)
-    raise ValueError(f"inertia = {inertia!r} must be 'constant', 'linear' or a callable schedule(k, maxiter, rows)")
+    raise ValueError(
+        f"inertia = {inertia!r} must be 'constant', 'linear' or a callable schedule(k, maxiter, rows)"
+    )
 
 
 def _eq20(mech: Mechanism) -> Fitness:
@@ -185,9 +215,13 @@ def pso(
         raise ValueError(f"swarm = {swarm!r} must be a positive integer")
     swarm = int(swarm)
     check_size(n_runs, swarm, maxiter, n)
-    lo, hi = (np.asarray(b, dtype=float) for b in (bounds if bounds is not None else mech.pose_bounds()))
+    lo, hi = (
+        np.asarray(b, dtype=float) for b in (bounds if bounds is not None else mech.pose_bounds())
+    )
     if lo.shape != (n,) or hi.shape != (n,) or np.any(hi <= lo):
-        raise ValueError(f"bounds must be two arrays of {n} values with lower < upper, got {lo}, {hi}")
+        raise ValueError(
+            f"bounds must be two arrays of {n} values with lower < upper, got {lo}, {hi}"
+        )
     span = hi - lo
     vmax = None if vclamp is None else float(vclamp) * span
     schedule = inertia_schedule(inertia, w, w_end)
@@ -263,8 +297,17 @@ def pso(
     res = inf_norm(rowwise(mech.residual, gbest, joints, tail=(joints.shape[-1],)))
     status = np.where(gf <= ftol, Status.CONVERGED, Status.MAXITER).astype(np.int64)
     return PSOResult(
-        x=gbest, success=status >= 0, status=status, nit=nit, nfev=nfev, njev=np.zeros(n_runs, dtype=np.int64),
-        residual=res, wall_time=time.perf_counter() - start, method="pso", message=summarize(status, maxiter),
-        fitness=gf, history=history, inertia=weights,
+        x=gbest,
+        success=status >= 0,
+        status=status,
+        nit=nit,
+        nfev=nfev,
+        njev=np.zeros(n_runs, dtype=np.int64),
+        residual=res,
+        wall_time=time.perf_counter() - start,
+        method="pso",
+        message=summarize(status, maxiter),
+        fitness=gf,
+        history=history,
+        inertia=weights,
     )
-

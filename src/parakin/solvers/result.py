@@ -31,14 +31,25 @@ from numpy.typing import NDArray
 from parakin.errors import ParakinError
 from parakin.mechanisms.base import Array, Mechanism
 
-__all__ = ["Evaluator", "FKResult", "ROW_ERRORS", "Status", "StepInfo", "inf_norm", "iterate", "rowwise",
-           "summarize"]
+__all__ = [
+    "Evaluator",
+    "FKResult",
+    "ROW_ERRORS",
+    "Status",
+    "StepInfo",
+    "inf_norm",
+    "iterate",
+    "rowwise",
+    "summarize",
+]
 
 #: what a mechanism raises for one pose or joint row it cannot handle (outside its domain, singular)
 ROW_ERRORS = (ParakinError, ArithmeticError)
 
 
-def rowwise(f: Callable[..., Any], *rows: Array, tail: tuple[int, ...], fill: float = np.nan) -> Array:
+def rowwise(
+    f: Callable[..., Any], *rows: Array, tail: tuple[int, ...], fill: float = np.nan
+) -> Array:
     """``f(*rows)`` on the whole batch; where it raises one of :data:`ROW_ERRORS`, on halves of the
     batch, so that a bad row gives ``fill`` (shape ``tail``) and never costs its neighbours.
     One vectorised call when every row is fine, ``O(k log N)`` calls for ``k`` bad rows."""
@@ -52,8 +63,12 @@ def rowwise(f: Callable[..., Any], *rows: Array, tail: tuple[int, ...], fill: fl
         if n == 1:
             return np.full((1, *tail), fill)
     half = n // 2
-    return np.concatenate([rowwise(f, *(r[:half] for r in rows), tail=tail, fill=fill),
-                           rowwise(f, *(r[half:] for r in rows), tail=tail, fill=fill)])
+    return np.concatenate(
+        [
+            rowwise(f, *(r[:half] for r in rows), tail=tail, fill=fill),
+            rowwise(f, *(r[half:] for r in rows), tail=tail, fill=fill),
+        ]
+    )
 
 
 class Status(IntEnum):
@@ -68,7 +83,9 @@ class Status(IntEnum):
     NO_SOLUTION = -4  #: the closed form has no (accurate enough) solution for these joints
     LOCAL_MINIMUM = -5  #: the step became small at a large residual (unreachable joints?)
     WRONG_ASSEMBLY = -6  #: converged, but on another assembly mode / branch than the one asked for
-    OUT_OF_DOMAIN = -7  #: converged, but the pose lies outside the mechanism's domain (its IK rejects it)
+    OUT_OF_DOMAIN = (
+        -7
+    )  #: converged, but the pose lies outside the mechanism's domain (its IK rejects it)
     WRONG_ANSWER = -8  #: residual within tol, but ik(x) misses the joints by more than joint_tol
     BAD_INPUT = -9  #: the row's joints or start are not finite (x is the mechanism's home)
     UNREACHABLE = -10  #: the mechanism's check_joints rejects the row's joints (no solve attempted)

@@ -92,8 +92,9 @@ class _Constants:
         out = self._cache.get(key)
         if out is None:
             out = {
-                k: torch.as_tensor(v, device=like.device,
-                                   dtype=torch.long if v.dtype.kind in "iu" else like.dtype)
+                k: torch.as_tensor(
+                    v, device=like.device, dtype=torch.long if v.dtype.kind in "iu" else like.dtype
+                )
                 for k, v in self._np.items()
             }
             self._cache[key] = out
@@ -127,7 +128,12 @@ def _ups2(mech: UPS2) -> ResidualFn:
         beta, gamma, y = pose[..., 0], pose[..., 1], pose[..., 2]
         rho = branch * torch.sqrt(torch.clamp(c * c - y * y, min=0.0))
         u = rho + k * torch.sin(gamma)
-        q = u * u + (k * k + a * a / 4) + (k * torch.cos(gamma) + y - h) ** 2 - a * k * torch.cos(beta)
+        q = (
+            u * u
+            + (k * k + a * a / 4)
+            + (k * torch.cos(gamma) + y - h) ** 2
+            - a * k * torch.cos(beta)
+        )
         s = a * u * torch.sin(beta)
         l1 = (ratio * c) ** 2 + h * h - 2 * ratio * h * y
         sq = torch.stack([l1, q - s, q + s], dim=-1)
@@ -138,7 +144,14 @@ def _ups2(mech: UPS2) -> ResidualFn:
 
 def _euler_zyx(a: Tensor, b: Tensor, c: Tensor) -> Tensor:
     """``Rz(a) Ry(b) Rx(c)`` (..., 3, 3), entry by entry as :func:`parakin.geometry.euler_zyx`."""
-    ca, sa, cb, sb, cc, sc = torch.cos(a), torch.sin(a), torch.cos(b), torch.sin(b), torch.cos(c), torch.sin(c)
+    ca, sa, cb, sb, cc, sc = (
+        torch.cos(a),
+        torch.sin(a),
+        torch.cos(b),
+        torch.sin(b),
+        torch.cos(c),
+        torch.sin(c),
+    )
     rows = [
         [ca * cb, ca * sb * sc - sa * cc, ca * sb * cc + sa * sc],
         [sa * cb, sa * sb * sc + ca * cc, sa * sb * cc - ca * sc],
@@ -344,7 +357,9 @@ def _solve(
                 sol, info = torch.linalg.solve_ex(j_lu, r_lu.unsqueeze(-1))
                 # LU failed on a finite system: exactly singular, pinv step in the next pass.
                 # A non-finite J or r gives a non-finite step: the row stops as NONFINITE.
-                singular = (info != 0) & torch.isfinite(j_lu).all((-2, -1)) & torch.isfinite(r_lu).all(-1)
+                singular = (
+                    (info != 0) & torch.isfinite(j_lu).all((-2, -1)) & torch.isfinite(r_lu).all(-1)
+                )
                 dx[:n_lu] = torch.where(singular[:, None], 0.0, sol[..., 0])
                 stepped[:n_lu] = ~singular
             if n_active > n_lu:
@@ -353,7 +368,9 @@ def _solve(
 
             x_new = xa - dx
             x_fin = torch.isfinite(x_new).all(-1)
-            r_new = fun(torch.where(x_fin[:, None], x_new, xa), qa)  # never evaluate non-finite poses
+            r_new = fun(
+                torch.where(x_fin[:, None], x_new, xa), qa
+            )  # never evaluate non-finite poses
             nfev[idx] += (stepped & x_fin).long()
             nit[idx] += stepped.long()
             res_new = _inf_norm(r_new)

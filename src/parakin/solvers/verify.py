@@ -37,7 +37,9 @@ JOINT_TOL_FLOOR = 1e-8
 def default_joint_tol(tol: float, options: dict[str, Any]) -> float:
     """100 x the accuracy the call asked for (``tol``, or the step / fitness tolerance ``xtol``,
     ``eps``, ``ftol`` of a method that stops on it), at least :data:`JOINT_TOL_FLOOR`."""
-    asked = [tol] + [float(options[k]) for k in ("xtol", "eps", "ftol") if options.get(k) is not None]
+    asked = [tol] + [
+        float(options[k]) for k in ("xtol", "eps", "ftol") if options.get(k) is not None
+    ]
     return max(JOINT_TOL_FLOOR, 100.0 * max(asked))
 
 
@@ -61,11 +63,15 @@ def judge_one(status: int, dom: bool, asm: bool, err: float, joint_tol: float) -
     return status
 
 
-def verify(mech: Mechanism, joints: Array, result: FKResult, joint_tol: float, maxiter: int | None = None) -> FKResult:
+def verify(
+    mech: Mechanism, joints: Array, result: FKResult, joint_tol: float, maxiter: int | None = None
+) -> FKResult:
     """``result`` (flat, ``(N,)``) with ``joint_error`` filled in and every claimed success that is
     not a valid answer turned into its failure status (see the module docstring)."""
     x, n = result.x, len(joints)
-    hooks = kernels.verify_hooks(mech, joints, x)  # the same three hooks, compiled, where the mechanism has a kernel
+    hooks = kernels.verify_hooks(
+        mech, joints, x
+    )  # the same three hooks, compiled, where the mechanism has a kernel
     if hooks is not None:
         dom, err, asm = hooks
     else:
@@ -87,5 +93,6 @@ def verify(mech: Mechanism, joints: Array, result: FKResult, joint_tol: float, m
     if np.array_equal(status, result.status):
         return dataclasses.replace(result, joint_error=err)
     message = summarize(status, maxiter)
-    return dataclasses.replace(result, success=status >= 0, status=status, joint_error=err, message=message)
-
+    return dataclasses.replace(
+        result, success=status >= 0, status=status, joint_error=err, message=message
+    )

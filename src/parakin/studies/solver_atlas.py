@@ -32,14 +32,23 @@ TITLE = "Beyond the papers: every solver on every mechanism"
 
 #: success rates over seeded problems: PSO rows are chaotic searches and local solvers may flip a
 #: near-threshold problem; medians of errors (round-off) and iterations are stable, timings are not
-ATLAS = Tolerance("statistical", 0.0, 0.0,
-                  "solver statistics over seeded problems: success and wrong-assembly rates within 5 "
-                  "points, median iterations within one, conditioning to rounding; timings, extremes "
-                  "and round-off errors not compared",
-                  columns={"n": (0.0, 0.0), "home_cond": (1e-6, 0.0), "median_cond": (1e-6, 0.0),
-                           "success_rate": (0.0, 0.05), "wrong_assembly_rate": (0.0, 0.05),
-                           "median_nit": (0.0, 1.0)},
-                  files=("extra_solver_atlas.png",))
+ATLAS = Tolerance(
+    "statistical",
+    0.0,
+    0.0,
+    "solver statistics over seeded problems: success and wrong-assembly rates within 5 "
+    "points, median iterations within one, conditioning to rounding; timings, extremes "
+    "and round-off errors not compared",
+    columns={
+        "n": (0.0, 0.0),
+        "home_cond": (1e-6, 0.0),
+        "median_cond": (1e-6, 0.0),
+        "success_rate": (0.0, 0.05),
+        "wrong_assembly_rate": (0.0, 0.05),
+        "median_nit": (0.0, 1.0),
+    },
+    files=("extra_solver_atlas.png",),
+)
 
 ATLAS_STEM = "extra_solver_atlas"
 BENCHMARKS = "benchmarks.md"
@@ -79,8 +88,10 @@ def atlas_cases(config: dict, *, network: bool = True) -> list[AtlasCase]:
     mechs = {
         "3p4s": P3P4S(),
         "2ups": li2020_2ups.common.mech(config),
-        "stewart12": ActiveLegs(mech=ye_stewart12.common.mech(config),
-                                active=tuple(k for k in range(1, 13) if k not in passive)),
+        "stewart12": ActiveLegs(
+            mech=ye_stewart12.common.mech(config),
+            active=tuple(k for k in range(1, 13) if k not in passive),
+        ),
         "stewart36": li2017_stewart36.common.mech(config),
         # beyond the papers: the general 6-6 platform (Dietmaier's, 40 real assemblies)
         "stewart66": Stewart66(),
@@ -96,12 +107,22 @@ def atlas_cases(config: dict, *, network: bool = True) -> list[AtlasCase]:
     cases = []
     for key, mech in mechs.items():
         box = _box(mech, cfg["box_fraction"][key])
-        solvers = standard_solvers(mech, pso_swarm=cfg["pso"]["swarm"], pso_maxiter=cfg["pso"]["maxiter"],
-                                   pso_rows=cfg["pso"]["rows"], box=box, network=net if key == "3p4s" else None,
-                                   seed=seed_for(config, f"atlas.pso.{key}") % 2**31)
+        solvers = standard_solvers(
+            mech,
+            pso_swarm=cfg["pso"]["swarm"],
+            pso_maxiter=cfg["pso"]["maxiter"],
+            pso_rows=cfg["pso"]["rows"],
+            box=box,
+            network=net if key == "3p4s" else None,
+            seed=seed_for(config, f"atlas.pso.{key}") % 2**31,
+        )
         if key == "stewart66":  # 40 homotopy paths per input (~5 ms): as many rows as PSO gets
-            solvers = tuple(dataclasses.replace(s, max_rows=cfg["pso"]["rows"]) if s.method == "all-solutions" else s
-                            for s in solvers)
+            solvers = tuple(
+                dataclasses.replace(s, max_rows=cfg["pso"]["rows"])
+                if s.method == "all-solutions"
+                else s
+                for s in solvers
+            )
         cases.append(AtlasCase(key, mech, box, solvers))
     return cases
 
@@ -115,7 +136,9 @@ def _gpu(case, batch) -> dict[str, float]:
     if not gpu_available():
         return {}
     try:
-        newton_torch(case.mech, batch.joints[:100], batch.start[:100], device="cuda")  # warm-up, compile
+        newton_torch(
+            case.mech, batch.joints[:100], batch.start[:100], device="cuda"
+        )  # warm-up, compile
         res = newton_torch(case.mech, batch.joints, batch.start, device="cuda")
     except NotImplementedError:
         return {}
@@ -142,17 +165,30 @@ def compute_atlas(config: dict) -> pd.DataFrame:
     done = Progress("atlas", len(cases) * len(SCENARIOS), "mechanism x scenario blocks", step=0.1)
     started = []
 
-    def progress(what: str) -> None:  # called as a block starts: report the blocks finished before it
+    def progress(
+        what: str,
+    ) -> None:  # called as a block starts: report the blocks finished before it
         if started:
             done.tick()
         started.append(what)
         print(f"  atlas: {what} ...", file=sys.stderr, flush=True)
 
     table = run_atlas(
-        cases, lambda stream: rng(config, stream), n=cfg["n"], n_single=cfg["n_single"],
-        n_batch=cfg["n_batch"], repeats=cfg["repeats"], start_spread=cfg["start_spread"],
-        joint_noise=cfg["joint_noise"], pool_factor=cfg["pool_factor"], tol=cfg["tol"], maxiter=cfg["maxiter"],
-        success_tol=cfg["success_tol"], gpu=_gpu, progress=progress)
+        cases,
+        lambda stream: rng(config, stream),
+        n=cfg["n"],
+        n_single=cfg["n_single"],
+        n_batch=cfg["n_batch"],
+        repeats=cfg["repeats"],
+        start_spread=cfg["start_spread"],
+        joint_noise=cfg["joint_noise"],
+        pool_factor=cfg["pool_factor"],
+        tol=cfg["tol"],
+        maxiter=cfg["maxiter"],
+        success_tol=cfg["success_tol"],
+        gpu=_gpu,
+        progress=progress,
+    )
     done.tick()
     return table
 
@@ -170,9 +206,11 @@ def atlas_markdown(df: pd.DataFrame) -> pd.DataFrame:
         row = {"mechanism": mech, "solver": solver}
         for s in SCENARIOS:
             row[f"success: {s}"] = _pct(by.loc[s, "success_rate"]) if s in by.index else "–"
-        row["wrong assembly (nominal / cold)"] = (f"{_pct(nom['wrong_assembly_rate'])} / "
-                                                  f"{_pct(by.loc['cold', 'wrong_assembly_rate'])}"
-                                                  if "cold" in by.index else _pct(nom["wrong_assembly_rate"]))
+        row["wrong assembly (nominal / cold)"] = (
+            f"{_pct(nom['wrong_assembly_rate'])} / {_pct(by.loc['cold', 'wrong_assembly_rate'])}"
+            if "cold" in by.index
+            else _pct(nom["wrong_assembly_rate"])
+        )
         row["error median / p95"] = f"{nom['median_err']:.1e} / {nom['p95_err']:.1e}"
         row["iterations / evaluations"] = f"{nom['median_nit']:g} / {nom['median_nfev']:g}"
         row["single solve (µs)"] = f"{nom['median_latency_us']:.0f}"
@@ -180,7 +218,9 @@ def atlas_markdown(df: pd.DataFrame) -> pd.DataFrame:
         row["× scipy per solve"] = f"{nom['speedup_per_solve']:.3g}"
         row["× scipy single call"] = f"{nom['speedup_single']:.2g}"
         gpu = nom.get("gpu_throughput_per_s", np.nan)
-        row["GPU (solves/s)"] = f"{gpu:.3g}" if gpu == gpu else gpu_note() if solver == "Newton" else "–"
+        row["GPU (solves/s)"] = (
+            f"{gpu:.3g}" if gpu == gpu else gpu_note() if solver == "Newton" else "–"
+        )
         out.append(row)
     return pd.DataFrame(out)
 
@@ -204,10 +244,18 @@ def recommend(df: pd.DataFrame, margin: float = 0.005) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
-@artefact(KEY, "solver_atlas", outputs=["extra_solver_atlas.csv", "extra_solver_atlas.md", "extra_solver_atlas.png"],
-          folder="", reference=False, needs=["zhao2017_3p4s:train"], tolerance=ATLAS,
-          config=["extra.solver_atlas", "li2020_2ups", "ye_stewart12", "li2017_stewart36"],
-          threads=2, resources={"runtime": 90, "mem_mb": 4000})
+@artefact(
+    KEY,
+    "solver_atlas",
+    outputs=["extra_solver_atlas.csv", "extra_solver_atlas.md", "extra_solver_atlas.png"],
+    folder="",
+    reference=False,
+    needs=["zhao2017_3p4s:train"],
+    tolerance=ATLAS,
+    config=["extra.solver_atlas", "li2020_2ups", "ye_stewart12", "li2017_stewart36"],
+    threads=2,
+    resources={"runtime": 90, "mem_mb": 4000},
+)
 def solver_atlas(config: dict, outdir: Path) -> list[Path]:
     """Every FK solver x every mechanism x four scenarios (issue: the comparison no paper has)."""
     cfg = config[KEY]["solver_atlas"]
@@ -230,11 +278,18 @@ def solver_atlas(config: dict, outdir: Path) -> list[Path]:
         "The 12-leg cube is solved from the six active legs of its 6-leg drive mode; its linear closed form "
         "needs all twelve. GPU column: batched Newton in torch on CUDA where available."
     )
-    notes += ("\n\n## Which solver to pick\n\nPer mechanism and scenario: among the solvers within half a "
-              "percentage point of the best success rate, the fastest batched one (success rate in brackets).\n\n"
-              + markdown_table(recommend(df)))
-    paths = write_table(df, outdir / ATLAS_STEM, title="Solver atlas: every FK solver on every mechanism",
-                        notes=notes, markdown=atlas_markdown(df))
+    notes += (
+        "\n\n## Which solver to pick\n\nPer mechanism and scenario: among the solvers within half a "
+        "percentage point of the best success rate, the fastest batched one (success rate in brackets).\n\n"
+        + markdown_table(recommend(df))
+    )
+    paths = write_table(
+        df,
+        outdir / ATLAS_STEM,
+        title="Solver atlas: every FK solver on every mechanism",
+        notes=notes,
+        markdown=atlas_markdown(df),
+    )
     paths.append(atlas_figure(df, outdir / f"{ATLAS_STEM}.png"))
     return paths
 
@@ -262,8 +317,9 @@ def atlas_figure(df: pd.DataFrame, path: Path) -> Path:
         axes = fig.subplots(1, len(scen), sharey=True, squeeze=False)[0]
         # bins that tell 96 % from 100 %: a practitioner cares most about the top of the scale
         bounds = [0.0, 0.25, 0.5, 0.75, 0.9, 0.99, 1.0 + 1e-9]
-        cmap = ListedColormap(["#D55E00", "#E69F00", "#F0E442", "#C2E699", "#78C679", "#238443"]).with_extremes(
-            bad="0.92")
+        cmap = ListedColormap(
+            ["#D55E00", "#E69F00", "#F0E442", "#C2E699", "#78C679", "#238443"]
+        ).with_extremes(bad="0.92")
         norm = BoundaryNorm(bounds, cmap.N)
         for ax, s in zip(axes, scen):
             g = df[df["scenario"] == s].set_index(["solver", "mechanism"])["success_rate"]
@@ -273,7 +329,15 @@ def atlas_figure(df: pd.DataFrame, path: Path) -> Path:
                 for j in range(len(mechs)):
                     v = m[i, j]
                     color = "white" if v == v and v >= 0.99 else "black"
-                    ax.text(j, i, "–" if v != v else _cell(v), ha="center", va="center", fontsize=6.5, color=color)
+                    ax.text(
+                        j,
+                        i,
+                        "–" if v != v else _cell(v),
+                        ha="center",
+                        va="center",
+                        fontsize=6.5,
+                        color=color,
+                    )
             ax.set_xticks(range(len(mechs)), mechs, rotation=30, ha="right")
             ax.tick_params(left=False)
             ax.set_title(s)
@@ -290,18 +354,28 @@ def glance(df: pd.DataFrame) -> str:
     """README's "at a glance" block: per mechanism, nominal scenario, each solver's success, batched
     throughput and ratio against scipy (per solve and per single call)."""
     nom = df[df["scenario"] == "nominal"]
-    t = pd.DataFrame({
-        "mechanism": nom["mechanism"], "solver": nom["solver"],
-        "success": [_pct(v) for v in nom["success_rate"]],
-        "batched solves/s": [f"{v:.3g}" for v in nom["throughput_per_s"]],
-        "× scipy (per solve, batched)": [f"{v:.3g}" for v in nom["speedup_per_solve"]],
-        "× scipy (single call)": [f"{v:.2g}" for v in nom["speedup_single"]],
-    })
+    t = pd.DataFrame(
+        {
+            "mechanism": nom["mechanism"],
+            "solver": nom["solver"],
+            "success": [_pct(v) for v in nom["success_rate"]],
+            "batched solves/s": [f"{v:.3g}" for v in nom["throughput_per_s"]],
+            "× scipy (per solve, batched)": [f"{v:.3g}" for v in nom["speedup_per_solve"]],
+            "× scipy (single call)": [f"{v:.2g}" for v in nom["speedup_single"]],
+        }
+    )
     return markdown_table(t)
 
 
-@artefact(KEY, "kernel_goals", outputs=["extra_kernel_goals.csv", "extra_kernel_goals.md"], folder="",
-          reference=False, tolerance=TIMING, config=["extra.kernel_goals"])
+@artefact(
+    KEY,
+    "kernel_goals",
+    outputs=["extra_kernel_goals.csv", "extra_kernel_goals.md"],
+    folder="",
+    reference=False,
+    tolerance=TIMING,
+    config=["extra.kernel_goals"],
+)
 def kernel_goals(config: dict, outdir: Path) -> list[Path]:
     """The compiled path's speed goals, measured in one run against ``scipy.optimize.root``
     (:func:`parakin.bench.kernel_goals`): single calls, batched Newton/LM, the 3-6 all-solutions FK
@@ -310,23 +384,53 @@ def kernel_goals(config: dict, outdir: Path) -> list[Path]:
     from parakin.bench import kernel_goals as measure
 
     cfg = config[KEY]["kernel_goals"]
-    df = measure(n_single=cfg["n_single"], n_batch=cfg["n_batch"], n_all=cfg["n_all"], repeats=cfg["repeats"],
-                 progress=lambda s: print(f"  kernel goals: {s}", file=sys.stderr))
-    text = ("# Compiled kernels: speed goals\n\nMeasured in one run on the machine that ran the pipeline; "
-            "every ratio is against `scipy.optimize.root` in the same run. Timings, never verdicts.\n\n"
-            + format_goals(df) + "\n")
-    return [write_csv(df, outdir / "extra_kernel_goals.csv"), atomic_write_text(outdir / "extra_kernel_goals.md", text)]
+    df = measure(
+        n_single=cfg["n_single"],
+        n_batch=cfg["n_batch"],
+        n_all=cfg["n_all"],
+        repeats=cfg["repeats"],
+        progress=lambda s: print(f"  kernel goals: {s}", file=sys.stderr),
+    )
+    text = (
+        "# Compiled kernels: speed goals\n\nMeasured in one run on the machine that ran the pipeline; "
+        "every ratio is against `scipy.optimize.root` in the same run. Timings, never verdicts.\n\n"
+        + format_goals(df)
+        + "\n"
+    )
+    return [
+        write_csv(df, outdir / "extra_kernel_goals.csv"),
+        atomic_write_text(outdir / "extra_kernel_goals.md", text),
+    ]
 
 
-@artefact(KEY, "benchmarks", outputs=["benchmarks.md"], folder="", reference=False, tolerance=TIMING,
-          needs=["extra:solver_atlas", "extra:kernel_goals", "zhao2017_3p4s:fk_benchmark", "zhao2017_3p4s:index_benchmark",
-                 "li2020_2ups:benchmark", "ye_stewart12:fk_speed", "ye_stewart12:fig12"])
+@artefact(
+    KEY,
+    "benchmarks",
+    outputs=["benchmarks.md"],
+    folder="",
+    reference=False,
+    tolerance=TIMING,
+    needs=[
+        "extra:solver_atlas",
+        "extra:kernel_goals",
+        "zhao2017_3p4s:fk_benchmark",
+        "zhao2017_3p4s:index_benchmark",
+        "li2020_2ups:benchmark",
+        "ye_stewart12:fk_speed",
+        "ye_stewart12:fig12",
+    ],
+)
 def benchmarks(config: dict, outdir: Path) -> list[Path]:
     """``benchmarks.md``: the atlas's speed view (with the README block) and the per-paper benchmarks."""
     df = pd.read_csv(outdir / f"{ATLAS_STEM}.csv")
-    six = df[(df["scenario"] == "nominal") & df["mechanism"].isin(["stewart12", "stewart36"])
-             & df["method"].isin(["newton", "lm"])]
-    slow = df[(df["scenario"] == "nominal") & (df["speedup_per_solve"] < 10) & (df["method"] != BASELINE)]
+    six = df[
+        (df["scenario"] == "nominal")
+        & df["mechanism"].isin(["stewart12", "stewart36"])
+        & df["method"].isin(["newton", "lm"])
+    ]
+    slow = df[
+        (df["scenario"] == "nominal") & (df["speedup_per_solve"] < 10) & (df["method"] != BASELINE)
+    ]
     lines = [
         "# Benchmarks",
         "",
@@ -341,19 +445,28 @@ def benchmarks(config: dict, outdir: Path) -> list[Path]:
         END,
         "",
         "Batched Newton / Levenberg-Marquardt on the 6-DOF mechanisms: "
-        + ", ".join(f"{r.mechanism} {r.solver} {r.throughput_per_s:.3g}/s" for r in six.itertuples())
+        + ", ".join(
+            f"{r.mechanism} {r.solver} {r.throughput_per_s:.3g}/s" for r in six.itertuples()
+        )
         + " (goal ≥ 1e5/s on 2 cores; the compiled kernels' own goals are below).",
         "",
         "Solvers under 10× scipy per solve: "
-        + ("; ".join(f"{r.mechanism} {r.solver} ({r.speedup_per_solve:.2g}×)" for r in slow.itertuples()) or "none")
+        + (
+            "; ".join(
+                f"{r.mechanism} {r.solver} ({r.speedup_per_solve:.2g}×)" for r in slow.itertuples()
+            )
+            or "none"
+        )
         + ". PSO evaluates a swarm for hundreds of iterations and converges to the tolerance rarely — it is a "
-          "global search, not a precise FK solver; single-call latencies are dominated by the generic driver's "
-          "fixed overhead (validation, result object), which batching amortises.",
+        "global search, not a precise FK solver; single-call latencies are dominated by the generic driver's "
+        "fixed overhead (validation, result object), which batching amortises.",
         "",
         f"Full atlas (every scenario): [{ATLAS_STEM}.md]({ATLAS_STEM}.md).",
     ]
     goals = outdir / "extra_kernel_goals.md"
-    if goals.exists():  # the compiled kernels' goals (single call vs scipy, batched throughput, PSO)
+    if (
+        goals.exists()
+    ):  # the compiled kernels' goals (single call vs scipy, batched throughput, PSO)
         body = goals.read_text().strip().splitlines()
         lines += ["", "## Compiled kernels: speed goals", "", *body[1:]]
     for paper, name in PAPER_BENCHMARKS:
@@ -361,7 +474,12 @@ def benchmarks(config: dict, outdir: Path) -> list[Path]:
         if p.exists():
             body = p.read_text().strip().splitlines()
             title = body[0].lstrip("# ").strip() if body and body[0].startswith("#") else name
-            lines += ["", f"## {paper}: {title}", "", *(body[1:] if body and body[0].startswith("#") else body)]
+            lines += [
+                "",
+                f"## {paper}: {title}",
+                "",
+                *(body[1:] if body and body[0].startswith("#") else body),
+            ]
     return [atomic_write_text(outdir / BENCHMARKS, "\n".join(lines).rstrip() + "\n")]
 
 
@@ -370,7 +488,7 @@ def readme_block(benchmarks_md: str) -> str:
     i, j = benchmarks_md.find(BEGIN), benchmarks_md.find(END)
     if i < 0 or j < i:
         raise ValueError(f"benchmarks file has no {BEGIN} ... {END} block")
-    return benchmarks_md[i:j + len(END)]
+    return benchmarks_md[i : j + len(END)]
 
 
 def sync_readme(readme: Path, benchmarks_md: Path) -> Path:
@@ -398,40 +516,72 @@ def summary(figdir: Path) -> str:
     for m in mechs:
         g = local[local["mechanism"] == m]
         by = {s: g[g["scenario"] == s]["success_rate"] for s in SCENARIOS}
-        lines.append(f"{m}: " + ", ".join(f"{s} {_pct(by[s].min())}–{_pct(by[s].max())}" for s in SCENARIOS if len(by[s])))
-    parts.append("Local solvers (Newton, Broyden, BFGS, LM, scipy root), success rate range per scenario — "
-                 + "; ".join(lines) + ".")
+        lines.append(
+            f"{m}: "
+            + ", ".join(
+                f"{s} {_pct(by[s].min())}–{_pct(by[s].max())}" for s in SCENARIOS if len(by[s])
+            )
+        )
+    parts.append(
+        "Local solvers (Newton, Broyden, BFGS, LM, scipy root), success rate range per scenario — "
+        + "; ".join(lines)
+        + "."
+    )
     wrong = df.loc[df["wrong_assembly_rate"].idxmax()]
-    parts.append(f"A converged solve is not always the right one: the largest wrong-assembly rate is "
-                 f"{_pct(wrong['wrong_assembly_rate'])} ({wrong['mechanism']}, {wrong['solver']}, {wrong['scenario']}); "
-                 "near a forward singularity two assemblies lie closer together than the start error, so a "
-                 "perturbed start often leads to the other one (the all-solutions FK with the nearest-start rule "
-                 "fails the same way).")
-    home = df.groupby("mechanism")["home_cond"].first() if "home_cond" in df else pd.Series(dtype=float)
+    parts.append(
+        f"A converged solve is not always the right one: the largest wrong-assembly rate is "
+        f"{_pct(wrong['wrong_assembly_rate'])} ({wrong['mechanism']}, {wrong['solver']}, {wrong['scenario']}); "
+        "near a forward singularity two assemblies lie closer together than the start error, so a "
+        "perturbed start often leads to the other one (the all-solutions FK with the nearest-start rule "
+        "fails the same way)."
+    )
+    home = (
+        df.groupby("mechanism")["home_cond"].first()
+        if "home_cond" in df
+        else pd.Series(dtype=float)
+    )
     worst = home.idxmax() if len(home) else None
     if worst is not None and home[worst] > 1e8:
-        cold = local[(local["mechanism"] == worst) & (local["scenario"] == "cold")].set_index("solver")["success_rate"]
-        parts.append(f"The cold start matters most on {worst}: its home pose is a forward singularity of the "
-                     f"solved leg set (cond(A) = {home[worst]:.2g} at home). Methods that keep the start's Jacobian "
-                     "(Broyden's secant update, MINPACK's hybr) cannot leave it; those that recompute or damp it "
-                     "(Newton with its pseudo-inverse fallback, BFGS, LM) mostly recover: "
-                     f"{', '.join(f'{k} {_pct(v)}' for k, v in cold.items())}.")
+        cold = local[(local["mechanism"] == worst) & (local["scenario"] == "cold")].set_index(
+            "solver"
+        )["success_rate"]
+        parts.append(
+            f"The cold start matters most on {worst}: its home pose is a forward singularity of the "
+            f"solved leg set (cond(A) = {home[worst]:.2g} at home). Methods that keep the start's Jacobian "
+            "(Broyden's secant update, MINPACK's hybr) cannot leave it; those that recompute or damp it "
+            "(Newton with its pseudo-inverse fallback, BFGS, LM) mostly recover: "
+            f"{', '.join(f'{k} {_pct(v)}' for k, v in cold.items())}."
+        )
     pso = df[df["method"] == "pso"]
     if len(pso):
         nom = pso[pso["scenario"] == "nominal"]
-        lat = df[df["scenario"] == "nominal"].set_index(["mechanism", "method"])["median_latency_us"]
-        cost = nom["median_latency_us"].to_numpy() / lat.xs("newton", level="method").reindex(nom["mechanism"]).to_numpy()
-        parts.append("PSO (swarm and iterations as configured, Li 2020's stop F ≤ 1e-6 mm): "
-                     + ", ".join(f"{r.mechanism} {r.solver.split('(')[1].rstrip(')')} {_pct(r.success_rate)}"
-                                 for r in nom.itertuples())
-                     + " on the nominal inputs — a global search that finds the 3-DOF poses most of the time and "
-                       f"the 6-DOF ones not at all within the budget, at {np.nanmin(cost):.0f}–{np.nanmax(cost):.0f}× "
-                       "the single-call time of Newton.")
+        lat = df[df["scenario"] == "nominal"].set_index(["mechanism", "method"])[
+            "median_latency_us"
+        ]
+        cost = (
+            nom["median_latency_us"].to_numpy()
+            / lat.xs("newton", level="method").reindex(nom["mechanism"]).to_numpy()
+        )
+        parts.append(
+            "PSO (swarm and iterations as configured, Li 2020's stop F ≤ 1e-6 mm): "
+            + ", ".join(
+                f"{r.mechanism} {r.solver.split('(')[1].rstrip(')')} {_pct(r.success_rate)}"
+                for r in nom.itertuples()
+            )
+            + " on the nominal inputs — a global search that finds the 3-DOF poses most of the time and "
+            f"the 6-DOF ones not at all within the budget, at {np.nanmin(cost):.0f}–{np.nanmax(cost):.0f}× "
+            "the single-call time of Newton."
+        )
     newton = df[(df["scenario"] == "nominal") & (df["method"] == "newton")]
-    parts.append("Batched Newton (nominal, this machine): " + ", ".join(
-        f"{r.mechanism} {r.throughput_per_s:.3g} solves/s ({r.speedup_per_solve:.3g}× scipy per solve, "
-        f"{r.speedup_single:.2g}× per single call)" for r in newton.itertuples())
+    parts.append(
+        "Batched Newton (nominal, this machine): "
+        + ", ".join(
+            f"{r.mechanism} {r.throughput_per_s:.3g} solves/s ({r.speedup_per_solve:.3g}× scipy per solve, "
+            f"{r.speedup_single:.2g}× per single call)"
+            for r in newton.itertuples()
+        )
         + ". Single calls pay the generic driver's fixed Python overhead (validation, batching, result object) "
-          "and are not faster than scipy's compiled MINPACK loop; batching is where the solvers win. "
-          f"Full table: [{ATLAS_STEM}.md]({ATLAS_STEM}.md); speed summary: [{BENCHMARKS}]({BENCHMARKS}).")
+        "and are not faster than scipy's compiled MINPACK loop; batching is where the solvers win. "
+        f"Full table: [{ATLAS_STEM}.md]({ATLAS_STEM}.md); speed summary: [{BENCHMARKS}]({BENCHMARKS})."
+    )
     return "\n\n".join(parts)

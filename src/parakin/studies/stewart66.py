@@ -27,8 +27,16 @@ import pandas as pd
 
 from parakin.mechanisms.stewart66 import DIETMAIER_LENGTHS, Stewart66
 
-__all__ = ["assemblies_data", "assemblies_draw", "real_counts_data", "real_counts_draw", "timing_data",
-           "timing_draw", "random_platform", "random_pose"]
+__all__ = [
+    "assemblies_data",
+    "assemblies_draw",
+    "real_counts_data",
+    "real_counts_draw",
+    "timing_data",
+    "timing_draw",
+    "random_platform",
+    "random_pose",
+]
 
 DEFAULTS: dict[str, Any] = {"seed": 66, "n_platforms": 50, "n_poses": 200, "n_timing": 200}
 
@@ -70,8 +78,12 @@ def assemblies_data(config: dict | None = None) -> pd.DataFrame:
         err = float(np.max(np.abs(m.ik(p) - np.asarray(DIETMAIER_LENGTHS))))
         rows.append({"solution": k, **dict(zip(m.pose_names, p.tolist())), "ik_error": err})
     df = pd.DataFrame(rows)
-    df.attrs.update(n_found=int(r.n_found), n_real=int(r.n_real), complete=bool(r.complete),
-                    alpha_max=float(np.nanmax(r.alpha)))
+    df.attrs.update(
+        n_found=int(r.n_found),
+        n_real=int(r.n_real),
+        complete=bool(r.complete),
+        alpha_max=float(np.nanmax(r.alpha)),
+    )
     return df
 
 
@@ -86,8 +98,13 @@ def assemblies_draw(frame: pd.DataFrame, path: str | Path) -> Path:
     rows = max(1, int(np.ceil(n / cols)))
     fig = Figure(figsize=(2.0 * cols, 2.0 * rows), dpi=100)
     FigureCanvasAgg(fig)
-    allpts = np.concatenate([m.platform_world(frame[list(m.pose_names)].to_numpy()).reshape(-1, 3),
-                             m.base_points]) if n else m.base_points
+    allpts = (
+        np.concatenate(
+            [m.platform_world(frame[list(m.pose_names)].to_numpy()).reshape(-1, 3), m.base_points]
+        )
+        if n
+        else m.base_points
+    )
     lo, hi = allpts.min(0), allpts.max(0)
     for i, (_, row) in enumerate(frame.iterrows()):
         ax = fig.add_subplot(rows, cols, i + 1, projection="3d")
@@ -124,17 +141,38 @@ def real_counts_data(config: dict | None = None) -> pd.DataFrame:
         t0 = time.perf_counter()
         r = m.fk_all(m.ik(pose), return_info=True)
         wall = time.perf_counter() - t0
-        rows.append({"set": "random platform", "index": i, "root_count": m.root_count, "n_found": int(r.n_found[0]),
-                     "complete": bool(r.complete[0]), "n_real": int(r.n_real[0]),
-                     "ik_error": float(r.ik_error[0]), "steps": int(r.steps[0]), "retries": int(r.retries[0]),
-                     "wall_s": wall})
+        rows.append(
+            {
+                "set": "random platform",
+                "index": i,
+                "root_count": m.root_count,
+                "n_found": int(r.n_found[0]),
+                "complete": bool(r.complete[0]),
+                "n_real": int(r.n_real[0]),
+                "ik_error": float(r.ik_error[0]),
+                "steps": int(r.steps[0]),
+                "retries": int(r.retries[0]),
+                "wall_s": wall,
+            }
+        )
     m = Stewart66()
     poses = random_pose(rng, int(c["n_poses"]), m)
     r = m.fk_all(m.ik(poses), return_info=True)
     for i in range(len(poses)):
-        rows.append({"set": "Dietmaier", "index": i, "root_count": m.root_count, "n_found": int(r.n_found[i]),
-                     "complete": bool(r.complete[i]), "n_real": int(r.n_real[i]), "ik_error": float(r.ik_error[i]),
-                     "steps": int(r.steps[i]), "retries": int(r.retries[i]), "wall_s": np.nan})
+        rows.append(
+            {
+                "set": "Dietmaier",
+                "index": i,
+                "root_count": m.root_count,
+                "n_found": int(r.n_found[i]),
+                "complete": bool(r.complete[i]),
+                "n_real": int(r.n_real[i]),
+                "ik_error": float(r.ik_error[i]),
+                "steps": int(r.steps[i]),
+                "retries": int(r.retries[i]),
+                "wall_s": np.nan,
+            }
+        )
     return pd.DataFrame(rows)
 
 
@@ -151,7 +189,12 @@ def real_counts_draw(frame: pd.DataFrame, path: str | Path) -> Path:
     width = 1.8 / max(1, len(sets))
     for k, s in enumerate(sets):
         counts = np.array([(frame.loc[frame["set"] == s, "n_real"] == b).sum() for b in bins])
-        ax.bar(bins - 0.9 + width * (k + 0.5), counts, width=width, label=f"{s} (n = {(frame['set'] == s).sum()})")
+        ax.bar(
+            bins - 0.9 + width * (k + 0.5),
+            counts,
+            width=width,
+            label=f"{s} (n = {(frame['set'] == s).sum()})",
+        )
     comp = frame["complete"].mean() * 100
     ax.set_xlabel("real forward solutions (of 40 complex)")
     ax.set_ylabel("inputs")
@@ -183,25 +226,55 @@ def timing_data(config: dict | None = None) -> pd.DataFrame:
         t0 = time.perf_counter()
         r1 = m.fk_all(q[i], return_info=True)
         single.append(time.perf_counter() - t0)
-    rows.append({"method": "fk_all, one input per call", "inputs": 1, "per_input_s": float(np.median(single)),
-                 "inputs_per_s": 1 / float(np.median(single)), "complete_rate": 1.0 * bool(r1.complete),
-                 "mean_real_found": float(r1.n_real)})
+    rows.append(
+        {
+            "method": "fk_all, one input per call",
+            "inputs": 1,
+            "per_input_s": float(np.median(single)),
+            "inputs_per_s": 1 / float(np.median(single)),
+            "complete_rate": 1.0 * bool(r1.complete),
+            "mean_real_found": float(r1.n_real),
+        }
+    )
     t0 = time.perf_counter()
     r = m.fk_all(q, return_info=True)
     wall = time.perf_counter() - t0
-    rows.append({"method": "fk_all, batched", "inputs": n, "per_input_s": wall / n, "inputs_per_s": n / wall,
-                 "complete_rate": float(r.complete.mean()), "mean_real_found": float(r.n_real.mean())})
+    rows.append(
+        {
+            "method": "fk_all, batched",
+            "inputs": n,
+            "per_input_s": wall / n,
+            "inputs_per_s": n / wall,
+            "complete_rate": float(r.complete.mean()),
+            "mean_real_found": float(r.n_real.mean()),
+        }
+    )
     lo, hi = m.pose_bounds()
     starts = rng.uniform(lo, hi, (n, 40, 6))
     t0 = time.perf_counter()
-    res = solve_fk(m, np.broadcast_to(q[:, None], (n, 40, 6)), x0=starts, method="newton", tol=1e-10, maxiter=50)
+    res = solve_fk(
+        m,
+        np.broadcast_to(q[:, None], (n, 40, 6)),
+        x0=starts,
+        method="newton",
+        tol=1e-10,
+        maxiter=50,
+    )
     wall_n = time.perf_counter() - t0
     found = []
     for i in range(n):
         x = res.x[i][res.success[i]]
         found.append(_count_distinct(m, x))
-    rows.append({"method": "Newton from 40 random starts, batched", "inputs": n, "per_input_s": wall_n / n,
-                 "inputs_per_s": n / wall_n, "complete_rate": np.nan, "mean_real_found": float(np.mean(found))})
+    rows.append(
+        {
+            "method": "Newton from 40 random starts, batched",
+            "inputs": n,
+            "per_input_s": wall_n / n,
+            "inputs_per_s": n / wall_n,
+            "complete_rate": np.nan,
+            "mean_real_found": float(np.mean(found)),
+        }
+    )
     df = pd.DataFrame(rows)
     df["x_newton_time"] = df["per_input_s"] / (wall_n / n)
     return df
@@ -234,7 +307,13 @@ def timing_draw(frame: pd.DataFrame, path: str | Path) -> Path:
     ax.set_xscale("log")
     ax.set_xlabel("inputs per second (all solutions of each input)")
     for yi, (_, r) in zip(y, frame.iterrows()):
-        ax.text(r["inputs_per_s"], yi, f"  {r['mean_real_found']:.1f} real found", va="center", fontsize=8)
+        ax.text(
+            r["inputs_per_s"],
+            yi,
+            f"  {r['mean_real_found']:.1f} real found",
+            va="center",
+            fontsize=8,
+        )
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path)
@@ -272,15 +351,39 @@ def _declare():
 
     #: path tracking: the root count, the solutions found and the real ones are properties of the
     #: input (stable), the steps and retries of a path tracker move with rounding (not compared)
-    counts = Tolerance("statistical", 0.0, 0.0,
-                       "all-solutions counts per input are properties of the input: compared exactly; "
-                       "tracking steps and retries move with rounding (not compared); IK error to 1e-9",
-                       columns={"index": (0.0, 0.0), "root_count": (0.0, 0.0), "n_found": (0.0, 0.0),
-                                "n_real": (0.0, 0.0), "ik_error": (0.0, 1e-9)})
+    counts = Tolerance(
+        "statistical",
+        0.0,
+        0.0,
+        "all-solutions counts per input are properties of the input: compared exactly; "
+        "tracking steps and retries move with rounding (not compared); IK error to 1e-9",
+        columns={
+            "index": (0.0, 0.0),
+            "root_count": (0.0, 0.0),
+            "n_found": (0.0, 0.0),
+            "n_real": (0.0, 0.0),
+            "ik_error": (0.0, 1e-9),
+        },
+    )
     common = {"config": [KEY], "reference": False}
-    figure(KEY, "assemblies", "extra_dietmaier_assemblies", assemblies, assemblies_draw,
-           tolerance=ROUNDING.but("certified roots refined by Newton to machine precision"), **common)
-    figure(KEY, "real_counts", "extra_real_counts", real_counts, real_counts_draw, tolerance=counts, **common)
+    figure(
+        KEY,
+        "assemblies",
+        "extra_dietmaier_assemblies",
+        assemblies,
+        assemblies_draw,
+        tolerance=ROUNDING.but("certified roots refined by Newton to machine precision"),
+        **common,
+    )
+    figure(
+        KEY,
+        "real_counts",
+        "extra_real_counts",
+        real_counts,
+        real_counts_draw,
+        tolerance=counts,
+        **common,
+    )
     figure(KEY, "timing", "extra_fk_all_timing", timing, timing_draw, tolerance=TIMING, **common)
 
 

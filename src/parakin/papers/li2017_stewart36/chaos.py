@@ -17,32 +17,50 @@ import numpy as np
 import pandas as pd
 
 import parakin.solvers.pso  # noqa: F401  (registers "pso")
+from parakin.claims import Claim, printed_value
 from parakin.config import seed_for
 from parakin.io import write_csv, write_table
-from parakin.papers.li2017_stewart36.common import INPUT_NOTE, KEY, cfg, fk_input, mech
+from parakin.papers.li2017_stewart36.common import INPUT_NOTE, KEY, artefact, cfg, fk_input, mech
 from parakin.plot import new_figure, save_figure, use_style
-from parakin.claims import Claim, printed_value
+from parakin.progress import Progress
+from parakin.registry import Tolerance
 from parakin.solvers import solve_fk
 from parakin.solvers.pso import ChaoticLogistic
-from parakin.registry import Tolerance
-from parakin.papers.li2017_stewart36.common import artefact
-from parakin.progress import Progress
 
 #: the logistic map (mu = 4) is chaotic: after ~50 iterations a rounding difference is amplified
 #: to O(1), so the weight sequences and the PSO runs they drive are compared only through what is
 #: stable: the histogram of the map's values (Table 1) within sampling noise, and the PSO fitness
 #: statistics over 50 runs by order of magnitude
-CHAOS = Tolerance("statistical", 0.0, 0.0,
-                  "chaotic map and PSO runs: histogram counts within 3 sqrt(count) + 3, statistics of "
-                  "the map within 0.05; trajectories and PSO extremes not compared",
-                  columns={"bin_lo": (1e-12, 0.0), "bin_hi": (1e-12, 0.0), "count_mu4": (0.1, 10.0),
-                           "count_mu0.4": (0.1, 10.0), "arcsine_expected": (1e-9, 0.0), "mean": (0.0, 0.05),
-                           "frac_above_0.1": (0.0, 0.05), "runs": (0.0, 0.0)},
-                  files=("fig02_chaotic_weights.csv", "fig02_chaotic_weights.png", "fig03_convergence.csv",
-                         "fig03_convergence.png"))
+CHAOS = Tolerance(
+    "statistical",
+    0.0,
+    0.0,
+    "chaotic map and PSO runs: histogram counts within 3 sqrt(count) + 3, statistics of "
+    "the map within 0.05; trajectories and PSO extremes not compared",
+    columns={
+        "bin_lo": (1e-12, 0.0),
+        "bin_hi": (1e-12, 0.0),
+        "count_mu4": (0.1, 10.0),
+        "count_mu0.4": (0.1, 10.0),
+        "arcsine_expected": (1e-9, 0.0),
+        "mean": (0.0, 0.05),
+        "frac_above_0.1": (0.0, 0.05),
+        "runs": (0.0, 0.0),
+    },
+    files=(
+        "fig02_chaotic_weights.csv",
+        "fig02_chaotic_weights.png",
+        "fig03_convergence.csv",
+        "fig03_convergence.png",
+    ),
+)
 
 VARIANTS = ("chaotic", "standard", "printed")  # printed: chaotic weight with the printed mu = 0.4
-LABELS = {"chaotic": "chaotic (μ = 4)", "standard": "standard (w 0.9 → 0.4)", "printed": "chaotic, μ = 0.4 as printed"}
+LABELS = {
+    "chaotic": "chaotic (μ = 4)",
+    "standard": "standard (w 0.9 → 0.4)",
+    "printed": "chaotic, μ = 0.4 as printed",
+}
 
 
 def logistic_weights(mu: float, z0: float, n: int) -> np.ndarray:
@@ -67,8 +85,12 @@ def histogram(z: np.ndarray, bins: int) -> np.ndarray:
     return np.histogram(np.clip(z, 0, 1), bins=bins, range=(0.0, 1.0))[0]
 
 
-@artefact("table1", outputs=["table1.csv", "table1.md", "table1_stats.csv", "table1_stats.md"], config=[KEY],
-          tolerance=CHAOS)
+@artefact(
+    "table1",
+    outputs=["table1.csv", "table1.md", "table1_stats.csv", "table1_stats.md"],
+    config=[KEY],
+    tolerance=CHAOS,
+)
 def table1(config: dict, outdir: Path) -> list[Path]:
     """Table 1 (body LOST): distribution of the chaotic weights over ten bins, mu = 4 and the printed
     mu = 0.4 (collapse), beside the arcsine law."""
@@ -79,25 +101,47 @@ def table1(config: dict, outdir: Path) -> list[Path]:
     z04 = logistic_weights(c["mu_printed"], c["z0"], n)
     exp = arcsine_expected(n, bins)
     h4 = histogram(z4, bins)
-    df = pd.DataFrame({"bin_lo": edges[:-1], "bin_hi": edges[1:], f"count_mu{c['mu']:g}": h4,
-                       f"count_mu{c['mu_printed']:g}": histogram(z04, bins), "arcsine_expected": exp})
+    df = pd.DataFrame(
+        {
+            "bin_lo": edges[:-1],
+            "bin_hi": edges[1:],
+            f"count_mu{c['mu']:g}": h4,
+            f"count_mu{c['mu_printed']:g}": histogram(z04, bins),
+            "arcsine_expected": exp,
+        }
+    )
     chi2 = float(np.sum((h4 - exp) ** 2 / exp))
-    stats = pd.DataFrame({
-        "mu": [c["mu"], c["mu_printed"]], "mean": [z4.mean(), z04.mean()], "min": [z4.min(), z04.min()],
-        "max": [z4.max(), z04.max()], "frac_above_0.1": [np.mean(z4 >= 0.1), np.mean(z04 >= 0.1)],
-        "last": [z4[-1], z04[-1]], "chi2_vs_arcsine": [chi2, float(np.sum((histogram(z04, bins) - exp) ** 2 / exp))],
-        "chi2_dof": [bins - 1, bins - 1],
-    })
-    return (write_table(df, outdir / "table1", title=f"Table 1 — {n} chaotic weights (Z0 = {c['z0']}) over {bins} bins",
-                        notes=f"Body of the paper's Table 1 lost; described as 'more at both ends, fairly uniform in "
-                              f"between'. mu = {c['mu']:g} is our reading; mu = {c['mu_printed']:g} as printed "
-                              "collapses to 0 (docs/li2017_stewart36.md#g6). Exact counts are floating-point sensitive (chaos); "
-                              "compare the distribution (chi2, 9 dof).")
-            + write_table(stats, outdir / "table1_stats", title="Table 1 — statistics of the weight sequences"))
+    stats = pd.DataFrame(
+        {
+            "mu": [c["mu"], c["mu_printed"]],
+            "mean": [z4.mean(), z04.mean()],
+            "min": [z4.min(), z04.min()],
+            "max": [z4.max(), z04.max()],
+            "frac_above_0.1": [np.mean(z4 >= 0.1), np.mean(z04 >= 0.1)],
+            "last": [z4[-1], z04[-1]],
+            "chi2_vs_arcsine": [chi2, float(np.sum((histogram(z04, bins) - exp) ** 2 / exp))],
+            "chi2_dof": [bins - 1, bins - 1],
+        }
+    )
+    return write_table(
+        df,
+        outdir / "table1",
+        title=f"Table 1 — {n} chaotic weights (Z0 = {c['z0']}) over {bins} bins",
+        notes=f"Body of the paper's Table 1 lost; described as 'more at both ends, fairly uniform in "
+        f"between'. mu = {c['mu']:g} is our reading; mu = {c['mu_printed']:g} as printed "
+        "collapses to 0 (docs/li2017_stewart36.md#g6). Exact counts are floating-point sensitive (chaos); "
+        "compare the distribution (chi2, 9 dof).",
+    ) + write_table(
+        stats, outdir / "table1_stats", title="Table 1 — statistics of the weight sequences"
+    )
 
 
-@artefact("fig02", outputs=["fig02_chaotic_weights.png", "fig02_chaotic_weights.csv"], config=[KEY],
-          tolerance=CHAOS)
+@artefact(
+    "fig02",
+    outputs=["fig02_chaotic_weights.png", "fig02_chaotic_weights.csv"],
+    config=[KEY],
+    tolerance=CHAOS,
+)
 def fig02(config: dict, outdir: Path) -> list[Path]:
     """Fig. 2: the weight sequence omega(t) = Z_t, t = 1..1000, for mu = 4 (and mu = 0.4 as printed)."""
     c = cfg(config)["chaos"]
@@ -113,7 +157,10 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
     ax.set_ylim(-0.02, 1.02)
     ax.legend(loc="center right", fontsize="x-small")
     df = pd.DataFrame({"t": t, f"w_mu{c['mu']:g}": z4, f"w_mu{c['mu_printed']:g}": z04})
-    return [save_figure(fig, outdir / "fig02_chaotic_weights.png"), write_csv(df, outdir / "fig02_chaotic_weights.csv")]
+    return [
+        save_figure(fig, outdir / "fig02_chaotic_weights.png"),
+        write_csv(df, outdir / "fig02_chaotic_weights.csv"),
+    ]
 
 
 def schedule(config: dict, variant: str, mu: float | None = None):
@@ -133,10 +180,25 @@ def run_pso(config: dict, variant: str, runs: int | None = None, b: float | None
     q = np.broadcast_to(fk_input(config, b), (runs, 6))
     seeds = seed_for(config, f"{KEY}.pso.{variant}") % (2**31) + np.arange(runs)
     fit = lambda x, joints: m.objective(x, joints[:, None, :])  # noqa: E731  eq. (4)
-    return solve_fk(m, q, method="pso", seed=seeds, tol=0.0, maxiter=int(p["maxiter"]), swarm=int(p["swarm"]),
-                    c1=float(p["c1"]), c2=float(p["c2"]), inertia=schedule(config, variant), w=float(p["w_start"]),
-                    w_end=float(p["w_end"]), vclamp=p["vclamp"], fitness=fit,
-                    callback=Progress(f"PSO {variant} ({runs} runs)", int(p["maxiter"]) + 1, "iterations").callback)
+    return solve_fk(
+        m,
+        q,
+        method="pso",
+        seed=seeds,
+        tol=0.0,
+        maxiter=int(p["maxiter"]),
+        swarm=int(p["swarm"]),
+        c1=float(p["c1"]),
+        c2=float(p["c2"]),
+        inertia=schedule(config, variant),
+        w=float(p["w_start"]),
+        w_end=float(p["w_end"]),
+        vclamp=p["vclamp"],
+        fitness=fit,
+        callback=Progress(
+            f"PSO {variant} ({runs} runs)", int(p["maxiter"]) + 1, "iterations"
+        ).callback,
+    )
 
 
 def polish(config: dict, res) -> tuple[np.ndarray, np.ndarray]:
@@ -148,9 +210,19 @@ def polish(config: dict, res) -> tuple[np.ndarray, np.ndarray]:
     return lm.x, m.objective(lm.x, q)
 
 
-@artefact("fig03", outputs=["fig03_convergence.png", "fig03_convergence.csv", "fitness_stats.csv",
-                           "fitness_stats.md"], config=[KEY], tolerance=CHAOS,
-          threads=1, resources={"runtime": 30, "mem_mb": 2000})
+@artefact(
+    "fig03",
+    outputs=[
+        "fig03_convergence.png",
+        "fig03_convergence.csv",
+        "fitness_stats.csv",
+        "fitness_stats.md",
+    ],
+    config=[KEY],
+    tolerance=CHAOS,
+    threads=1,
+    resources={"runtime": 30, "mem_mb": 2000},
+)
 def fig03(config: dict, outdir: Path) -> list[Path]:
     """Fig. 3: best fitness F (eq. 4) per iteration, median and 10-90 % band over the runs, chaotic vs
     standard PSO; the fitness statistics beside the paper's (best 0, worst 1.38e-30, mean 2.05e-31),
@@ -169,43 +241,80 @@ def fig03(config: dict, outdir: Path) -> list[Path]:
         lo, med, hi = np.percentile(h, [10, 50, 90], axis=0)
         ax.fill_between(it, lo, hi, color=color, alpha=0.2, lw=0)
         ax.semilogy(it, med, color=color, lw=1.3, label=f"{LABELS[variant]} PSO (median, 10–90 %)")
-        frames.append(pd.DataFrame({"variant": variant, "iteration": it, "F_median": med, "F_q10": lo, "F_q90": hi}))
+        frames.append(
+            pd.DataFrame(
+                {"variant": variant, "iteration": it, "F_median": med, "F_q10": lo, "F_q90": hi}
+            )
+        )
         t1 = time.perf_counter()
         _, fpol = polish(config, res)
         wall_pol = time.perf_counter() - t1
-        xs = VARIANTS.index(variant) + np.linspace(-0.25, 0.25, len(fpol)) if len(fpol) > 1 else [VARIANTS.index(variant)]
+        xs = (
+            VARIANTS.index(variant) + np.linspace(-0.25, 0.25, len(fpol))
+            if len(fpol) > 1
+            else [VARIANTS.index(variant)]
+        )
         ax_lm.plot(xs, np.maximum(fpol, 1e-33), "o", mfc="none", color=color, ms=3.5)
-        for name, f, w in ((f"{variant} PSO", res.fitness, wall), (f"{variant} PSO + LM", fpol, wall_pol)):
-            stats.append({"variant": name, "runs": len(f), "best": float(np.min(f)), "worst": float(np.max(f)),
-                          "mean": float(np.mean(f)), "median": float(np.median(f)),
-                          "runs_below_1e-25": int(np.sum(f < 1e-25)), "wall_time_s": w})
+        for name, f, w in (
+            (f"{variant} PSO", res.fitness, wall),
+            (f"{variant} PSO + LM", fpol, wall_pol),
+        ):
+            stats.append(
+                {
+                    "variant": name,
+                    "runs": len(f),
+                    "best": float(np.min(f)),
+                    "worst": float(np.max(f)),
+                    "mean": float(np.mean(f)),
+                    "median": float(np.median(f)),
+                    "runs_below_1e-25": int(np.sum(f < 1e-25)),
+                    "wall_time_s": w,
+                }
+            )
     ax.set_xlabel("PSO iteration")
     ax.set_ylabel("best fitness F (eq. 4)")
     ax.set_ylim(bottom=1e-33)
     for a_ in (ax, ax_lm):
-        a_.axhline(1.380507e-30, color="k", ls="--", lw=1.0, label="paper: worst of its 50 runs, 1.38e-30")
-    ax_lm.set_xticks(range(len(VARIANTS)), ["chaotic", "standard", "μ = 0.4"], fontsize="x-small", rotation=40)
+        a_.axhline(
+            1.380507e-30, color="k", ls="--", lw=1.0, label="paper: worst of its 50 runs, 1.38e-30"
+        )
+    ax_lm.set_xticks(
+        range(len(VARIANTS)), ["chaotic", "standard", "μ = 0.4"], fontsize="x-small", rotation=40
+    )
     ax_lm.set_xlim(-0.6, len(VARIANTS) - 0.4)
     ax_lm.set_title("after LM polish\n(each run)", fontsize="small")
-    ax.set_title(f"Fig. 3: PSO convergence on one input, {cfg(config)['pso']['runs']} runs per variant", fontsize="small")
+    ax.set_title(
+        f"Fig. 3: PSO convergence on one input, {cfg(config)['pso']['runs']} runs per variant",
+        fontsize="small",
+    )
     handles, labels = ax.get_legend_handles_labels()
     fig.legend(handles, labels, fontsize="x-small", loc="outside lower center", ncols=2)
     st = pd.DataFrame(stats)
     p = cfg(config)["pso"]
-    return [save_figure(fig, outdir / "fig03_convergence.png"), write_csv(pd.concat(frames), outdir / "fig03_convergence.csv")] + \
-        write_table(st, outdir / "fitness_stats", floatfmt=".3g",
-                    title=f"§3 — fitness over {p['runs']} runs (n = {p['swarm']}, {p['maxiter']} iterations, c1 = c2 = {p['c1']:g})",
-                    notes=f"Paper: best 0, worst 1.380507E-30, mean 2.051038E-31. {INPUT_NOTE}; b = {cfg(config)['b']}. "
-                          "'+ LM' = Levenberg-Marquardt polish of each PSO end point (our addition).")
+    return [
+        save_figure(fig, outdir / "fig03_convergence.png"),
+        write_csv(pd.concat(frames), outdir / "fig03_convergence.csv"),
+    ] + write_table(
+        st,
+        outdir / "fitness_stats",
+        floatfmt=".3g",
+        title=f"§3 — fitness over {p['runs']} runs (n = {p['swarm']}, {p['maxiter']} iterations, c1 = c2 = {p['c1']:g})",
+        notes=f"Paper: best 0, worst 1.380507E-30, mean 2.051038E-31. {INPUT_NOTE}; b = {cfg(config)['b']}. "
+        "'+ LM' = Levenberg-Marquardt polish of each PSO end point (our addition).",
+    )
 
 
-
-
-
-@artefact("pso_test", outputs=["extra_pso_test.csv", "extra_pso_test.md", "extra_pso_runs.csv"], config=[KEY],
-          tolerance=CHAOS.but("the test's p-values and medians over the runs: statistics of chaotic runs, compared by "
-                              "order of magnitude only through the verdict; per-run values not compared",
-                              columns={}, files=("extra_pso_runs.csv",)))
+@artefact(
+    "pso_test",
+    outputs=["extra_pso_test.csv", "extra_pso_test.md", "extra_pso_runs.csv"],
+    config=[KEY],
+    tolerance=CHAOS.but(
+        "the test's p-values and medians over the runs: statistics of chaotic runs, compared by "
+        "order of magnitude only through the verdict; per-run values not compared",
+        columns={},
+        files=("extra_pso_runs.csv",),
+    ),
+)
 def pso_test(config: dict, outdir: Path) -> list[Path]:
     """The paper's headline claim (abstract, §3, conclusion): chaotic-weight PSO converges more precisely
     than standard PSO, judged by a one-sided Mann-Whitney U test on the final best fitness of the
@@ -216,19 +325,42 @@ def pso_test(config: dict, outdir: Path) -> list[Path]:
     a, b = np.asarray(runs["chaotic"], float), np.asarray(runs["standard"], float)
     lower = mannwhitneyu(a, b, alternative="less")
     higher = mannwhitneyu(a, b, alternative="greater")
-    df = pd.DataFrame({"quantity": ["runs_chaotic", "runs_standard", "median_chaotic", "median_standard",
-                                    "U_chaotic", "p_chaotic_lower", "p_standard_lower",
-                                    "share_chaotic_above_standard"],
-                       "value": [len(a), len(b), float(np.median(a)), float(np.median(b)), float(lower.statistic),
-                                 float(lower.pvalue), float(higher.pvalue), float(lower.statistic) / (len(a) * len(b))]})
+    df = pd.DataFrame(
+        {
+            "quantity": [
+                "runs_chaotic",
+                "runs_standard",
+                "median_chaotic",
+                "median_standard",
+                "U_chaotic",
+                "p_chaotic_lower",
+                "p_standard_lower",
+                "share_chaotic_above_standard",
+            ],
+            "value": [
+                len(a),
+                len(b),
+                float(np.median(a)),
+                float(np.median(b)),
+                float(lower.statistic),
+                float(lower.pvalue),
+                float(higher.pvalue),
+                float(lower.statistic) / (len(a) * len(b)),
+            ],
+        }
+    )
     per_run = pd.DataFrame({"run": np.arange(len(a)), "chaotic_F": a, "standard_F": b})
-    return write_table(df, outdir / "extra_pso_test", floatfmt=".4g",
-                       title="Chaotic vs standard PSO: one-sided Mann-Whitney U test on the final best fitness",
-                       notes="H1 of p_chaotic_lower: chaotic runs end lower (more precise) than standard ones; the paper's "
-                             "claim is supported when p <= 0.05 (the tolerance declared in data/reference). "
-                             "share_chaotic_above_standard = U / (n1 n2), the probability that a chaotic run ends above (less "
-                             "precise than) a standard one. Runs, swarm and iterations as §3; standard = linearly decreasing weight "
-                             "(ASSUMED).") + [write_csv(per_run, outdir / "extra_pso_runs.csv")]
+    return write_table(
+        df,
+        outdir / "extra_pso_test",
+        floatfmt=".4g",
+        title="Chaotic vs standard PSO: one-sided Mann-Whitney U test on the final best fitness",
+        notes="H1 of p_chaotic_lower: chaotic runs end lower (more precise) than standard ones; the paper's "
+        "claim is supported when p <= 0.05 (the tolerance declared in data/reference). "
+        "share_chaotic_above_standard = U / (n1 n2), the probability that a chaotic run ends above (less "
+        "precise than) a standard one. Runs, swarm and iterations as §3; standard = linearly decreasing weight "
+        "(ASSUMED).",
+    ) + [write_csv(per_run, outdir / "extra_pso_runs.csv")]
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
@@ -241,11 +373,21 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
         if len(row):
             frac = float(row["frac_above_0.1"].iloc[0])
             good = st[~np.isclose(st["mu"], float(printed_mu))]
-            out.append(Claim(KEY, "eq9", "mu", printed_mu, float(good["mu"].iloc[0]), "1", variant="mu that gives Fig. 2 / Table 1",
-                             evidence=f"{KEY}/table1_stats.md",
-                             reason=f"misprint: with mu = {printed_mu} the weights collapse to 0 (fraction >= 0.1: {frac:.3f}, "
-                                    f"last {float(row['last'].iloc[0]):.2g}); mu = {float(good['mu'].iloc[0]):g} fills [0,1] "
-                                    f"with chi2 = {float(good['chi2_vs_arcsine'].iloc[0]):.1f} (9 dof) vs the arcsine law"))
+            out.append(
+                Claim(
+                    KEY,
+                    "eq9",
+                    "mu",
+                    printed_mu,
+                    float(good["mu"].iloc[0]),
+                    "1",
+                    variant="mu that gives Fig. 2 / Table 1",
+                    evidence=f"{KEY}/table1_stats.md",
+                    reason=f"misprint: with mu = {printed_mu} the weights collapse to 0 (fraction >= 0.1: {frac:.3f}, "
+                    f"last {float(row['last'].iloc[0]):.2g}); mu = {float(good['mu'].iloc[0]):g} fills [0,1] "
+                    f"with chi2 = {float(good['chi2_vs_arcsine'].iloc[0]):.1f} (9 dof) vs the arcsine law",
+                )
+            )
     # set-up echoes (n_weights, runs, iterations) are inputs of the paper, not results: no claims
     path = figdir / "fitness_stats.csv"
     if path.exists():
@@ -256,33 +398,84 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
             r = st.loc[variant]
             n_ok, n = int(r["runs_below_1e-25"]), int(r["runs"])
             if "LM" not in variant:
-                why = (f"PSO alone stalls far above machine precision ({n_ok}/{n} runs below 1e-25, median "
-                       f"{float(r['median']):.2g}; c1 = c2 = 2 keeps the swarm exploring; docs/li2017_stewart36.md#s4.5)")
+                why = (
+                    f"PSO alone stalls far above machine precision ({n_ok}/{n} runs below 1e-25, median "
+                    f"{float(r['median']):.2g}; c1 = c2 = 2 keeps the swarm exploring; docs/li2017_stewart36.md#s4.5)"
+                )
             else:
-                why = (f"a local LM polish of the PSO end point reaches machine precision in {n_ok}/{n} runs (median "
-                       f"{float(r['median']):.2g}), the rest stall in local minima (worst {float(r['worst']):.2g}): a "
-                       "plausible source of the paper's numbers only if failed runs were discarded (unverified)")
+                why = (
+                    f"a local LM polish of the PSO end point reaches machine precision in {n_ok}/{n} runs (median "
+                    f"{float(r['median']):.2g}), the rest stall in local minima (worst {float(r['worst']):.2g}): a "
+                    "plausible source of the paper's numbers only if failed runs were discarded (unverified)"
+                )
             why += "; the paper's statistics are for the chaotic variant"
             lm = "a Levenberg-Marquardt polish the paper does not have" if "LM" in variant else ""
             ev = f"{KEY}/fitness_stats.md"
-            out.append(Claim(KEY, "sec3", "fitness_best", printed_value(ref, "sec3", "fitness_best"), float(r["best"]), "1",
-                             variant=variant, kind="upper", reason=why, basis=lm, evidence=ev))
-            out.append(Claim(KEY, "sec3", "fitness_worst", printed_value(ref, "sec3", "fitness_worst"), float(r["worst"]), "1",
-                             variant=variant, kind="upper", reason=why, basis=lm, evidence=ev))
-            out.append(Claim(KEY, "sec3", "fitness_mean", printed_value(ref, "sec3", "fitness_mean"), float(r["mean"]), "1",
-                             variant=variant, kind="order", reason=why, basis=lm, evidence=ev))
+            out.append(
+                Claim(
+                    KEY,
+                    "sec3",
+                    "fitness_best",
+                    printed_value(ref, "sec3", "fitness_best"),
+                    float(r["best"]),
+                    "1",
+                    variant=variant,
+                    kind="upper",
+                    reason=why,
+                    basis=lm,
+                    evidence=ev,
+                )
+            )
+            out.append(
+                Claim(
+                    KEY,
+                    "sec3",
+                    "fitness_worst",
+                    printed_value(ref, "sec3", "fitness_worst"),
+                    float(r["worst"]),
+                    "1",
+                    variant=variant,
+                    kind="upper",
+                    reason=why,
+                    basis=lm,
+                    evidence=ev,
+                )
+            )
+            out.append(
+                Claim(
+                    KEY,
+                    "sec3",
+                    "fitness_mean",
+                    printed_value(ref, "sec3", "fitness_mean"),
+                    float(r["mean"]),
+                    "1",
+                    variant=variant,
+                    kind="order",
+                    reason=why,
+                    basis=lm,
+                    evidence=ev,
+                )
+            )
     path = figdir / "extra_pso_test.csv"
     if path.exists():
         tst = pd.read_csv(path).set_index("quantity")["value"]
-        out.append(Claim(KEY, "abstract", "chaotic_more_precise.p_value",
-                         printed_value(ref, "abstract", "chaotic_more_precise.p_value"), float(tst["p_chaotic_lower"]), "1",
-                         variant=f"one-sided Mann-Whitney U on the final best fitness, {int(tst['runs_chaotic'])} chaotic vs "
-                                 f"{int(tst['runs_standard'])} standard runs",
-                         evidence=f"{KEY}/extra_pso_test.md",
-                         reason=f"median final fitness chaotic {tst['median_chaotic']:.2g}, standard {tst['median_standard']:.2g}; "
-                                f"the opposite one-sided test (standard lower) gives p = {tst['p_standard_lower']:.2g}: "
-                                "with the paper's settings (mu = 4, standard = linearly decreasing weight, ASSUMED) the "
-                                "chaotic weight is less precise"))
+        out.append(
+            Claim(
+                KEY,
+                "abstract",
+                "chaotic_more_precise.p_value",
+                printed_value(ref, "abstract", "chaotic_more_precise.p_value"),
+                float(tst["p_chaotic_lower"]),
+                "1",
+                variant=f"one-sided Mann-Whitney U on the final best fitness, {int(tst['runs_chaotic'])} chaotic vs "
+                f"{int(tst['runs_standard'])} standard runs",
+                evidence=f"{KEY}/extra_pso_test.md",
+                reason=f"median final fitness chaotic {tst['median_chaotic']:.2g}, standard {tst['median_standard']:.2g}; "
+                f"the opposite one-sided test (standard lower) gives p = {tst['p_standard_lower']:.2g}: "
+                "with the paper's settings (mu = 4, standard = linearly decreasing weight, ASSUMED) the "
+                "chaotic weight is less precise",
+            )
+        )
     return out
 
 
@@ -292,13 +485,24 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     if path.exists():
         t = pd.read_csv(path)
         cols = [c for c in t.columns if c.startswith("count_mu")]
-        parts.append("Chaotic weights per 0.1 bin: " + "; ".join(
-            f"{c.replace('count_mu', 'mu = ')}: {', '.join(str(int(v)) for v in t[c])}" for c in cols)
-            + f" (arcsine law: {', '.join(f'{v:.1f}' for v in t['arcsine_expected'])}).")
+        parts.append(
+            "Chaotic weights per 0.1 bin: "
+            + "; ".join(
+                f"{c.replace('count_mu', 'mu = ')}: {', '.join(str(int(v)) for v in t[c])}"
+                for c in cols
+            )
+            + f" (arcsine law: {', '.join(f'{v:.1f}' for v in t['arcsine_expected'])})."
+        )
     path = figdir / "fitness_stats.csv"
     if path.exists():
         st = pd.read_csv(path)
-        parts.append("Fitness over the runs (best / median / worst; runs < 1e-25): " + "; ".join(
-            f"{r['variant']}: {r['best']:.2g} / {r['median']:.2g} / {r['worst']:.2g}; "
-            f"{int(r['runs_below_1e-25'])}/{int(r['runs'])}" for _, r in st.iterrows()) + ". Paper: 0 / – / 1.38e-30 (mean 2.05e-31).")
+        parts.append(
+            "Fitness over the runs (best / median / worst; runs < 1e-25): "
+            + "; ".join(
+                f"{r['variant']}: {r['best']:.2g} / {r['median']:.2g} / {r['worst']:.2g}; "
+                f"{int(r['runs_below_1e-25'])}/{int(r['runs'])}"
+                for _, r in st.iterrows()
+            )
+            + ". Paper: 0 / – / 1.38e-30 (mean 2.05e-31)."
+        )
     return "\n\n".join(parts)

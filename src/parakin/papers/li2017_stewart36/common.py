@@ -9,13 +9,12 @@ from __future__ import annotations
 
 from functools import partial
 
-from parakin import registry
-
 import numpy as np
 import pandas as pd
 
-from parakin.mechanisms.stewart36 import Stewart36, pose_from_paper
+from parakin import registry
 from parakin.claims import load_reference
+from parakin.mechanisms.stewart36 import Stewart36, pose_from_paper
 
 KEY = "li2017_stewart36"
 
@@ -44,8 +43,13 @@ def table3(ref: pd.DataFrame | None = None) -> pd.DataFrame:
     rows = []
     for k in range(1, 20):
         sub = t[t["quantity"].str.startswith(f"row{k}.")].set_index("quantity")
-        rows.append({"row": k, **{c: float(sub.loc[f"row{k}.{c}", "value"]) for c in POSE_COLS},
-                     "note": sub.loc[f"row{k}.alpha", "note"]})
+        rows.append(
+            {
+                "row": k,
+                **{c: float(sub.loc[f"row{k}.{c}", "value"]) for c in POSE_COLS},
+                "note": sub.loc[f"row{k}.alpha", "note"],
+            }
+        )
     return pd.DataFrame(rows)
 
 

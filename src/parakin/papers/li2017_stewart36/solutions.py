@@ -12,20 +12,30 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from parakin.claims import Claim, load_reference, printed_value
 from parakin.config import rng
 from parakin.io import write_csv, write_table
 from parakin.mechanisms.stewart36 import pose_from_paper, pose_to_paper
-from parakin.papers.li2017_stewart36.common import INPUT_NOTE, KEY, POSE_COLS, cfg, fk_input, mech, table3
+from parakin.papers.li2017_stewart36.common import (
+    INPUT_NOTE,
+    KEY,
+    POSE_COLS,
+    artefact,
+    cfg,
+    fk_input,
+    mech,
+    table3,
+)
 from parakin.plot import draw_mechanism, new_figure, save_figure, skeleton_table, use_style
-from parakin.claims import Claim, load_reference, printed_value
-from parakin.solvers import solve_fk
 from parakin.registry import ROUNDING
-from parakin.papers.li2017_stewart36.common import artefact
+from parakin.solvers import solve_fk
 
 #: Table 3's residuals at the printed poses are closed-form; the certified solution set comes from
 #: polynomial roots polished to round-off
-ROOTS = ROUNDING.but("roots of a degree-16 polynomial polished by Newton: poses to rounding, residuals at "
-                     "round-off within 1e-9")
+ROOTS = ROUNDING.but(
+    "roots of a degree-16 polynomial polished by Newton: poses to rounding, residuals at "
+    "round-off within 1e-9"
+)
 
 RANGES = ("X", "Y", "Z", "angle1", "angle2", "angle3")
 
@@ -34,8 +44,13 @@ def adams_ranges(ref: pd.DataFrame | None = None) -> dict[str, tuple[float, floa
     """The CM ranges stated in §4 (from Figs 6-11), keyed by pose column."""
     ref = load_reference(KEY) if ref is None else ref
     cols = {"X": "X", "Y": "Y", "Z": "Z", "angle1": "alpha", "angle2": "beta", "angle3": "gamma"}
-    return {cols[q]: (float(printed_value(ref, "sec4", f"{q}_min")), float(printed_value(ref, "sec4", f"{q}_max")))
-            for q in RANGES}
+    return {
+        cols[q]: (
+            float(printed_value(ref, "sec4", f"{q}_min")),
+            float(printed_value(ref, "sec4", f"{q}_max")),
+        )
+        for q in RANGES
+    }
 
 
 @artefact("table3", outputs=["table3.csv", "table3.md"], config=[KEY], tolerance=ROOTS)
@@ -55,14 +70,27 @@ def table3_artefact(config: dict, outdir: Path) -> list[Path]:
         inside &= (t[col] >= lo) & (t[col] <= hi)
     t["inside_sec4_ranges"] = inside
     b0 = cfg(config)["b"]
-    return write_table(t, outdir / "table3", floatfmt=".4g",
-                       title="Table 3 — the paper's 19 'forward solutions', decoded, with their residuals",
-                       notes=f"{INPUT_NOTE}. F = eq. (4) (squared-length residual); max_leg_err = max |IK(row) - L|. "
-                             f"Row 1 is exact by construction; a real solution would have F ~ 1e-30. Default b = {b0}.")
+    return write_table(
+        t,
+        outdir / "table3",
+        floatfmt=".4g",
+        title="Table 3 — the paper's 19 'forward solutions', decoded, with their residuals",
+        notes=f"{INPUT_NOTE}. F = eq. (4) (squared-length residual); max_leg_err = max |IK(row) - L|. "
+        f"Row 1 is exact by construction; a real solution would have F ~ 1e-30. Default b = {b0}.",
+    )
 
 
-@artefact("extra_solutions", outputs=["extra_solutions.csv", "extra_solutions.md", "extra_solution_counts_b.csv",
-                                     "extra_solution_counts_b.md"], config=[KEY], tolerance=ROOTS)
+@artefact(
+    "extra_solutions",
+    outputs=[
+        "extra_solutions.csv",
+        "extra_solutions.md",
+        "extra_solution_counts_b.csv",
+        "extra_solution_counts_b.md",
+    ],
+    config=[KEY],
+    tolerance=ROOTS,
+)
 def solutions_artefact(config: dict, outdir: Path) -> list[Path]:
     """Our table of all real forward solutions of the reconstructed input, for every b of the sweep."""
     rows, counts = [], []
@@ -75,26 +103,61 @@ def solutions_artefact(config: dict, outdir: Path) -> list[Path]:
         real = sols[np.isfinite(sols[:, 0])]
         for k, s in enumerate(real):
             p = pose_to_paper(s)
-            rows.append({"b": b, "solution": k + 1, **dict(zip(POSE_COLS, p)),
-                         "ik_error": float(np.max(np.abs(m.ik(s) - q))), "above_base": bool(s[5] > 0),
-                         "is_table3_row1": bool(np.allclose(p, table3().iloc[0][list(POSE_COLS)].to_numpy(float), atol=1e-6)),
-                         "sigma_min_jacobian": float(np.linalg.svd(m.jacobian_pose(s), compute_uv=False)[-1])})
-        counts.append({"b": b, "complex_roots": int(info["n_complex"]), "real": int(info["n_real"]),
-                       "above_base": int(info["n_above"]), "degree_tail": float(info["tail"]), "wall_time_ms": wall * 1e3})
+            rows.append(
+                {
+                    "b": b,
+                    "solution": k + 1,
+                    **dict(zip(POSE_COLS, p)),
+                    "ik_error": float(np.max(np.abs(m.ik(s) - q))),
+                    "above_base": bool(s[5] > 0),
+                    "is_table3_row1": bool(
+                        np.allclose(p, table3().iloc[0][list(POSE_COLS)].to_numpy(float), atol=1e-6)
+                    ),
+                    "sigma_min_jacobian": float(
+                        np.linalg.svd(m.jacobian_pose(s), compute_uv=False)[-1]
+                    ),
+                }
+            )
+        counts.append(
+            {
+                "b": b,
+                "complex_roots": int(info["n_complex"]),
+                "real": int(info["n_real"]),
+                "above_base": int(info["n_above"]),
+                "degree_tail": float(info["tail"]),
+                "wall_time_ms": wall * 1e3,
+            }
+        )
     df = pd.DataFrame(rows)
     md = df.copy()
-    return (write_table(df, outdir / "extra_solutions", floatfmt=".6g", markdown=md,
-                        title="All real forward solutions of the reconstructed input (certified, degree-16 polynomial)",
-                        notes=f"{INPUT_NOTE}. Angles in degrees. Each solution has its mirror (alpha, -beta, -gamma, X, Y, -Z).")
-            + write_table(pd.DataFrame(counts), outdir / "extra_solution_counts_b", floatfmt=".4g",
-                          title="Number of forward solutions per b (paper: 19, all above the base)",
-                          notes="degree_tail = size of the interpolated coefficients above degree 16 (relative): "
-                                "the polynomial has degree 16, so at most 16 complex and 8 above-base solutions."))
+    return write_table(
+        df,
+        outdir / "extra_solutions",
+        floatfmt=".6g",
+        markdown=md,
+        title="All real forward solutions of the reconstructed input (certified, degree-16 polynomial)",
+        notes=f"{INPUT_NOTE}. Angles in degrees. Each solution has its mirror (alpha, -beta, -gamma, X, Y, -Z).",
+    ) + write_table(
+        pd.DataFrame(counts),
+        outdir / "extra_solution_counts_b",
+        floatfmt=".4g",
+        title="Number of forward solutions per b (paper: 19, all above the base)",
+        notes="degree_tail = size of the interpolated coefficients above degree 16 (relative): "
+        "the polynomial has degree 16, so at most 16 complex and 8 above-base solutions.",
+    )
 
 
-@artefact("extra_solution_counts", outputs=["extra_solution_counts.csv", "extra_solution_counts.md",
-                                           "extra_solution_counts.png", "extra_solution_counts_richest.csv"],
-          config=[KEY], tolerance=ROOTS)
+@artefact(
+    "extra_solution_counts",
+    outputs=[
+        "extra_solution_counts.csv",
+        "extra_solution_counts.md",
+        "extra_solution_counts.png",
+        "extra_solution_counts_richest.csv",
+    ],
+    config=[KEY],
+    tolerance=ROOTS,
+)
 def counts_artefact(config: dict, outdir: Path) -> list[Path]:
     """Histogram of the number of real FK solutions over random inputs (random pose near Table 3 row 1,
     IK, legs scaled by U[1 - s, 1 + s]), per b of the sweep."""
@@ -116,36 +179,75 @@ def counts_artefact(config: dict, outdir: Path) -> list[Path]:
         assembl = info["n_complex"] > 0
         best = int(np.argmax(info["n_real"]))
         sb = _[best][np.isfinite(_[best][:, 0])]
-        frames.append(pd.DataFrame({"b": b, "sample": best, **{f"L{i + 1}": q[best, i] for i in range(6)},
-                                    "solution": np.arange(1, len(sb) + 1),
-                                    **{c: pose_to_paper(sb)[:, i] for i, c in enumerate(POSE_COLS)},
-                                    "ik_error": np.max(np.abs(m.ik(sb) - q[best]), axis=-1)}))
+        frames.append(
+            pd.DataFrame(
+                {
+                    "b": b,
+                    "sample": best,
+                    **{f"L{i + 1}": q[best, i] for i in range(6)},
+                    "solution": np.arange(1, len(sb) + 1),
+                    **{c: pose_to_paper(sb)[:, i] for i, c in enumerate(POSE_COLS)},
+                    "ik_error": np.max(np.abs(m.ik(sb) - q[best]), axis=-1),
+                }
+            )
+        )
         hist = np.bincount(info["n_real"][assembl], minlength=17)
-        rows.append({"b": b, "samples": n, "no_circles": int(np.sum(~assembl)),
-                     **{f"real_{k}": int(hist[k]) for k in range(0, 17, 2)},
-                     "max_real": int(info["n_real"].max()), "max_above_base": int(info["n_above"].max()),
-                     "max_ik_error": float(np.nanmax(info["ik_error"])) if np.isfinite(info["ik_error"]).any() else 0.0,
-                     "wall_time_ms_per_input": wall / n * 1e3})
-        ax.bar(np.arange(0, 17, 2) + (j - (len(bsw) - 1) / 2) * width * 2, hist[::2], width=2 * width, label=f"b = {b:g}")
+        rows.append(
+            {
+                "b": b,
+                "samples": n,
+                "no_circles": int(np.sum(~assembl)),
+                **{f"real_{k}": int(hist[k]) for k in range(0, 17, 2)},
+                "max_real": int(info["n_real"].max()),
+                "max_above_base": int(info["n_above"].max()),
+                "max_ik_error": float(np.nanmax(info["ik_error"]))
+                if np.isfinite(info["ik_error"]).any()
+                else 0.0,
+                "wall_time_ms_per_input": wall / n * 1e3,
+            }
+        )
+        ax.bar(
+            np.arange(0, 17, 2) + (j - (len(bsw) - 1) / 2) * width * 2,
+            hist[::2],
+            width=2 * width,
+            label=f"b = {b:g}",
+        )
     ax.set_xlabel("number of real forward solutions")
     ax.set_ylabel("inputs")
     ax.set_xticks(list(range(0, 17, 2)) + [19])
     ax.axvline(19, color="0.3", ls="--", lw=1.0)
-    ax.text(18.8, ax.get_ylim()[1] * 0.9, "paper: 19", ha="right", va="top", fontsize="x-small", color="0.3")
+    ax.text(
+        18.8,
+        ax.get_ylim()[1] * 0.9,
+        "paper: 19",
+        ha="right",
+        va="top",
+        fontsize="x-small",
+        color="0.3",
+    )
     ax.axvline(16.5, color="0.6", ls=":", lw=0.8)
     ax.set_xlim(-1.5, 20)
     ax.legend(fontsize="x-small")
     df = pd.DataFrame(rows)
-    return write_table(df, outdir / "extra_solution_counts", floatfmt=".3g",
-                       title="Real forward solutions over random inputs (certified all-solutions FK)",
-                       notes=f"{n} inputs per b: random pose near Table 3 row 1, IK, each leg scaled by U[{1 - s:g}, {1 + s:g}]; "
-                             "no_circles = a leg pair cannot reach its base edge.") + \
-        [save_figure(fig, outdir / "extra_solution_counts.png"),
-         write_csv(pd.concat(frames), outdir / "extra_solution_counts_richest.csv")]
+    return write_table(
+        df,
+        outdir / "extra_solution_counts",
+        floatfmt=".3g",
+        title="Real forward solutions over random inputs (certified all-solutions FK)",
+        notes=f"{n} inputs per b: random pose near Table 3 row 1, IK, each leg scaled by U[{1 - s:g}, {1 + s:g}]; "
+        "no_circles = a leg pair cannot reach its base edge.",
+    ) + [
+        save_figure(fig, outdir / "extra_solution_counts.png"),
+        write_csv(pd.concat(frames), outdir / "extra_solution_counts_richest.csv"),
+    ]
 
 
-@artefact("fig01", outputs=["fig01_structure.png", "fig01_structure.csv", "extra_solutions.png"], config=[KEY],
-          tolerance=ROOTS)
+@artefact(
+    "fig01",
+    outputs=["fig01_structure.png", "fig01_structure.csv", "extra_solutions.png"],
+    config=[KEY],
+    tolerance=ROOTS,
+)
 def fig01(config: dict, outdir: Path) -> list[Path]:
     """Fig. 1 redrawn from our model at Table 3 row 1, plus every above-base solution of the
     reconstructed input (Fig. 4's role: the model the paper simulated)."""
@@ -153,24 +255,48 @@ def fig01(config: dict, outdir: Path) -> list[Path]:
     q = fk_input(config)
     sols = m.fk_all(q)
     up = sols[np.isfinite(sols[:, 0]) & (np.nan_to_num(sols[:, 5]) > 0)]
-    ax = draw_mechanism(m.skeleton(m.home()), frame_length=0.4, title=f"3-6 platform, b = {m.b:g}, Table 3 row 1")
-    paths = [save_figure(ax.figure, outdir / "fig01_structure.png"),
-             write_csv(skeleton_table(m.skeleton(m.home()), frame_length=0.4), outdir / "fig01_structure.csv")]
+    ax = draw_mechanism(
+        m.skeleton(m.home()), frame_length=0.4, title=f"3-6 platform, b = {m.b:g}, Table 3 row 1"
+    )
+    paths = [
+        save_figure(ax.figure, outdir / "fig01_structure.png"),
+        write_csv(
+            skeleton_table(m.skeleton(m.home()), frame_length=0.4), outdir / "fig01_structure.csv"
+        ),
+    ]
     k = len(up)
     fig, _ = new_figure((3.0 * k, 3.2))
     fig.clear()
     for i, s in enumerate(up):
         a = fig.add_subplot(1, k, i + 1, projection="3d")
-        draw_mechanism(m.skeleton(s), ax=a, labels=False, frames=False, legend=False,
-                       title=f"({', '.join(f'{v:.1f}' for v in pose_to_paper(s)[:3])})°, Z = {s[5]:.3f}")
+        draw_mechanism(
+            m.skeleton(s),
+            ax=a,
+            labels=False,
+            frames=False,
+            legend=False,
+            title=f"({', '.join(f'{v:.1f}' for v in pose_to_paper(s)[:3])})°, Z = {s[5]:.3f}",
+        )
     paths.append(save_figure(fig, outdir / "extra_solutions.png"))
     return paths
 
 
-@artefact("adams", outputs=["fig05_cm_velocity.png", "fig05_cm_velocity.csv", "fig06_cm_position.png",
-                           "fig06_cm_position.csv", "fig09_euler_angles.png", "fig09_euler_angles.csv",
-                           "extra_adams_trajectory.csv", "extra_adams_surrogate.csv", "extra_adams_surrogate.md"],
-          config=[KEY], tolerance=ROUNDING)
+@artefact(
+    "adams",
+    outputs=[
+        "fig05_cm_velocity.png",
+        "fig05_cm_velocity.csv",
+        "fig06_cm_position.png",
+        "fig06_cm_position.csv",
+        "fig09_euler_angles.png",
+        "fig09_euler_angles.csv",
+        "extra_adams_trajectory.csv",
+        "extra_adams_surrogate.csv",
+        "extra_adams_surrogate.md",
+    ],
+    config=[KEY],
+    tolerance=ROUNDING,
+)
 def adams_artefact(config: dict, outdir: Path) -> list[Path]:
     """Surrogate of the Adams study (Figs 5-11; drive mapping unknown, docs/li2017_stewart36.md#s5): a pose trajectory whose
     coordinates oscillate inside the stated ranges (periods 10, 6.67, 20 s from eq. 10: X and alpha
@@ -181,8 +307,14 @@ def adams_artefact(config: dict, outdir: Path) -> list[Path]:
     rngs = adams_ranges()
     t = np.linspace(0, float(a["t_end"]), int(a["samples"]))
     periods = {"X": 10.0, "alpha": 10.0, "Y": 20 / 3, "beta": 20 / 3, "Z": 20.0, "gamma": 20.0}
-    traj = np.stack([(rngs[c][0] + rngs[c][1]) / 2 + (rngs[c][1] - rngs[c][0]) / 2 * np.sin(2 * np.pi * t / periods[c])
-                     for c in POSE_COLS], axis=-1)
+    traj = np.stack(
+        [
+            (rngs[c][0] + rngs[c][1]) / 2
+            + (rngs[c][1] - rngs[c][0]) / 2 * np.sin(2 * np.pi * t / periods[c])
+            for c in POSE_COLS
+        ],
+        axis=-1,
+    )
     truth = pose_from_paper(traj)
     legs = m.ik(truth)
     x = truth[0] + 1e-3
@@ -193,22 +325,39 @@ def adams_artefact(config: dict, outdir: Path) -> list[Path]:
     err = np.max(np.abs(rec - truth))
     deg = pose_to_paper(rec)
     vel = np.gradient(rec[:, 3:], t, axis=0)
-    df = pd.DataFrame({"t_s": t, **{c: deg[:, i] for i, c in enumerate(POSE_COLS)},
-                       "VX": vel[:, 0], "VY": vel[:, 1], "VZ": vel[:, 2], **{f"L{i + 1}": legs[:, i] for i in range(6)}})
+    df = pd.DataFrame(
+        {
+            "t_s": t,
+            **{c: deg[:, i] for i, c in enumerate(POSE_COLS)},
+            "VX": vel[:, 0],
+            "VY": vel[:, 1],
+            "VZ": vel[:, 2],
+            **{f"L{i + 1}": legs[:, i] for i in range(6)},
+        }
+    )
     paths = []
     fig, ax = new_figure((6.4, 3.0))
-    for i, c in enumerate(("VX", "VY", "VZ")):
+    for c in ("VX", "VY", "VZ"):
         ax.plot(t, df[c], lw=1.0, label=c)
     ax.set_xlabel("t (s)")
     ax.set_ylabel("CM velocity (a/s; a = top side)")
-    ax.set_title("Fig. 5, SURROGATE: CM velocity of a trajectory built inside the paper's stated ranges\n"
-                 "(the Adams drive mapping is not given; recovered by warm-started Newton FK)", fontsize=8)
+    ax.set_title(
+        "Fig. 5, SURROGATE: CM velocity of a trajectory built inside the paper's stated ranges\n"
+        "(the Adams drive mapping is not given; recovered by warm-started Newton FK)",
+        fontsize=8,
+    )
     ax.legend(fontsize="x-small", loc="upper left", bbox_to_anchor=(1.0, 1.0))
     paths.append(save_figure(fig, outdir / "fig05_cm_velocity.png"))
     paths.append(write_csv(df[["t_s", "VX", "VY", "VZ"]], outdir / "fig05_cm_velocity.csv"))
     for stem, cols, unit, title in (
-            ("fig06_cm_position", ("X", "Y", "Z"), " (a)", "Fig. 6, SURROGATE: CM position"),
-            ("fig09_euler_angles", ("alpha", "beta", "gamma"), " (°)", "Fig. 9, SURROGATE: Euler angles")):
+        ("fig06_cm_position", ("X", "Y", "Z"), " (a)", "Fig. 6, SURROGATE: CM position"),
+        (
+            "fig09_euler_angles",
+            ("alpha", "beta", "gamma"),
+            " (°)",
+            "Fig. 9, SURROGATE: Euler angles",
+        ),
+    ):
         fig, _ = new_figure((6.4, 4.6))
         fig.clear()
         with use_style():
@@ -220,20 +369,36 @@ def adams_artefact(config: dict, outdir: Path) -> list[Path]:
             axi.set_ylim(lo - 0.2 * (hi - lo), hi + 0.2 * (hi - lo))
             axi.set_ylabel(c + unit)
         axs[0].legend(fontsize="x-small", loc="upper left", bbox_to_anchor=(1.0, 1.0))
-        axs[0].set_title(f"{title} of a trajectory built inside the paper's stated ranges\n(the Adams drive mapping "
-                         "is not given; lengths in units of the top side a)", fontsize=8)
+        axs[0].set_title(
+            f"{title} of a trajectory built inside the paper's stated ranges\n(the Adams drive mapping "
+            "is not given; lengths in units of the top side a)",
+            fontsize=8,
+        )
         axs[-1].set_xlabel("t (s)")
         paths.append(save_figure(fig, outdir / f"{stem}.png"))
         paths.append(write_csv(df[["t_s", *cols]], outdir / f"{stem}.csv"))
     paths.append(write_csv(df, outdir / "extra_adams_trajectory.csv"))
-    summ = pd.DataFrame([{"quantity": c, "stated_min": rngs[c][0], "stated_max": rngs[c][1], "ours_min": df[c].min(),
-                          "ours_max": df[c].max()} for c in POSE_COLS] + [{"quantity": "max_roundtrip_error", "ours_max": err}])
-    return paths + write_table(summ, outdir / "extra_adams_surrogate", floatfmt=".6g",
-                               title="Surrogate of the Adams study (drive mapping unknown; docs/li2017_stewart36.md#s5)",
-                               notes="A pose trajectory inside the stated ranges by construction, recovered by "
-                                     "warm-started Newton FK from its leg lengths; the check is the round trip.")
-
-
+    summ = pd.DataFrame(
+        [
+            {
+                "quantity": c,
+                "stated_min": rngs[c][0],
+                "stated_max": rngs[c][1],
+                "ours_min": df[c].min(),
+                "ours_max": df[c].max(),
+            }
+            for c in POSE_COLS
+        ]
+        + [{"quantity": "max_roundtrip_error", "ours_max": err}]
+    )
+    return paths + write_table(
+        summ,
+        outdir / "extra_adams_surrogate",
+        floatfmt=".6g",
+        title="Surrogate of the Adams study (drive mapping unknown; docs/li2017_stewart36.md#s5)",
+        notes="A pose trajectory inside the stated ranges by construction, recovered by "
+        "warm-started Newton FK from its leg lengths; the check is the round trip.",
+    )
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
@@ -245,33 +410,58 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     path = figdir / "extra_solution_counts_b.csv"
     if path.exists():
         c = pd.read_csv(path)
-        out.append(Claim(KEY, "table3", "n_solutions", printed_value(ref, "table3", "n_solutions"),
-                         float(c["above_base"].max()), "1", variant="certified FK: max above-base solutions over the b sweep",
-                         evidence=f"{KEY}/extra_solution_counts_b.md",
-                         reason=f"the FK is a degree-16 polynomial (16 complex roots in mirror pairs, so <= 8 above the "
-                                f"base); we find {', '.join(f'{int(r.real)} real / {int(r.above_base)} above (b = {r.b:g})' for r in c.itertuples())}. "
-                                "Table 3's rows are not solutions of one input (see table3.csv residuals) and 3 are duplicates"))
+        out.append(
+            Claim(
+                KEY,
+                "table3",
+                "n_solutions",
+                printed_value(ref, "table3", "n_solutions"),
+                float(c["above_base"].max()),
+                "1",
+                variant="certified FK: max above-base solutions over the b sweep",
+                evidence=f"{KEY}/extra_solution_counts_b.md",
+                reason=f"the FK is a degree-16 polynomial (16 complex roots in mirror pairs, so <= 8 above the "
+                f"base); we find {', '.join(f'{int(r.real)} real / {int(r.above_base)} above (b = {r.b:g})' for r in c.itertuples())}. "
+                "Table 3's rows are not solutions of one input (see table3.csv residuals) and 3 are duplicates",
+            )
+        )
     path = figdir / "extra_solution_counts.csv"
     if path.exists():
         c = pd.read_csv(path)
         for col, what in (("max_above_base", "above-base"), ("max_real", "real")):
             r = c.loc[c[col].idxmax()]
-            out.append(Claim(KEY, "table3", "n_solutions", printed_value(ref, "table3", "n_solutions"), float(r[col]), "1",
-                             variant=f"certified FK: most {what} solutions over {int(c['samples'].sum())} random inputs "
-                                     f"(b = {', '.join(f'{v:g}' for v in c['b'])})", evidence=f"{KEY}/extra_solution_counts.md",
-                             reason="the polynomial has degree 16, so no input has more than 16 real or 8 above-base "
-                                    "solutions; the paper's 19 (all above the base) cannot be distinct solutions of one input"))
+            out.append(
+                Claim(
+                    KEY,
+                    "table3",
+                    "n_solutions",
+                    printed_value(ref, "table3", "n_solutions"),
+                    float(r[col]),
+                    "1",
+                    variant=f"certified FK: most {what} solutions over {int(c['samples'].sum())} random inputs "
+                    f"(b = {', '.join(f'{v:g}' for v in c['b'])})",
+                    evidence=f"{KEY}/extra_solution_counts.md",
+                    reason="the polynomial has degree 16, so no input has more than 16 real or 8 above-base "
+                    "solutions; the paper's 19 (all above the base) cannot be distinct solutions of one input",
+                )
+            )
     path, sols_path = figdir / "table3.csv", figdir / "extra_solutions.csv"
     if path.exists() and sols_path.exists():
         t = pd.read_csv(path)
         sols = pd.read_csv(sols_path)
         sols = sols[sols["above_base"].astype(bool)].reset_index(drop=True)
         fcols = [col for col in t.columns if col.startswith("F_b")]
-        scale = np.array([np.pi / 180] * 3 + [1.0] * 3)  # angles compared in radians, positions as they are
+        scale = np.array(
+            [np.pi / 180] * 3 + [1.0] * 3
+        )  # angles compared in radians, positions as they are
         for _, r in t.iterrows():
             row = int(r["row"])
             p = r[list(POSE_COLS)].to_numpy(float)
-            k = int(np.argmin(np.sum(((sols[list(POSE_COLS)].to_numpy(float) - p) * scale) ** 2, axis=1)))
+            k = int(
+                np.argmin(
+                    np.sum(((sols[list(POSE_COLS)].to_numpy(float) - p) * scale) ** 2, axis=1)
+                )
+            )
             near = sols.iloc[k]
             j = int(np.argmin([r[col] for col in fcols]))
             leg = float(r[f"max_leg_err_b{fcols[j][3:]}"])
@@ -279,28 +469,53 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
             for q in POSE_COLS:
                 quantity = f"row{row}.{q}"
                 if row == 1:
-                    out.append(Claim(KEY, "table3", quantity, printed_value(ref, "table3", quantity), float(near[q]),
-                                     "deg" if q in ("alpha", "beta", "gamma") else "1",
-                                     variant=f"certified FK solution of L = IK(row 1) (b = {near['b']:g})",
-                                     basis="the lost FK input is reconstructed as IK(row 1) (docs/li2017_stewart36.md#g1), "
-                                           "so row 1 is a solution by construction"))
+                    out.append(
+                        Claim(
+                            KEY,
+                            "table3",
+                            quantity,
+                            printed_value(ref, "table3", quantity),
+                            float(near[q]),
+                            "deg" if q in ("alpha", "beta", "gamma") else "1",
+                            variant=f"certified FK solution of L = IK(row 1) (b = {near['b']:g})",
+                            basis="the lost FK input is reconstructed as IK(row 1) (docs/li2017_stewart36.md#g1), "
+                            "so row 1 is a solution by construction",
+                        )
+                    )
                     continue
-                out.append(Claim(KEY, "table3", quantity, printed_value(ref, "table3", quantity), float(near[q]),
-                                 "deg" if q in ("alpha", "beta", "gamma") else "1",
-                                 variant=f"nearest certified above-base solution over the b sweep (b = {near['b']:g}, "
-                                         f"solution {int(near['solution'])})",
-                                 evidence=f"{KEY}/table3.md",
-                                 reason=f"row {row} is not a solution of the reconstructed input for any b of the sweep: "
-                                        f"F (eq. 4) >= {float(r[fcols[j]]):.2g}, a leg off by {leg:.3g} (printing to 3 "
-                                        "decimals moves a leg by ~1e-3 at most); no layout/Euler reading tried makes the "
-                                        f"19 rows solutions of one input (docs/li2017_stewart36.md#s4.2){note}"))
+                out.append(
+                    Claim(
+                        KEY,
+                        "table3",
+                        quantity,
+                        printed_value(ref, "table3", quantity),
+                        float(near[q]),
+                        "deg" if q in ("alpha", "beta", "gamma") else "1",
+                        variant=f"nearest certified above-base solution over the b sweep (b = {near['b']:g}, "
+                        f"solution {int(near['solution'])})",
+                        evidence=f"{KEY}/table3.md",
+                        reason=f"row {row} is not a solution of the reconstructed input for any b of the sweep: "
+                        f"F (eq. 4) >= {float(r[fcols[j]]):.2g}, a leg off by {leg:.3g} (printing to 3 "
+                        "decimals moves a leg by ~1e-3 at most); no layout/Euler reading tried makes the "
+                        f"19 rows solutions of one input (docs/li2017_stewart36.md#s4.2){note}",
+                    )
+                )
         outside = int((~t["inside_sec4_ranges"].astype(bool)).sum())
-        out.append(Claim(KEY, "sec4", "table3_rows_outside_ranges", printed_value(ref, "sec4", "table3_rows_outside_ranges"),
-                         float(outside), "1", variant="the paper's Table 3 against its own §4 ranges",
-                         evidence=f"{KEY}/table3.md",
-                         reason=f"rows outside: {', '.join(str(r) for r in t.loc[~t['inside_sec4_ranges'].astype(bool), 'row'])} "
-                                "(alpha > 80 deg or X < -0.30): the paper contradicts itself (paper against paper, "
-                                "no computation of ours)"))
+        out.append(
+            Claim(
+                KEY,
+                "sec4",
+                "table3_rows_outside_ranges",
+                printed_value(ref, "sec4", "table3_rows_outside_ranges"),
+                float(outside),
+                "1",
+                variant="the paper's Table 3 against its own §4 ranges",
+                evidence=f"{KEY}/table3.md",
+                reason=f"rows outside: {', '.join(str(r) for r in t.loc[~t['inside_sec4_ranges'].astype(bool), 'row'])} "
+                "(alpha > 80 deg or X < -0.30): the paper contradicts itself (paper against paper, "
+                "no computation of ours)",
+            )
+        )
     return out
 
 
@@ -309,26 +524,46 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     path = figdir / "extra_solution_counts_b.csv"
     if path.exists():
         c = pd.read_csv(path)
-        parts.append("Certified all-solutions FK of the reconstructed input: " + "; ".join(
-            f"b = {r.b:g}: {int(r.complex_roots)} complex, {int(r.real)} real, {int(r.above_base)} above the base "
-            f"({r.wall_time_ms:.2g} ms)" for r in c.itertuples()) + ". The paper lists 19 'solutions', all above the base.")
+        parts.append(
+            "Certified all-solutions FK of the reconstructed input: "
+            + "; ".join(
+                f"b = {r.b:g}: {int(r.complex_roots)} complex, {int(r.real)} real, {int(r.above_base)} above the base "
+                f"({r.wall_time_ms:.2g} ms)"
+                for r in c.itertuples()
+            )
+            + ". The paper lists 19 'solutions', all above the base."
+        )
     path = figdir / "table3.csv"
     if path.exists():
         t = pd.read_csv(path)
         fcols = [col for col in t.columns if col.startswith("F_b")]
-        parts.append("Table 3 rows 2-19 under L = IK(row 1): F (eq. 4) from " + "; ".join(
-            f"{col[2:]}: {t[col].iloc[1:].min():.2g}…{t[col].iloc[1:].max():.2g}" for col in fcols)
-            + f" (a solution has F ~ 1e-30); {int((~t['inside_sec4_ranges'].astype(bool)).sum())} of 19 rows lie outside the §4 ranges.")
+        parts.append(
+            "Table 3 rows 2-19 under L = IK(row 1): F (eq. 4) from "
+            + "; ".join(
+                f"{col[2:]}: {t[col].iloc[1:].min():.2g}…{t[col].iloc[1:].max():.2g}"
+                for col in fcols
+            )
+            + f" (a solution has F ~ 1e-30); {int((~t['inside_sec4_ranges'].astype(bool)).sum())} of 19 rows lie outside the §4 ranges."
+        )
     path = figdir / "extra_solution_counts.csv"
     if path.exists():
         c = pd.read_csv(path)
         cols = [col for col in c.columns if col.startswith("real_")]
-        parts.append("Real solutions over random inputs: " + "; ".join(
-            f"b = {r['b']:g}: " + ", ".join(f"{col[5:]}: {int(r[col])}" for col in cols if r[col]) +
-            f" (no circles: {int(r['no_circles'])}; max above base {int(r['max_above_base'])}; "
-            f"{r['wall_time_ms_per_input']:.2g} ms/input)" for _, r in c.iterrows()) + ".")
+        parts.append(
+            "Real solutions over random inputs: "
+            + "; ".join(
+                f"b = {r['b']:g}: "
+                + ", ".join(f"{col[5:]}: {int(r[col])}" for col in cols if r[col])
+                + f" (no circles: {int(r['no_circles'])}; max above base {int(r['max_above_base'])}; "
+                f"{r['wall_time_ms_per_input']:.2g} ms/input)"
+                for _, r in c.iterrows()
+            )
+            + "."
+        )
     path = figdir / "extra_adams_surrogate.csv"
     if path.exists():
         s = pd.read_csv(path).set_index("quantity")
-        parts.append(f"Adams surrogate: round-trip error of the warm-started Newton FK {s.loc['max_roundtrip_error', 'ours_max']:.2g}.")
+        parts.append(
+            f"Adams surrogate: round-trip error of the warm-started Newton FK {s.loc['max_roundtrip_error', 'ours_max']:.2g}."
+        )
     return "\n\n".join(parts)

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 from functools import partial
 
-from parakin import registry
-
 import numpy as np
 import pandas as pd
 
-from parakin.mechanisms.ups2 import UPS2
+from parakin import registry
 from parakin.claims import load_reference
+from parakin.mechanisms.ups2 import UPS2
 
 KEY = "li2020_2ups"
 

@@ -15,35 +15,71 @@ import numpy as np
 import pandas as pd
 
 import parakin.solvers.pso  # noqa: F401  (registers "pso")
+from parakin.claims import Claim, load_reference, printed_value
 from parakin.config import seed_for
 from parakin.io import write_csv, write_table
-from parakin.papers.li2020_2ups.common import CASES, KEY, mech, table2_inputs, table2_outputs, to_paper
+from parakin.papers.li2020_2ups.common import (
+    CASES,
+    KEY,
+    artefact,
+    mech,
+    table2_inputs,
+    table2_outputs,
+    to_paper,
+)
 from parakin.plot import new_figure, save_figure
-from parakin.claims import Claim, load_reference, printed_value
-from parakin.solvers import solve_fk
-from parakin.registry import ROUNDING, Tolerance
-from parakin.papers.li2020_2ups.common import artefact
 from parakin.progress import Progress
+from parakin.registry import ROUNDING, Tolerance
+from parakin.solvers import solve_fk
 
 #: PSO is a seeded but chaotic search: the pose it settles on in one run moves with the rounding of
 #: one product. Stable are the exact and printed poses (closed form / transcribed) and the medians
 #: over all runs of a variant that converges; spreads, extremes and counts of runs are not compared
-PSO_TABLE = Tolerance("statistical", 0.0, 0.0,
-                      "PSO runs: exact (closed-form) and printed columns to rounding, run medians within "
-                      "0.05 (deg, mm); spreads, extremes, iteration counts and run counts not compared; "
-                      "the consistency checks (closed form) to rounding",
-                      columns={c: (1e-9, 1e-12) for c in ("beta_exact", "gamma_exact", "Y_exact", "beta_paper",
-                                                          "gamma_paper", "Y_paper", "l1_of_paper_pose",
-                                                          "l2_of_paper_pose", "l3_of_paper_pose", "runs")}
-                      | {c: (0.0, 0.05) for c in ("beta_median", "gamma_median", "Y_median")}
-                      | {"value": (1e-6, 1e-9)})
-PSO_TRAJECTORY = Tolerance("statistical", 0.0, 0.0, "PSO fitness per iteration: one chaotic trajectory per run",
-                           files=("fig02_fitness.csv", "fig02_fitness.png"))
-SOLVER_COUNTS = Tolerance("statistical", 0.0, 0.0,
-                          "solver counts: local solvers and the closed form exactly (deterministic from the "
-                          "seeded inputs), the PSO row within 2 of 20 runs; iteration medians within one",
-                          columns={"poses": (0.0, 0.0), "success": (0.0, 2.0), "correct": (0.0, 2.0),
-                                   "nit_median": (0.0, 1.0)})
+PSO_TABLE = Tolerance(
+    "statistical",
+    0.0,
+    0.0,
+    "PSO runs: exact (closed-form) and printed columns to rounding, run medians within "
+    "0.05 (deg, mm); spreads, extremes, iteration counts and run counts not compared; "
+    "the consistency checks (closed form) to rounding",
+    columns={
+        c: (1e-9, 1e-12)
+        for c in (
+            "beta_exact",
+            "gamma_exact",
+            "Y_exact",
+            "beta_paper",
+            "gamma_paper",
+            "Y_paper",
+            "l1_of_paper_pose",
+            "l2_of_paper_pose",
+            "l3_of_paper_pose",
+            "runs",
+        )
+    }
+    | {c: (0.0, 0.05) for c in ("beta_median", "gamma_median", "Y_median")}
+    | {"value": (1e-6, 1e-9)},
+)
+PSO_TRAJECTORY = Tolerance(
+    "statistical",
+    0.0,
+    0.0,
+    "PSO fitness per iteration: one chaotic trajectory per run",
+    files=("fig02_fitness.csv", "fig02_fitness.png"),
+)
+SOLVER_COUNTS = Tolerance(
+    "statistical",
+    0.0,
+    0.0,
+    "solver counts: local solvers and the closed form exactly (deterministic from the "
+    "seeded inputs), the PSO row within 2 of 20 runs; iteration medians within one",
+    columns={
+        "poses": (0.0, 0.0),
+        "success": (0.0, 2.0),
+        "correct": (0.0, 2.0),
+        "nit_median": (0.0, 1.0),
+    },
+)
 
 VARIANTS = {
     "as_printed": {"inertia": "constant", "vclamp": None},
@@ -55,9 +91,17 @@ VARIANTS = {
 def pso_options(config: dict, variant: str) -> dict:
     p = config[KEY]["pso"]
     v = VARIANTS[variant]
-    return {"swarm": p["swarm"], "maxiter": p["maxiter"], "c1": p["c1"], "c2": p["c2"], "w": p["w"],
-            "w_end": p["w_end"], "inertia": v["inertia"],
-            "vclamp": p["vclamp"] if v["vclamp"] == "cfg" else None, "tol": p["ftol_mm"] * 1e-3}
+    return {
+        "swarm": p["swarm"],
+        "maxiter": p["maxiter"],
+        "c1": p["c1"],
+        "c2": p["c2"],
+        "w": p["w"],
+        "w_end": p["w_end"],
+        "inertia": v["inertia"],
+        "vclamp": p["vclamp"] if v["vclamp"] == "cfg" else None,
+        "tol": p["ftol_mm"] * 1e-3,
+    }
 
 
 def seeds(config: dict, variant: str) -> np.ndarray:
@@ -72,7 +116,9 @@ def run_pso(config: dict, variant: str, joints: np.ndarray, seed_list: np.ndarra
     q = np.repeat(joints, ns, axis=0)
     s = np.tile(seed_list, nq)
     opts = pso_options(config, variant)
-    ticker = Progress(f"PSO {variant} ({nq} inputs x {ns} seeds)", int(opts["maxiter"]) + 1, "iterations")
+    ticker = Progress(
+        f"PSO {variant} ({nq} inputs x {ns} seeds)", int(opts["maxiter"]) + 1, "iterations"
+    )
     res = solve_fk(m, q, method="pso", seed=s, callback=ticker.callback, **opts)
     return res.reshape((nq, ns))
 
@@ -84,13 +130,19 @@ def table1(config: dict, outdir: Path) -> list[Path]:
     m = mech(config)
     lo, hi = m.pose_bounds()
     rows = [
-        ("swarm size", "40", p["swarm"], ""), ("max iterations", "1500", p["maxiter"], ""),
-        ("inertia weight", "0.9", p["w"], f"as_printed: constant; improved: linear {p['w']} -> {p['w_end']} (ASSUMED)"),
+        ("swarm size", "40", p["swarm"], ""),
+        ("max iterations", "1500", p["maxiter"], ""),
+        (
+            "inertia weight",
+            "0.9",
+            p["w"],
+            f"as_printed: constant; improved: linear {p['w']} -> {p['w_end']} (ASSUMED)",
+        ),
         ("learning factor", "2", p["c1"], f"c1 = {p['c1']}, c2 = {p['c2']} (ASSUMED both)"),
         ("search-space dimension", "3", 3, "x = (beta, gamma, Y)"),
         ("beta range (deg)", "[-30, 30]", f"[{np.rad2deg(lo[0]):g}, {np.rad2deg(hi[0]):g}]", ""),
         ("gamma range (deg)", "[-60, 60]", f"[{np.rad2deg(lo[1]):g}, {np.rad2deg(hi[1]):g}]", ""),
-        ("Y range (mm)", "[-20, 110]", f"[{lo[2]*1e3:g}, {hi[2]*1e3:g}]", ""),
+        ("Y range (mm)", "[-20, 110]", f"[{lo[2] * 1e3:g}, {hi[2] * 1e3:g}]", ""),
         ("stop: F below (mm)", "1e-6", p["ftol_mm"], "eq (20)"),
         ("velocity clamp (x range)", "-", p["vclamp"], "improved_clamped only (ASSUMED)"),
         ("initialisation", "-", "uniform in box, v = 0", "ASSUMED"),
@@ -100,8 +152,14 @@ def table1(config: dict, outdir: Path) -> list[Path]:
     return write_table(df, outdir / "table1", title="Table 1 — PSO parameters as used")
 
 
-@artefact("table2", outputs=["table2.csv", "table2.md", "table2_consistency.csv", "table2_consistency.md"],
-          config=[KEY], tolerance=PSO_TABLE, threads=1, resources={"runtime": 30, "mem_mb": 2000})
+@artefact(
+    "table2",
+    outputs=["table2.csv", "table2.md", "table2_consistency.csv", "table2_consistency.md"],
+    config=[KEY],
+    tolerance=PSO_TABLE,
+    threads=1,
+    resources={"runtime": 30, "mem_mb": 2000},
+)
 def table2(config: dict, outdir: Path) -> list[Path]:
     """Table 2 recomputed: PSO (each variant, N seeds) on the paper's inputs, medians and spreads,
     beside the exact FK (all-solutions polynomial) and the paper's printed outputs."""
@@ -118,30 +176,65 @@ def table2(config: dict, outdir: Path) -> list[Path]:
         x = to_paper(res.x)  # (cases, seeds, 3)
         for i, case in enumerate(CASES):
             err = np.abs(x[i] - exact[i])
-            rows.append({
-                "case": case, "variant": variant,
-                **{f"{n}_median": float(np.median(x[i, :, j])) for j, n in enumerate(("beta", "gamma", "Y"))},
-                **{f"{n}_iqr": float(np.subtract(*np.percentile(x[i, :, j], [75, 25]))) for j, n in enumerate(("beta", "gamma", "Y"))},
-                **{f"{n}_maxerr": float(err[:, j].max()) for j, n in enumerate(("beta", "gamma", "Y"))},
-                "F_median_mm": float(np.median(res.fitness[i]) * 1e3), "F_max_mm": float(np.max(res.fitness[i]) * 1e3),
-                "converged": int(res.success[i].sum()), "runs": int(res.success[i].size),
-                "nit_median": float(np.median(res.nit[i])), "wall_s_all_cases": wall,
-            })
+            rows.append(
+                {
+                    "case": case,
+                    "variant": variant,
+                    **{
+                        f"{n}_median": float(np.median(x[i, :, j]))
+                        for j, n in enumerate(("beta", "gamma", "Y"))
+                    },
+                    **{
+                        f"{n}_iqr": float(np.subtract(*np.percentile(x[i, :, j], [75, 25])))
+                        for j, n in enumerate(("beta", "gamma", "Y"))
+                    },
+                    **{
+                        f"{n}_maxerr": float(err[:, j].max())
+                        for j, n in enumerate(("beta", "gamma", "Y"))
+                    },
+                    "F_median_mm": float(np.median(res.fitness[i]) * 1e3),
+                    "F_max_mm": float(np.max(res.fitness[i]) * 1e3),
+                    "converged": int(res.success[i].sum()),
+                    "runs": int(res.success[i].size),
+                    "nit_median": float(np.median(res.nit[i])),
+                    "wall_s_all_cases": wall,
+                }
+            )
     df = pd.DataFrame(rows)
     for i, case in enumerate(CASES):
         df.loc[df["case"] == case, ["beta_exact", "gamma_exact", "Y_exact"]] = exact[i]
         df.loc[df["case"] == case, ["beta_paper", "gamma_paper", "Y_paper"]] = paper[i]
     ik_paper = m.ik(np.concatenate([np.deg2rad(paper[:, :2]), paper[:, 2:] * 1e-3], axis=1)) * 1e3
     for i, case in enumerate(CASES):
-        df.loc[df["case"] == case, ["l1_of_paper_pose", "l2_of_paper_pose", "l3_of_paper_pose"]] = ik_paper[i]
-    md = df[df["variant"] == "improved_clamped"][["case", "beta_paper", "gamma_paper", "Y_paper", "beta_median",
-                                                   "gamma_median", "Y_median", "beta_exact", "gamma_exact", "Y_exact",
-                                                   "converged", "runs"]]
-    paths = write_table(df, outdir / "table2", title="Table 2 — forward kinematics of the paper's inputs (deg, deg, mm)",
-                        markdown=md, floatfmt=".4g",
-                        notes="paper = printed outputs; median/iqr over seeds of our PSO; exact = polynomial FK "
-                              "(unique solution in the Table 1 box). Verdict: differs, paper inconsistent "
-                              "(see table2_consistency).")
+        df.loc[df["case"] == case, ["l1_of_paper_pose", "l2_of_paper_pose", "l3_of_paper_pose"]] = (
+            ik_paper[i]
+        )
+    md = df[df["variant"] == "improved_clamped"][
+        [
+            "case",
+            "beta_paper",
+            "gamma_paper",
+            "Y_paper",
+            "beta_median",
+            "gamma_median",
+            "Y_median",
+            "beta_exact",
+            "gamma_exact",
+            "Y_exact",
+            "converged",
+            "runs",
+        ]
+    ]
+    paths = write_table(
+        df,
+        outdir / "table2",
+        title="Table 2 — forward kinematics of the paper's inputs (deg, deg, mm)",
+        markdown=md,
+        floatfmt=".4g",
+        notes="paper = printed outputs; median/iqr over seeds of our PSO; exact = polynomial FK "
+        "(unique solution in the Table 1 box). Verdict: differs, paper inconsistent "
+        "(see table2_consistency).",
+    )
     return paths + consistency(config, outdir)
 
 
@@ -163,7 +256,9 @@ def consistency_checks(ref: pd.DataFrame | None = None) -> dict[str, float]:
     d1, d3 = q[0, 0], q[2, 0]
     a = np.linspace(1e-3, 200, 400001)
     g = 2 / np.sqrt(3) * a
-    L = (g * (y[2] - y[0]) - d1**2 + d3**2) / (2 * (d1 - d3))  # 2L(d1 - d3) + d1^2 - d3^2 = g (Y3 - Y1)
+    L = (g * (y[2] - y[0]) - d1**2 + d3**2) / (
+        2 * (d1 - d3)
+    )  # 2L(d1 - d3) + d1^2 - d3^2 = g (Y3 - Y1)
     c2 = 9 / 4 * ((L + d1) ** 2 - 0.75 * a**2 + g * y[0])
     feasible = c2 > 0
     positive = feasible & (L + d3 > 0) & (L + d1 > 0)  # both SPR lengths must be positive, too
@@ -188,11 +283,20 @@ def consistency(config: dict, outdir: Path) -> list[Path]:
         "a_max_with_positive_l1_mm": "the same, also requiring l1 > 0 in case 3 (0 = no geometry at all)",
         "sign_violations": "(l3^2 - l2^2)/2a = (rho + k sin g) sin b: sign(beta) = sign(l_i3 - l_i2) (must be 0)",
     }
-    df = pd.DataFrame({"check": list(c), "value": list(c.values()), "meaning": [expl[k] for k in c]})
-    return write_table(df, outdir / "table2_consistency", title="Table 2 against the paper's own IK (any a, b, c)")
+    df = pd.DataFrame(
+        {"check": list(c), "value": list(c.values()), "meaning": [expl[k] for k in c]}
+    )
+    return write_table(
+        df, outdir / "table2_consistency", title="Table 2 against the paper's own IK (any a, b, c)"
+    )
 
 
-@artefact("fig02", outputs=["fig02_fitness.png", "fig02_fitness.csv"], config=[KEY], tolerance=PSO_TRAJECTORY)
+@artefact(
+    "fig02",
+    outputs=["fig02_fitness.png", "fig02_fitness.csv"],
+    config=[KEY],
+    tolerance=PSO_TRAJECTORY,
+)
 def fig02(config: dict, outdir: Path) -> list[Path]:
     """Fig. 2: best fitness F (mm) per iteration for the five cases, one seed, as printed vs improved."""
     m = mech(config)
@@ -207,23 +311,47 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
         hist = res.history * 1e3
         for i, case in enumerate(CASES):
             ax.semilogy(np.arange(hist.shape[1]), hist[i], lw=1.0, label=f"case {case}")
-            frames.append(pd.DataFrame({"variant": variant, "case": case, "iteration": np.arange(hist.shape[1]),
-                                        "F_mm": hist[i]}))
+            frames.append(
+                pd.DataFrame(
+                    {
+                        "variant": variant,
+                        "case": case,
+                        "iteration": np.arange(hist.shape[1]),
+                        "F_mm": hist[i],
+                    }
+                )
+            )
         ax.axhline(config[KEY]["pso"]["ftol_mm"], color="0.4", ls="--", lw=0.8)
-        ax.set_title({"as_printed": "Table 1 as printed (w = 0.9)", "improved": "improved (w 0.9 → 0.4)"}[variant],
-                     fontsize="small")
+        ax.set_title(
+            {"as_printed": "Table 1 as printed (w = 0.9)", "improved": "improved (w 0.9 → 0.4)"}[
+                variant
+            ],
+            fontsize="small",
+        )
         ax.set_xlabel("iteration")
     axs[0].set_ylabel("best fitness F (mm)")
     from matplotlib.ticker import MaxNLocator
+
     for ax in axs:
         ax.xaxis.set_major_locator(MaxNLocator(4))
     axs[1].legend(fontsize="x-small")
-    fig.suptitle("Fig. 2: PSO best fitness per iteration on Table 2's five inputs (one seed); dashed: the "
-                 "paper's threshold F < 1e-6 mm", fontsize="small")
-    return [save_figure(fig, outdir / "fig02_fitness.png"), write_csv(pd.concat(frames), outdir / "fig02_fitness.csv")]
+    fig.suptitle(
+        "Fig. 2: PSO best fitness per iteration on Table 2's five inputs (one seed); dashed: the "
+        "paper's threshold F < 1e-6 mm",
+        fontsize="small",
+    )
+    return [
+        save_figure(fig, outdir / "fig02_fitness.png"),
+        write_csv(pd.concat(frames), outdir / "fig02_fitness.csv"),
+    ]
 
 
-@artefact("solvers", outputs=["extra_solvers.csv", "extra_solvers.md"], config=[KEY], tolerance=SOLVER_COUNTS)
+@artefact(
+    "solvers",
+    outputs=["extra_solvers.csv", "extra_solvers.md"],
+    config=[KEY],
+    tolerance=SOLVER_COUNTS,
+)
 def solver_comparison(config: dict, outdir: Path) -> list[Path]:
     """Extra: every FK method on random poses of the Table 1 box (strokes by IK): success, iterations,
     evaluations and time, batched; PSO (improved_clamped) on a subset."""
@@ -238,25 +366,42 @@ def solver_comparison(config: dict, outdir: Path) -> list[Path]:
 
     def add(name: str, res, truth: np.ndarray) -> None:
         err = np.abs(res.x - truth)
-        rows.append({"method": name, "poses": int(res.success.size), "success": int(res.success.sum()),
-                     "correct": int(np.sum(np.all(err < 1e-6, axis=-1))),
-                     "nit_median": float(np.median(res.nit)), "nfev_median": float(np.median(res.nfev)),
-                     "wall_ms_per_pose": 1e3 * res.wall_time / res.success.size})
+        rows.append(
+            {
+                "method": name,
+                "poses": int(res.success.size),
+                "success": int(res.success.sum()),
+                "correct": int(np.sum(np.all(err < 1e-6, axis=-1))),
+                "nit_median": float(np.median(res.nit)),
+                "nfev_median": float(np.median(res.nfev)),
+                "wall_ms_per_pose": 1e3 * res.wall_time / res.success.size,
+            }
+        )
 
     for method in ("closed-form", "newton", "lm"):
         add(method, solve_fk(m, q, method=method, tol=1e-12, maxiter=50), poses)
     k = min(n, config[KEY]["compare_pso_poses"])
-    add("pso (improved_clamped)", solve_fk(m, q[:k], method="pso", seed=np.arange(k),
-                                            **pso_options(config, "improved_clamped")), poses[:k])
+    add(
+        "pso (improved_clamped)",
+        solve_fk(
+            m, q[:k], method="pso", seed=np.arange(k), **pso_options(config, "improved_clamped")
+        ),
+        poses[:k],
+    )
     df = pd.DataFrame(rows)
-    return write_table(df, outdir / "extra_solvers", title="FK solvers on random poses of the Table 1 box",
-                       notes="correct: max |x - true| < 1e-6 (rad, m); PSO success = F below the paper's threshold.")
+    return write_table(
+        df,
+        outdir / "extra_solvers",
+        title="FK solvers on random poses of the Table 1 box",
+        notes="correct: max |x - true| < 1e-6 (rad, m); PSO success = F below the paper's threshold.",
+    )
 
 
-
-REASON_T2 = ("paper inconsistent: Table 2 contradicts its own IK for any a, b, c (table2_consistency: equal l_i1 "
-             "with different Y, Y not monotone in l_i1, cases 1+3 need a <= ~14.6 mm, 4 of 5 signs of beta wrong); "
-             "ours = median PSO (improved_clamped) with a, b, c = config (ASSUMED)")
+REASON_T2 = (
+    "paper inconsistent: Table 2 contradicts its own IK for any a, b, c (table2_consistency: equal l_i1 "
+    "with different Y, Y not monotone in l_i1, cases 1+3 need a <= ~14.6 mm, 4 of 5 signs of beta wrong); "
+    "ours = median PSO (improved_clamped) with a, b, c = config (ASSUMED)"
+)
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
@@ -267,16 +412,37 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
         imp = df[df["variant"] == "improved_clamped"].set_index("case")
         for case in CASES:
             for n, unit in (("beta", "deg"), ("gamma", "deg"), ("Y", "mm")):
-                out.append(Claim(KEY, "table2", f"case{case}.{n}", printed_value(ref, "table2", f"case{case}.{n}"),
-                                 float(imp.loc[case, f"{n}_median"]), unit, variant="PSO improved_clamped, median",
-                                 reason=REASON_T2, evidence=f"{KEY}/table2_consistency.md"))
+                out.append(
+                    Claim(
+                        KEY,
+                        "table2",
+                        f"case{case}.{n}",
+                        printed_value(ref, "table2", f"case{case}.{n}"),
+                        float(imp.loc[case, f"{n}_median"]),
+                        unit,
+                        variant="PSO improved_clamped, median",
+                        reason=REASON_T2,
+                        evidence=f"{KEY}/table2_consistency.md",
+                    )
+                )
         thr = printed_value(ref, "eq20", "fitness_threshold")
         for variant in VARIANTS:
             sub = df[df["variant"] == variant]
-            out.append(Claim(KEY, "eq20", "fitness_threshold", thr, float(sub["F_median_mm"].median()), "mm",
-                             variant=f"PSO {variant}: median final F over all runs", kind="upper",
-                             reason="" if variant != "as_printed" else
-                             "w = 0.9 with c1 + c2 = 4 lies outside the PSO stability region (c1 + c2 < 2(1 + w) = 3.8)"))
+            out.append(
+                Claim(
+                    KEY,
+                    "eq20",
+                    "fitness_threshold",
+                    thr,
+                    float(sub["F_median_mm"].median()),
+                    "mm",
+                    variant=f"PSO {variant}: median final F over all runs",
+                    kind="upper",
+                    reason=""
+                    if variant != "as_printed"
+                    else "w = 0.9 with c1 + c2 = 4 lies outside the PSO stability region (c1 + c2 < 2(1 + w) = 3.8)",
+                )
+            )
         out += _precision_claims(df, ref)
     out += _fig2_claims(figdir, ref)
     out += _numerical_fk_claims(figdir, ref)
@@ -290,21 +456,57 @@ def _precision_claims(df: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
     out = []
     for variant in VARIANTS:
         sub = df[df["variant"] == variant]
-        out.append(Claim(KEY, "text_s3", "pso_all_inputs_precise", printed_value(ref, "text_s3", "pso_all_inputs_precise"), float(sub["converged"].sum() / sub["runs"].sum()),
-                         "1", variant=f"PSO {variant}: fraction of runs (5 cases x seeds) with F below eq (20)",
-                         kind="lower", reason="encoding: 'precise for all given inputs' = every run reaches F < 1e-6 mm"
-                         + (" (w = 0.9 constant diverges: see eq20 rows)" if variant == "as_printed" else
-                            " (no clamp: a few runs stall in a far corner of the box)" if variant == "improved" else "")))
+        out.append(
+            Claim(
+                KEY,
+                "text_s3",
+                "pso_all_inputs_precise",
+                printed_value(ref, "text_s3", "pso_all_inputs_precise"),
+                float(sub["converged"].sum() / sub["runs"].sum()),
+                "1",
+                variant=f"PSO {variant}: fraction of runs (5 cases x seeds) with F below eq (20)",
+                kind="lower",
+                reason="encoding: 'precise for all given inputs' = every run reaches F < 1e-6 mm"
+                + (
+                    " (w = 0.9 constant diverges: see eq20 rows)"
+                    if variant == "as_printed"
+                    else " (no clamp: a few runs stall in a far corner of the box)"
+                    if variant == "improved"
+                    else ""
+                ),
+            )
+        )
     # the paper's printed poses through eq (20): F = sum_j |l_j(pose) - l_j(input)| (mm)
     first = df.drop_duplicates("case").set_index("case")
     inputs = table2_inputs(ref) * 1e3
-    F = [float(np.sum(np.abs(first.loc[c, ["l1_of_paper_pose", "l2_of_paper_pose", "l3_of_paper_pose"]].to_numpy(float)
-                             - inputs[i]))) for i, c in enumerate(CASES)]
-    out.append(Claim(KEY, "table2", "paper_pose_fitness", printed_value(ref, "table2", "paper_pose_fitness"), max(F), "mm",
-                     evidence=f"{KEY}/table2_consistency.md",
-                     variant="max over the 5 cases of eq (20)'s F at the paper's printed Table 2 poses", kind="upper",
-                     reason="the printed poses do not solve the paper's own IK; geometry-independent proof in "
-                            "table2_consistency (a, b, c = config here, ASSUMED)"))
+    F = [
+        float(
+            np.sum(
+                np.abs(
+                    first.loc[
+                        c, ["l1_of_paper_pose", "l2_of_paper_pose", "l3_of_paper_pose"]
+                    ].to_numpy(float)
+                    - inputs[i]
+                )
+            )
+        )
+        for i, c in enumerate(CASES)
+    ]
+    out.append(
+        Claim(
+            KEY,
+            "table2",
+            "paper_pose_fitness",
+            printed_value(ref, "table2", "paper_pose_fitness"),
+            max(F),
+            "mm",
+            evidence=f"{KEY}/table2_consistency.md",
+            variant="max over the 5 cases of eq (20)'s F at the paper's printed Table 2 poses",
+            kind="upper",
+            reason="the printed poses do not solve the paper's own IK; geometry-independent proof in "
+            "table2_consistency (a, b, c = config here, ASSUMED)",
+        )
+    )
     return out
 
 
@@ -321,12 +523,26 @@ def _fig2_claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     for variant, sub in d.groupby("variant", sort=False):
         hit = sub[sub["F_mm"] <= thr].groupby("case")["iteration"].min()
         worst = float(hit.max()) if len(hit) == sub["case"].nunique() else float("nan")
-        out.append(Claim(KEY, "fig2", "iterations_to_threshold", budget, worst, "1",
-                         variant=f"PSO {variant}, one seed: max over the 5 cases of the first iteration with F <= "
-                                 f"{thr:g} mm (nan = some case never does)", kind="upper",
-                         reason="encoding: 'converges quickly' = every case reaches eq (20)'s threshold within Table "
-                                "1's 1500 iterations" + ("; constant w = 0.9 never does (Fig. 2 curves stall at "
-                                                           "~0.1-1 mm)" if variant == "as_printed" else "")))
+        out.append(
+            Claim(
+                KEY,
+                "fig2",
+                "iterations_to_threshold",
+                budget,
+                worst,
+                "1",
+                variant=f"PSO {variant}, one seed: max over the 5 cases of the first iteration with F <= "
+                f"{thr:g} mm (nan = some case never does)",
+                kind="upper",
+                reason="encoding: 'converges quickly' = every case reaches eq (20)'s threshold within Table "
+                "1's 1500 iterations"
+                + (
+                    "; constant w = 0.9 never does (Fig. 2 curves stall at ~0.1-1 mm)"
+                    if variant == "as_printed"
+                    else ""
+                ),
+            )
+        )
     return out
 
 
@@ -337,21 +553,40 @@ def _numerical_fk_claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     if not path.exists():
         return []
     s = pd.read_csv(path).set_index("method")
-    out = [Claim(KEY, "text_intro", "analytic_fk_cost", printed_value(ref, "text_intro", "analytic_fk_cost"),
-                 float(s.loc["closed-form", "wall_ms_per_pose"]),
-                 "ms", evidence=f"{KEY}/extra_solvers.md", variant="all-solutions FK (closed-form Y + degree-8 polynomial), batched, per pose",
-                 kind="lower", reason="encoding: 'analytic FK is costly' = at least 1 ms per solve; ours: Y in closed "
-                 "form and (beta, gamma) from one degree-8 polynomial, all roots; a wall-clock time, but load on a "
-                 "shared machine only lengthens it, so a time below the bound stays below it")]
+    out = [
+        Claim(
+            KEY,
+            "text_intro",
+            "analytic_fk_cost",
+            printed_value(ref, "text_intro", "analytic_fk_cost"),
+            float(s.loc["closed-form", "wall_ms_per_pose"]),
+            "ms",
+            evidence=f"{KEY}/extra_solvers.md",
+            variant="all-solutions FK (closed-form Y + degree-8 polynomial), batched, per pose",
+            kind="lower",
+            reason="encoding: 'analytic FK is costly' = at least 1 ms per solve; ours: Y in closed "
+            "form and (beta, gamma) from one degree-8 polynomial, all roots; a wall-clock time, but load on a "
+            "shared machine only lengthens it, so a time below the bound stays below it",
+        )
+    ]
     for method in ("newton", "lm"):
         r = s.loc[method]
         poses = int(r["poses"])
-        out.append(Claim(KEY, "text_intro", f"{method}_failure_from_home",
-                         printed_value(ref, "text_intro", f"{method}_failure_from_home"),
-                         float((poses - r["correct"]) / poses), "1", evidence=f"{KEY}/extra_solvers.md",
-                         variant=f"{method} from the home pose: fraction of {poses} random box poses not recovered",
-                         kind="lower", reason="encoding: 'numerical FK depends on the initial guess' = at least one "
-                         f"failure from a fixed start in {poses} poses (>= 1/{poses}); none failed"))
+        out.append(
+            Claim(
+                KEY,
+                "text_intro",
+                f"{method}_failure_from_home",
+                printed_value(ref, "text_intro", f"{method}_failure_from_home"),
+                float((poses - r["correct"]) / poses),
+                "1",
+                evidence=f"{KEY}/extra_solvers.md",
+                variant=f"{method} from the home pose: fraction of {poses} random box poses not recovered",
+                kind="lower",
+                reason="encoding: 'numerical FK depends on the initial guess' = at least one "
+                f"failure from a fixed start in {poses} poses (>= 1/{poses}); none failed",
+            )
+        )
     return out
 
 
@@ -360,15 +595,31 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     path = figdir / "table2.csv"
     if path.exists():
         df = pd.read_csv(path)
-        agg = df.groupby("variant", sort=False).agg(conv=("converged", "sum"), runs=("runs", "sum"),
-                                                     F=("F_median_mm", "median"), nit=("nit_median", "median"))
-        parts.append("PSO on Table 2's inputs: " + "; ".join(
-            f"{v}: {int(r.conv)}/{int(r.runs)} runs reach F < threshold, median final F = {r.F:.3g} mm, median "
-            f"iterations {r.nit:.0f}" for v, r in agg.iterrows()) + ".")
+        agg = df.groupby("variant", sort=False).agg(
+            conv=("converged", "sum"),
+            runs=("runs", "sum"),
+            F=("F_median_mm", "median"),
+            nit=("nit_median", "median"),
+        )
+        parts.append(
+            "PSO on Table 2's inputs: "
+            + "; ".join(
+                f"{v}: {int(r.conv)}/{int(r.runs)} runs reach F < threshold, median final F = {r.F:.3g} mm, median "
+                f"iterations {r.nit:.0f}"
+                for v, r in agg.iterrows()
+            )
+            + "."
+        )
         d = df[df["variant"] == "improved_clamped"]
-        parts.append("Our converged poses vs the paper's (β°, γ°, Y mm): " + "; ".join(
-            f"case {int(r.case)}: ({r.beta_median:.3f}, {r.gamma_median:.3f}, {r.Y_median:.3f}) vs "
-            f"({r.beta_paper:.3f}, {r.gamma_paper:.3f}, {r.Y_paper:.3f})" for r in d.itertuples()) + ".")
+        parts.append(
+            "Our converged poses vs the paper's (β°, γ°, Y mm): "
+            + "; ".join(
+                f"case {int(r.case)}: ({r.beta_median:.3f}, {r.gamma_median:.3f}, {r.Y_median:.3f}) vs "
+                f"({r.beta_paper:.3f}, {r.gamma_paper:.3f}, {r.Y_paper:.3f})"
+                for r in d.itertuples()
+            )
+            + "."
+        )
     path = figdir / "table2_consistency.csv"
     if path.exists():
         c = pd.read_csv(path).set_index("check")["value"]
@@ -377,10 +628,17 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
             f"differ by {c['same_l1_Y_spread_mm']:.3f} mm; {int(c['order_violations'])} pair(s) violate the monotone "
             f"Y(l1); cases 1 and 3 together need a ≤ {c['a_max_mm']:.1f} mm and c ≤ {c['c_max_mm']:.1f} mm "
             f"(and no a at all once case 3's l1 must be positive: a_max = {c['a_max_with_positive_l1_mm']:.1f} mm); "
-            f"{int(c['sign_violations'])} of 5 rows have sign(β) ≠ sign(l_i3 − l_i2).")
+            f"{int(c['sign_violations'])} of 5 rows have sign(β) ≠ sign(l_i3 − l_i2)."
+        )
     path = figdir / "extra_solvers.csv"
     if path.exists():
         s = pd.read_csv(path)
-        parts.append("FK solvers on random box poses: " + "; ".join(
-            f"{r.method}: {r.correct}/{r.poses} correct, {r.wall_ms_per_pose:.3g} ms/pose" for r in s.itertuples()) + ".")
+        parts.append(
+            "FK solvers on random box poses: "
+            + "; ".join(
+                f"{r.method}: {r.correct}/{r.poses} correct, {r.wall_ms_per_pose:.3g} ms/pose"
+                for r in s.itertuples()
+            )
+            + "."
+        )
     return "\n\n".join(parts)

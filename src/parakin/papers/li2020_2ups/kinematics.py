@@ -9,63 +9,107 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from parakin.claims import Claim, printed_value
 from parakin.config import rng
 from parakin.io import write_csv, write_table
-from parakin.papers.li2020_2ups.common import KEY, mech
+from parakin.papers.li2020_2ups.common import KEY, artefact, mech
 from parakin.papers.li2020_2ups.symbolic import derivation, loop_closure_model
 from parakin.plot import draw_mechanism, new_figure, save_figure, skeleton_table
-from parakin.claims import Claim, printed_value
 from parakin.registry import DESCRIPTIVE, EXACT, ROUNDING
-from parakin.papers.li2020_2ups.common import artefact
 
 #: pose drawn in Fig. 1 (deg, deg, mm): tilted so that both rotations are visible
 FIG1_POSE = (15.0, 20.0, 30.0)
 
 
-@artefact("fig01", outputs=["fig01_mechanism.png", "fig01_mechanism.csv"], config=[KEY], tolerance=DESCRIPTIVE)
+@artefact(
+    "fig01",
+    outputs=["fig01_mechanism.png", "fig01_mechanism.csv"],
+    config=[KEY],
+    tolerance=DESCRIPTIVE,
+)
 def fig01(config: dict, outdir: Path) -> list[Path]:
     """Fig. 1 redrawn from our model at FIG1_POSE, with the plotted coordinates as CSV."""
     m = mech(config)
     pose = np.array([np.deg2rad(FIG1_POSE[0]), np.deg2rad(FIG1_POSE[1]), FIG1_POSE[2] * 1e-3])
     sk = m.skeleton(pose)
-    ax = draw_mechanism(sk, frame_length=0.06,
-                        title=f"2-UPS/(S+SPR)R at β = {FIG1_POSE[0]:g}°, γ = {FIG1_POSE[1]:g}°, Y = {FIG1_POSE[2]:g} mm")
+    ax = draw_mechanism(
+        sk,
+        frame_length=0.06,
+        title=f"2-UPS/(S+SPR)R at β = {FIG1_POSE[0]:g}°, γ = {FIG1_POSE[1]:g}°, Y = {FIG1_POSE[2]:g} mm",
+    )
     png = save_figure(ax.figure, outdir / "fig01_mechanism.png")
     return [png, write_csv(skeleton_table(sk, frame_length=0.06), outdir / "fig01_mechanism.csv")]
 
 
-@artefact("concomitant", outputs=["extra_concomitant.csv", "extra_concomitant.md"], config=[KEY],
-          tolerance=ROUNDING)
+@artefact(
+    "concomitant",
+    outputs=["extra_concomitant.csv", "extra_concomitant.md"],
+    config=[KEY],
+    tolerance=ROUNDING,
+)
 def concomitant(config: dict, outdir: Path) -> list[Path]:
     """Symbolic derivation (sympy) that alpha = 0 and eq. (14) follow from (6), (12); the vector IK
     against the scalar closed forms; a numeric check with an independent loop-closure model."""
     cfg = config[KEY]
     d = derivation()
     m = mech(config)
-    model = loop_closure_model(cfg["concomitant_samples"], rng(config, f"{KEY}.concomitant"), c=m.c, a=m.a)
+    model = loop_closure_model(
+        cfg["concomitant_samples"], rng(config, f"{KEY}.concomitant"), c=m.c, a=m.a
+    )
     y = model["P"][:, 1]
     rho = np.sqrt(m.c**2 - y**2)
     rows = [
         ("B2B3 = R (B3' - B2') equals eq (7)", "symbolic", float(d["eq7_ok"]), "1 = true"),
         ("B2B3 . e_y", "symbolic", np.nan, str(d["constraint_y"])),
-        ("solutions alpha in [0, 2pi) for cos(beta) != 0", "symbolic", np.nan,
-         ", ".join(f"{v:.6g}" for v in d["alpha_solutions"]) + " (pi = flipped platform)"),
+        (
+            "solutions alpha in [0, 2pi) for cos(beta) != 0",
+            "symbolic",
+            np.nan,
+            ", ".join(f"{v:.6g}" for v in d["alpha_solutions"]) + " (pi = flipped platform)",
+        ),
         ("X from B2B3 . P = 0 at alpha = 0 (eq 8)", "symbolic", np.nan, str(d["X_of_Z"][0])),
         ("eq (14) satisfies (6) and (12)", "symbolic", float(d["P_ok"]), "1 = true"),
         ("|l1|^2 vector form = closed form", "symbolic", float(d["ik_ok"][0]), "1 = true"),
         ("|l2|^2 vector form = closed form", "symbolic", float(d["ik_ok"][1]), "1 = true"),
         ("|l3|^2 vector form = closed form", "symbolic", float(d["ik_ok"][2]), "1 = true"),
-        ("printed (16)^2 - vector |l2|^2", "symbolic", float(d["printed16_differs"]),
-         f"{d['printed16_minus_vector']} (nonzero: Y missing in the printed y term)"),
-        ("max |alpha| (rad), loop-closure model", "numeric", float(np.max(np.abs(model["alpha"]))),
-         f"{len(y)} random assemblies"),
-        ("max |X - rho sin beta| (m)", "numeric", float(np.max(np.abs(model["P"][:, 0] - rho * np.sin(model["beta"])))), ""),
-        ("max |Z - rho cos beta| (m)", "numeric", float(np.max(np.abs(model["P"][:, 2] - rho * np.cos(model["beta"])))), ""),
-        ("constraint Jacobian rank (DOF = 6 - rank)", "numeric", float(_dof(config)), "DOF at random poses"),
+        (
+            "printed (16)^2 - vector |l2|^2",
+            "symbolic",
+            float(d["printed16_differs"]),
+            f"{d['printed16_minus_vector']} (nonzero: Y missing in the printed y term)",
+        ),
+        (
+            "max |alpha| (rad), loop-closure model",
+            "numeric",
+            float(np.max(np.abs(model["alpha"]))),
+            f"{len(y)} random assemblies",
+        ),
+        (
+            "max |X - rho sin beta| (m)",
+            "numeric",
+            float(np.max(np.abs(model["P"][:, 0] - rho * np.sin(model["beta"])))),
+            "",
+        ),
+        (
+            "max |Z - rho cos beta| (m)",
+            "numeric",
+            float(np.max(np.abs(model["P"][:, 2] - rho * np.cos(model["beta"])))),
+            "",
+        ),
+        (
+            "constraint Jacobian rank (DOF = 6 - rank)",
+            "numeric",
+            float(_dof(config)),
+            "DOF at random poses",
+        ),
     ]
     df = pd.DataFrame(rows, columns=["check", "kind", "value", "detail"])
-    return write_table(df, outdir / "extra_concomitant", title="Concomitant motion: symbolic and numeric checks",
-                       notes="alpha = 0 follows from the first constraint of (6) alone; X and Z are functions of (beta, Y).")
+    return write_table(
+        df,
+        outdir / "extra_concomitant",
+        title="Concomitant motion: symbolic and numeric checks",
+        notes="alpha = 0 follows from the first constraint of (6) alone; X and Z are functions of (beta, Y).",
+    )
 
 
 def _dof(config: dict) -> int:
@@ -81,7 +125,11 @@ def _dof(config: dict) -> int:
 
         def cons(z: np.ndarray) -> np.ndarray:
             al, be = z[0], z[1]
-            b2b3 = np.sqrt(2) * m.b * np.array([-np.cos(al) * np.cos(be), -np.sin(al) * np.cos(be), np.sin(be)])
+            b2b3 = (
+                np.sqrt(2)
+                * m.b
+                * np.array([-np.cos(al) * np.cos(be), -np.sin(al) * np.cos(be), np.sin(be)])
+            )
             return np.array([b2b3[1], b2b3 @ z[3:], z[3:] @ z[3:] - m.c**2])
 
         jac = np.stack([(cons(z0 + e) - cons(z0 - e)) / 2e-7 for e in 1e-7 * np.eye(6)], axis=-1)
@@ -89,7 +137,12 @@ def _dof(config: dict) -> int:
     return int(min(dofs))
 
 
-@artefact("parasitic", outputs=["extra_parasitic.png", "extra_parasitic.csv"], config=[KEY], tolerance=ROUNDING)
+@artefact(
+    "parasitic",
+    outputs=["extra_parasitic.png", "extra_parasitic.csv"],
+    config=[KEY],
+    tolerance=ROUNDING,
+)
 def parasitic(config: dict, outdir: Path) -> list[Path]:
     """Extra: the parasitic translations X = rho sin(beta) and dZ = c - rho cos(beta) over the
     Table 1 box (beta, Y); gamma does not enter."""
@@ -101,8 +154,14 @@ def parasitic(config: dict, outdir: Path) -> list[Path]:
     bb, yy = np.meshgrid(beta, y, indexing="ij")
     p = m.position(np.stack([bb, np.zeros_like(bb), yy], axis=-1))
     x_mm, dz_mm = p[..., 0] * 1e3, (m.c - p[..., 2]) * 1e3
-    df = pd.DataFrame({"beta_deg": np.rad2deg(bb).ravel(), "Y_mm": (yy * 1e3).ravel(),
-                       "X_mm": x_mm.ravel(), "dZ_mm": dz_mm.ravel()})
+    df = pd.DataFrame(
+        {
+            "beta_deg": np.rad2deg(bb).ravel(),
+            "Y_mm": (yy * 1e3).ravel(),
+            "X_mm": x_mm.ravel(),
+            "dZ_mm": dz_mm.ravel(),
+        }
+    )
     fig, axes = new_figure((6.6, 2.8))
     fig.clear()
     fig.set_layout_engine(None)
@@ -115,12 +174,21 @@ def parasitic(config: dict, outdir: Path) -> list[Path]:
         ax.set_xlabel("β (deg)")
         ax.set_ylabel("Y (mm)")
         ax.set_xticks([-30, -15, 0, 15, 30])
-    fig.suptitle(f"Parasitic translations of B1 (a, b, c = {m.a*1e3:g}, {m.b*1e3:g}, {m.c*1e3:g} mm)")
-    return [save_figure(fig, outdir / "extra_parasitic.png"), write_csv(df, outdir / "extra_parasitic.csv")]
+    fig.suptitle(
+        f"Parasitic translations of B1 (a, b, c = {m.a * 1e3:g}, {m.b * 1e3:g}, {m.c * 1e3:g} mm)"
+    )
+    return [
+        save_figure(fig, outdir / "extra_parasitic.png"),
+        write_csv(df, outdir / "extra_parasitic.csv"),
+    ]
 
 
-@artefact("fk_solutions", outputs=["extra_fk_solutions.png", "extra_fk_solutions.csv"], config=[KEY],
-          tolerance=EXACT)
+@artefact(
+    "fk_solutions",
+    outputs=["extra_fk_solutions.png", "extra_fk_solutions.csv"],
+    config=[KEY],
+    tolerance=EXACT,
+)
 def solution_count(config: dict, outdir: Path) -> list[Path]:
     """Extra: number of real FK solutions (rho > 0 branch, all of beta, gamma) of the strokes of each
     pose of a (beta, gamma) grid, at three Y across Table 1's range; and how many lie in the box."""
@@ -137,23 +205,43 @@ def solution_count(config: dict, outdir: Path) -> list[Path]:
     with np.errstate(invalid="ignore"):
         inbox = real & np.all((sols >= lo - 1e-9) & (sols <= hi + 1e-9), axis=-1)
     count, nbox = real.sum(-1), inbox.sum(-1)
-    df = pd.DataFrame({"beta_deg": np.rad2deg(bb).ravel(), "gamma_deg": np.rad2deg(gg).ravel(),
-                       "Y_mm": (yy * 1e3).ravel(), "n_real": count.ravel(), "n_in_box": nbox.ravel()})
+    df = pd.DataFrame(
+        {
+            "beta_deg": np.rad2deg(bb).ravel(),
+            "gamma_deg": np.rad2deg(gg).ravel(),
+            "Y_mm": (yy * 1e3).ravel(),
+            "n_real": count.ravel(),
+            "n_in_box": nbox.ravel(),
+        }
+    )
     fig, _ = new_figure((7.2, 2.6))
     fig.clear()
     axs = fig.subplots(1, 3, sharey=True)
     levels = np.arange(-0.5, 9.5, 1.0)
     for i, ax in enumerate(axs):
-        cs = ax.contourf(np.rad2deg(bb[..., i]), np.rad2deg(gg[..., i]), count[..., i], levels=levels, cmap="Blues")
-        ax.set_title(f"Y = {ys[i]*1e3:g} mm", fontsize="small")
+        cs = ax.contourf(
+            np.rad2deg(bb[..., i]),
+            np.rad2deg(gg[..., i]),
+            count[..., i],
+            levels=levels,
+            cmap="Blues",
+        )
+        ax.set_title(f"Y = {ys[i] * 1e3:g} mm", fontsize="small")
         ax.set_xlabel("β (deg)")
     axs[0].set_ylabel("γ (deg)")
     fig.colorbar(cs, ax=axs, label="real FK solutions", ticks=range(0, 9))
-    return [save_figure(fig, outdir / "extra_fk_solutions.png"), write_csv(df, outdir / "extra_fk_solutions.csv")]
+    return [
+        save_figure(fig, outdir / "extra_fk_solutions.png"),
+        write_csv(df, outdir / "extra_fk_solutions.csv"),
+    ]
 
 
-@artefact("singularity_workspace", outputs=["extra_singularity_workspace.png",
-                                          "extra_singularity_workspace.csv"], config=[KEY], tolerance=EXACT)
+@artefact(
+    "singularity_workspace",
+    outputs=["extra_singularity_workspace.png", "extra_singularity_workspace.csv"],
+    config=[KEY],
+    tolerance=EXACT,
+)
 def singularity_workspace(config: dict, outdir: Path) -> list[Path]:
     """Extra: det of the velocity Jacobian J (qdot = J posedot) over (beta, gamma) at three Y of
     Table 1's box, with the region where eq (19)'s stroke limits hold; cond(J) beside it.
@@ -164,37 +252,71 @@ def singularity_workspace(config: dict, outdir: Path) -> list[Path]:
     n = config[KEY]["grid"]
     lo, hi = m.pose_bounds()
     ys = np.array([lo[2], 0.5 * (lo[2] + hi[2]), hi[2]])
-    bb, gg, yy = np.meshgrid(np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n), ys, indexing="ij")
+    bb, gg, yy = np.meshgrid(
+        np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n), ys, indexing="ij"
+    )
     poses = np.stack([bb, gg, yy], axis=-1)
     jac = m.velocity_jacobian(poses)
     det = np.linalg.det(jac)
     cond = np.linalg.cond(jac)
     inside = m.within_limits(m.ik(poses))
-    df = pd.DataFrame({"beta_deg": np.rad2deg(bb).ravel(), "gamma_deg": np.rad2deg(gg).ravel(),
-                       "Y_mm": (yy * 1e3).ravel(), "det_J_m2": det.ravel(), "cond_J": cond.ravel(),
-                       "within_eq19": inside.ravel()})
+    df = pd.DataFrame(
+        {
+            "beta_deg": np.rad2deg(bb).ravel(),
+            "gamma_deg": np.rad2deg(gg).ravel(),
+            "Y_mm": (yy * 1e3).ravel(),
+            "det_J_m2": det.ravel(),
+            "cond_J": cond.ravel(),
+            "within_eq19": inside.ravel(),
+        }
+    )
     with use_style():
         fig, _ = new_figure((7.2, 2.8))
         fig.clear()
         axs = fig.subplots(1, 3, sharey=True)
         crosses = bool(det.min() < 0 < det.max())
-        levels = (np.linspace(-1, 1, 17) * np.abs(det).max()) if crosses else np.linspace(det.min(), det.max(), 13)
+        levels = (
+            (np.linspace(-1, 1, 17) * np.abs(det).max())
+            if crosses
+            else np.linspace(det.min(), det.max(), 13)
+        )
         for i, ax in enumerate(axs):
-            cs = ax.contourf(np.rad2deg(bb[..., i]), np.rad2deg(gg[..., i]), det[..., i], levels=levels,
-                             cmap="RdBu_r" if crosses else "viridis")
-            ax.contour(np.rad2deg(bb[..., i]), np.rad2deg(gg[..., i]), det[..., i], levels=[0.0], colors="k", linewidths=1.2)
-            ax.contourf(np.rad2deg(bb[..., i]), np.rad2deg(gg[..., i]), (~inside[..., i]).astype(float), levels=[0.5, 1.5],
-                        colors="none", hatches=["////"])
+            cs = ax.contourf(
+                np.rad2deg(bb[..., i]),
+                np.rad2deg(gg[..., i]),
+                det[..., i],
+                levels=levels,
+                cmap="RdBu_r" if crosses else "viridis",
+            )
+            ax.contour(
+                np.rad2deg(bb[..., i]),
+                np.rad2deg(gg[..., i]),
+                det[..., i],
+                levels=[0.0],
+                colors="k",
+                linewidths=1.2,
+            )
+            ax.contourf(
+                np.rad2deg(bb[..., i]),
+                np.rad2deg(gg[..., i]),
+                (~inside[..., i]).astype(float),
+                levels=[0.5, 1.5],
+                colors="none",
+                hatches=["////"],
+            )
             ax.set_title(f"Y = {ys[i] * 1e3:g} mm", fontsize="small")
             ax.set_xlabel("β (deg)")
         axs[0].set_ylabel("γ (deg)")
         fig.colorbar(cs, ax=axs, label="det J (m²)", format="%.1e")
-        fig.suptitle("Velocity Jacobian over Table 1's search box; hatched: strokes beyond eq. (19)"
-                     + ("; black: det J = 0" if crosses else "; det J never vanishes here"), fontsize="small")
-    return [save_figure(fig, outdir / "extra_singularity_workspace.png"),
-            write_csv(df, outdir / "extra_singularity_workspace.csv")]
-
-
+        fig.suptitle(
+            "Velocity Jacobian over Table 1's search box; hatched: strokes beyond eq. (19)"
+            + ("; black: det J = 0" if crosses else "; det J never vanishes here"),
+            fontsize="small",
+        )
+    return [
+        save_figure(fig, outdir / "extra_singularity_workspace.png"),
+        write_csv(df, outdir / "extra_singularity_workspace.csv"),
+    ]
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
@@ -203,13 +325,33 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     if path.exists():
         df = pd.read_csv(path).set_index("check")
         rank_dof = float(df.loc["constraint Jacobian rank (DOF = 6 - rank)", "value"])
-        out.append(Claim(KEY, "text_s1.1", "dof", printed_value(ref, "text_s1.1", "dof"), rank_dof, "1",
-                         variant="6 - rank of the constraint Jacobian of (6)+(12)", tol=0.0))
+        out.append(
+            Claim(
+                KEY,
+                "text_s1.1",
+                "dof",
+                printed_value(ref, "text_s1.1", "dof"),
+                rank_dof,
+                "1",
+                variant="6 - rank of the constraint Jacobian of (6)+(12)",
+                tol=0.0,
+            )
+        )
         alpha = float(df.loc["max |alpha| (rad), loop-closure model", "value"])
-        out.append(Claim(KEY, "eq8", "alpha", printed_value(ref, "eq8", "alpha"), float(np.rad2deg(alpha)), "deg",
-                         variant="max |alpha| over random assemblies of an independent loop-closure model",
-                         tol=1e-9, reason="also symbolic: B2B3.e_y = -sqrt2 b sin(alpha) cos(beta) = 0 gives alpha = 0 "
-                         "(pi = flipped platform); but X = rho sin(beta), Z = rho cos(beta) are parasitic translations"))
+        out.append(
+            Claim(
+                KEY,
+                "eq8",
+                "alpha",
+                printed_value(ref, "eq8", "alpha"),
+                float(np.rad2deg(alpha)),
+                "deg",
+                variant="max |alpha| over random assemblies of an independent loop-closure model",
+                tol=1e-9,
+                reason="also symbolic: B2B3.e_y = -sqrt2 b sin(alpha) cos(beta) = 0 gives alpha = 0 "
+                "(pi = flipped platform); but X = rho sin(beta), Z = rho cos(beta) are parasitic translations",
+            )
+        )
         out += _equation_claims(df, ref)
     return out
 
@@ -225,29 +367,81 @@ def _equation_claims(df: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
     enc = "encoding: printed 1 = the paper's equation; ours 1 = sympy proves the identity, 0 = it fails"
     v = df["value"]
     out = [
-        Claim(KEY, "eq7", "B2B3_identity", printed_value(ref, "eq7", "B2B3_identity"), float(v["B2B3 = R (B3' - B2') equals eq (7)"]), "1",
-              variant="sympy: R(alpha, beta, gamma) (eq 1) applied to B3' - B2' (eq 5) minus eq (7)", tol=0.0,
-              reason=enc + " (the extracted 'S_beta' is read as sin(beta))"),
-        Claim(KEY, "eq14", "P_identity", printed_value(ref, "eq14", "P_identity"), float(v["eq (14) satisfies (6) and (12)"]), "1",
-              variant="sympy: P = (sin b sqrt(c^2 - Y^2), Y, cos b sqrt(c^2 - Y^2)) satisfies (6) and (12)", tol=0.0,
-              reason=enc),
-        Claim(KEY, "eq14", "X_residual", printed_value(ref, "eq14", "X_residual"), float(v["max |X - rho sin beta| (m)"]) * 1e3, "mm",
-              variant="max |X - sin(b) sqrt(c^2 - Y^2)| over an independent loop-closure model", tol=1e-9,
-              reason="numeric residual of eq (14), tolerance 1e-9 mm (round-off)"),
-        Claim(KEY, "eq14", "Z_residual", printed_value(ref, "eq14", "Z_residual"), float(v["max |Z - rho cos beta| (m)"]) * 1e3, "mm",
-              variant="max |Z - cos(b) sqrt(c^2 - Y^2)| over an independent loop-closure model", tol=1e-9,
-              reason="numeric residual of eq (14), tolerance 1e-9 mm (round-off)"),
+        Claim(
+            KEY,
+            "eq7",
+            "B2B3_identity",
+            printed_value(ref, "eq7", "B2B3_identity"),
+            float(v["B2B3 = R (B3' - B2') equals eq (7)"]),
+            "1",
+            variant="sympy: R(alpha, beta, gamma) (eq 1) applied to B3' - B2' (eq 5) minus eq (7)",
+            tol=0.0,
+            reason=enc + " (the extracted 'S_beta' is read as sin(beta))",
+        ),
+        Claim(
+            KEY,
+            "eq14",
+            "P_identity",
+            printed_value(ref, "eq14", "P_identity"),
+            float(v["eq (14) satisfies (6) and (12)"]),
+            "1",
+            variant="sympy: P = (sin b sqrt(c^2 - Y^2), Y, cos b sqrt(c^2 - Y^2)) satisfies (6) and (12)",
+            tol=0.0,
+            reason=enc,
+        ),
+        Claim(
+            KEY,
+            "eq14",
+            "X_residual",
+            printed_value(ref, "eq14", "X_residual"),
+            float(v["max |X - rho sin beta| (m)"]) * 1e3,
+            "mm",
+            variant="max |X - sin(b) sqrt(c^2 - Y^2)| over an independent loop-closure model",
+            tol=1e-9,
+            reason="numeric residual of eq (14), tolerance 1e-9 mm (round-off)",
+        ),
+        Claim(
+            KEY,
+            "eq14",
+            "Z_residual",
+            printed_value(ref, "eq14", "Z_residual"),
+            float(v["max |Z - rho cos beta| (m)"]) * 1e3,
+            "mm",
+            variant="max |Z - cos(b) sqrt(c^2 - Y^2)| over an independent loop-closure model",
+            tol=1e-9,
+            reason="numeric residual of eq (14), tolerance 1e-9 mm (round-off)",
+        ),
     ]
     for j in (1, 2, 3):
-        out.append(Claim(KEY, "eq9-11", f"l{j}_identity", printed_value(ref, "eq9-11", f"l{j}_identity"), float(v[f"|l{j}|^2 vector form = closed form"]), "1",
-                         variant=f"sympy: |l{j}|^2 of the vector form (eqs 9-11, 14) = our scalar closed form",
-                         tol=0.0, reason=enc))
+        out.append(
+            Claim(
+                KEY,
+                "eq9-11",
+                f"l{j}_identity",
+                printed_value(ref, "eq9-11", f"l{j}_identity"),
+                float(v[f"|l{j}|^2 vector form = closed form"]),
+                "1",
+                variant=f"sympy: |l{j}|^2 of the vector form (eqs 9-11, 14) = our scalar closed form",
+                tol=0.0,
+                reason=enc,
+            )
+        )
     diff = df.loc["printed (16)^2 - vector |l2|^2"]
-    out.append(Claim(KEY, "eq16", "printed_equals_vector_form", printed_value(ref, "eq16", "printed_equals_vector_form"), 1.0 - float(diff["value"]), "1",
-                     variant="sympy: printed scalar (16)^2 - vector |l2|^2 (1 = identical)", tol=0.0,
-                     evidence=f"{KEY}/extra_concomitant.md",
-                     reason=f"typo in the printed (16): the difference is {diff['detail']}; we code (9)-(11) + (14), "
-                            "which the paper's own vector derivation gives"))
+    out.append(
+        Claim(
+            KEY,
+            "eq16",
+            "printed_equals_vector_form",
+            printed_value(ref, "eq16", "printed_equals_vector_form"),
+            1.0 - float(diff["value"]),
+            "1",
+            variant="sympy: printed scalar (16)^2 - vector |l2|^2 (1 = identical)",
+            tol=0.0,
+            evidence=f"{KEY}/extra_concomitant.md",
+            reason=f"typo in the printed (16): the difference is {diff['detail']}; we code (9)-(11) + (14), "
+            "which the paper's own vector derivation gives",
+        )
+    )
     return out
 
 
@@ -277,13 +471,17 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     path = figdir / "extra_parasitic.csv"
     if path.exists():
         df = pd.read_csv(path)
-        parts.append(f"Parasitic translations over the Table 1 box: |X| up to {df['X_mm'].abs().max():.1f} mm, "
-                     f"ΔZ up to {df['dZ_mm'].max():.1f} mm — 'no concomitant motion' holds only for the rotation about z.")
+        parts.append(
+            f"Parasitic translations over the Table 1 box: |X| up to {df['X_mm'].abs().max():.1f} mm, "
+            f"ΔZ up to {df['dZ_mm'].max():.1f} mm — 'no concomitant motion' holds only for the rotation about z."
+        )
     path = figdir / "extra_fk_solutions.csv"
     if path.exists():
         df = pd.read_csv(path)
         counts = df["n_real"].value_counts().sort_index()
-        parts.append("Real FK solutions (ρ > 0 branch) over the box grid: "
-                     + ", ".join(f"{int(k)}: {int(v)} poses" for k, v in counts.items())
-                     + f"; solutions inside the Table 1 box: min {df['n_in_box'].min()}, max {df['n_in_box'].max()}.")
+        parts.append(
+            "Real FK solutions (ρ > 0 branch) over the box grid: "
+            + ", ".join(f"{int(k)}: {int(v)} poses" for k, v in counts.items())
+            + f"; solutions inside the Table 1 box: min {df['n_in_box'].min()}, max {df['n_in_box'].max()}."
+        )
     return "\n\n".join(parts)

@@ -39,17 +39,27 @@ def derivation() -> dict[str, object]:
     P = sp.Matrix([X, Y, Z])
     B2, B3 = P + R * b2l, P + R * b3l
     b2b3 = sp.simplify(B3 - B2)
-    eq7 = sp.Matrix([-sp.sqrt(2) * b * sp.cos(al) * sp.cos(be), -sp.sqrt(2) * b * sp.sin(al) * sp.cos(be),
-                     sp.sqrt(2) * b * sp.sin(be)])
+    eq7 = sp.Matrix(
+        [
+            -sp.sqrt(2) * b * sp.cos(al) * sp.cos(be),
+            -sp.sqrt(2) * b * sp.sin(al) * sp.cos(be),
+            sp.sqrt(2) * b * sp.sin(be),
+        ]
+    )
     eq7_ok = sp.simplify(b2b3 - eq7) == sp.zeros(3, 1)
     cons_y = sp.simplify(b2b3.dot(sp.Matrix([0, 1, 0])))
     # cos(beta) != 0 (|beta| < 90 deg): divide it out and solve for alpha in [0, 2 pi)
-    alpha_solutions = sp.solveset(sp.simplify(cons_y / (-sp.sqrt(2) * b * sp.cos(be))), al, sp.Interval.Ropen(0, 2 * sp.pi))
+    alpha_solutions = sp.solveset(
+        sp.simplify(cons_y / (-sp.sqrt(2) * b * sp.cos(be))), al, sp.Interval.Ropen(0, 2 * sp.pi)
+    )
     cons_p = sp.simplify(b2b3.dot(P).subs(al, 0))
     x_of_z = sp.solve(cons_p, X)
     rho = sp.sqrt(c**2 - Y**2)
     P14 = {X: rho * sp.sin(be), Z: rho * sp.cos(be)}
-    p_ok = sp.simplify(cons_p.subs(P14)) == 0 and sp.simplify((X**2 + Y**2 + Z**2 - c**2).subs(P14)) == 0
+    p_ok = (
+        sp.simplify(cons_p.subs(P14)) == 0
+        and sp.simplify((X**2 + Y**2 + Z**2 - c**2).subs(P14)) == 0
+    )
     # vector IK (9)-(11) at alpha = 0 with (14)
     h = sp.sqrt(3) / 2 * a
     A1, A2, A3 = sp.Matrix([0, h, 0]), sp.Matrix([a / 2, h, 0]), sp.Matrix([-a / 2, h, 0])
@@ -59,23 +69,39 @@ def derivation() -> dict[str, object]:
     sq = [sp.expand(v.dot(v)) for v in legs]
     u = rho + k * sp.sin(ga)
     Q = u**2 + k**2 + a**2 / 4 + (k * sp.cos(ga) + Y - h) ** 2 - a * k * sp.cos(be)
-    closed = [sp.Rational(4, 9) * c**2 + sp.Rational(3, 4) * a**2 - 2 / sp.sqrt(3) * a * Y,
-              Q - a * u * sp.sin(be), Q + a * u * sp.sin(be)]
+    closed = [
+        sp.Rational(4, 9) * c**2 + sp.Rational(3, 4) * a**2 - 2 / sp.sqrt(3) * a * Y,
+        Q - a * u * sp.sin(be),
+        Q + a * u * sp.sin(be),
+    ]
     ik_ok = [sp.simplify(sp.expand_trig(s - cf)) == 0 for s, cf in zip(sq, closed)]
-    printed16 = ((rho * sp.sin(be) + k * (sp.cos(be) + sp.sin(ga) * sp.sin(be)) - a / 2) ** 2
-                 + (k * sp.cos(ga) - sp.sqrt(3) / 2 * a) ** 2
-                 + (rho * sp.cos(be) + k * (-sp.sin(be) + sp.cos(be) * sp.sin(ga))) ** 2)
+    printed16 = (
+        (rho * sp.sin(be) + k * (sp.cos(be) + sp.sin(ga) * sp.sin(be)) - a / 2) ** 2
+        + (k * sp.cos(ga) - sp.sqrt(3) / 2 * a) ** 2
+        + (rho * sp.cos(be) + k * (-sp.sin(be) + sp.cos(be) * sp.sin(ga))) ** 2
+    )
     diff16 = sp.simplify(sp.expand(printed16 - sq[1]))
     return {
-        "B2B3": b2b3, "eq7_ok": bool(eq7_ok), "constraint_y": cons_y,
+        "B2B3": b2b3,
+        "eq7_ok": bool(eq7_ok),
+        "constraint_y": cons_y,
         "alpha_solutions": sorted(float(s) for s in alpha_solutions),
-        "X_of_Z": x_of_z, "P_ok": bool(p_ok), "ik_ok": [bool(v) for v in ik_ok],
-        "printed16_minus_vector": diff16, "printed16_differs": diff16 != 0,
+        "X_of_Z": x_of_z,
+        "P_ok": bool(p_ok),
+        "ik_ok": [bool(v) for v in ik_ok],
+        "printed16_minus_vector": diff16,
+        "printed16_differs": diff16 != 0,
     }
 
 
-def loop_closure_model(n: int, rng: np.random.Generator, c: float = 0.3, a: float = 0.15,
-                       max_tilt: float = np.deg2rad(45.0), max_roll: float = np.deg2rad(90.0)) -> dict[str, np.ndarray]:
+def loop_closure_model(
+    n: int,
+    rng: np.random.Generator,
+    c: float = 0.3,
+    a: float = 0.15,
+    max_tilt: float = np.deg2rad(45.0),
+    max_roll: float = np.deg2rad(90.0),
+) -> dict[str, np.ndarray]:
     """An independent joint-level model of the (S+SPR)R unit (docs/li2020_2ups.md#g5), sampled ``n`` times.
 
     The SR link points along a random unit vector ``n_l`` (tilt up to ``max_tilt`` from z, any

@@ -8,9 +8,9 @@ Configuration: ``config["ye_stewart12"]``. The paper in our own words: ``docs/ye
 
 from __future__ import annotations
 
+from parakin.papers.sections import combine
 from parakin.papers.ye_stewart12 import fk, modes, solvers, symbolic
 from parakin.papers.ye_stewart12.common import KEY, TITLE
-from parakin.papers.sections import combine
 
 SECTIONS = [fk, symbolic, solvers, modes]
 

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-from functools import partial
-
-from parakin import registry
-
 import time
+from functools import partial
 
 import numpy as np
 
+from parakin import registry
 from parakin.mechanisms.stewart12 import NESTED_PASSIVE, DriveMode, Stewart12
 from parakin.solvers import solve_fk
 
@@ -22,8 +20,10 @@ KEY = "ye_stewart12"
 #: ``@artefact(name, outputs=..., ...)`` declares one of this paper's tables or figures
 #: (:func:`parakin.registry.artefact` with the paper key filled in)
 artefact = partial(registry.artefact, KEY)
-TITLE = ("Ye, You, Shen, Wu, Ru — Stewart-derived 12-leg cube mechanism: closed-form FK, "
-         "compatibility equations, N-R vs Broyden, drive modes")
+TITLE = (
+    "Ye, You, Shen, Wu, Ru — Stewart-derived 12-leg cube mechanism: closed-form FK, "
+    "compatibility equations, N-R vs Broyden, drive modes"
+)
 
 #: paper mode numbers (Table 6): I = R5 ... VI = R0
 MODE_NAMES = {5: "I", 4: "II", 3: "III", 2: "IV", 1: "V", 0: "VI"}
@@ -32,8 +32,11 @@ MODE_NAMES = {5: "I", 4: "II", 3: "III", 2: "IV", 1: "V", 0: "VI"}
 def mech(config: dict, n_mm: float | None = None, L_mm: float | None = None) -> Stewart12:
     """The mechanism of the configured geometry (paper: n = 15, L = 25 mm) and lambda convention."""
     c = config[KEY]
-    return Stewart12(n=(c["n_mm"] if n_mm is None else n_mm) * 1e-3,
-                     L=(c["L_mm"] if L_mm is None else L_mm) * 1e-3, convention=c["convention"])
+    return Stewart12(
+        n=(c["n_mm"] if n_mm is None else n_mm) * 1e-3,
+        L=(c["L_mm"] if L_mm is None else L_mm) * 1e-3,
+        convention=c["convention"],
+    )
 
 
 def test_pose(config: dict) -> np.ndarray:
@@ -50,11 +53,20 @@ def passive_sets(config: dict) -> dict[int, tuple[int, ...]]:
 
 def passive_caption(config: dict) -> str:
     s = passive_sets(config)
-    return "passive legs " + ", ".join(f"R={r}: {{{','.join(map(str, s[r]))}}}" for r in range(5, -1, -1))
+    return "passive legs " + ", ".join(
+        f"R={r}: {{{','.join(map(str, s[r]))}}}" for r in range(5, -1, -1)
+    )
 
 
-def run_mode(m: Stewart12, passive: tuple[int, ...], pose: np.ndarray, d: np.ndarray, method: str,
-             maxiter: int, xtol_floor: float = 1e-13) -> dict[str, np.ndarray]:
+def run_mode(
+    m: Stewart12,
+    passive: tuple[int, ...],
+    pose: np.ndarray,
+    d: np.ndarray,
+    method: str,
+    maxiter: int,
+    xtol_floor: float = 1e-13,
+) -> dict[str, np.ndarray]:
     """Solve the drive mode from ``X0 = (1 + d) X*`` for every d (batched, generic solver).
 
     The solver runs with ``tol = 0`` and a step floor ``xtol_floor`` (m) well below every
@@ -65,8 +77,16 @@ def run_mode(m: Stewart12, passive: tuple[int, ...], pose: np.ndarray, d: np.nda
     dm = DriveMode(m, passive)
     xs, act = dm.split(m.ik(pose))
     traj: list[np.ndarray] = []
-    res = solve_fk(dm, act, x0=(1.0 + np.asarray(d))[:, None] * xs, method=method, tol=0.0,
-                   maxiter=maxiter, xtol=xtol_floor, callback=lambda k, x, r: traj.append(x))
+    res = solve_fk(
+        dm,
+        act,
+        x0=(1.0 + np.asarray(d))[:, None] * xs,
+        method=method,
+        tol=0.0,
+        maxiter=maxiter,
+        xtol=xtol_floor,
+        callback=lambda k, x, r: traj.append(x),
+    )
     return {"xstar": xs, "traj": np.array(traj), "status": res.status, "nit": res.nit, "x": res.x}
 
 
@@ -85,8 +105,15 @@ def state_at(traj: np.ndarray, k: np.ndarray) -> np.ndarray:
     return traj[k, np.arange(traj.shape[1])]
 
 
-def time_solve(m: Stewart12, passive: tuple[int, ...], pose: np.ndarray, d: float, method: str, tol: float,
-               repeats: int) -> float:
+def time_solve(
+    m: Stewart12,
+    passive: tuple[int, ...],
+    pose: np.ndarray,
+    d: float,
+    method: str,
+    tol: float,
+    repeats: int,
+) -> float:
     """Median wall time (s) of one single-case solve stopped by ``xtol = tol`` (inf-norm)."""
     dm = DriveMode(m, passive)
     xs, act = dm.split(m.ik(pose))

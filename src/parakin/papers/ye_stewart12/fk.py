@@ -9,14 +9,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from parakin.claims import Claim
 from parakin.config import rng
 from parakin.io import write_csv, write_table
-from parakin.papers.ye_stewart12.common import KEY, mech, passive_sets, test_pose
+from parakin.papers.ye_stewart12.common import KEY, artefact, mech, passive_sets, test_pose
 from parakin.plot import draw_mechanism, save_figure, skeleton_table
-from parakin.claims import Claim, printed_value
 from parakin.registry import DESCRIPTIVE, EXACT, TIMING
-from parakin.papers.ye_stewart12.common import artefact
-
 
 EQS = ("f (21)", "g (22)", "v (23)", "u (24)", "w (25)", "h (26)")
 
@@ -26,7 +24,12 @@ def _states(config: dict) -> dict[str, np.ndarray]:
     return {"initial": m.home(), "arbitrary (§3.3 test pose)": test_pose(config)}
 
 
-@artefact("table1", outputs=["table1.csv", "table1.md", "table1_random.csv"], config=[KEY], tolerance=EXACT)
+@artefact(
+    "table1",
+    outputs=["table1.csv", "table1.md", "table1_random.csv"],
+    config=[KEY],
+    tolerance=EXACT,
+)
 def table1(config: dict, outdir: Path) -> list[Path]:
     """Table 1 (lost): FK check — pose and joint centres from the 12 IK lengths vs the exact ones,
     at the initial state and at the §3.3 test pose (the paper's arbitrary state is unknown)."""
@@ -39,23 +42,48 @@ def table1(config: dict, outdir: Path) -> list[Path]:
         names = ["x0 (mm)", "y0 (mm)", "z0 (mm)", "lambda1", "lambda2", "lambda3"]
         scale = np.array([1e3, 1e3, 1e3, 1, 1, 1])
         for i, nm in enumerate(names):
-            rows.append({"state": state, "quantity": nm, "exact": pose[i] * scale[i], "computed": got[i] * scale[i],
-                         "abs_error": abs(got[i] - pose[i]) * scale[i]})
+            rows.append(
+                {
+                    "state": state,
+                    "quantity": nm,
+                    "exact": pose[i] * scale[i],
+                    "computed": got[i] * scale[i],
+                    "abs_error": abs(got[i] - pose[i]) * scale[i],
+                }
+            )
         for j in range(6):
             for c, ax in enumerate("xyz"):
-                rows.append({"state": state, "quantity": f"B{j + 1}.{ax} (mm)", "exact": bj_true[j, c] * 1e3,
-                             "computed": bj_got[j, c] * 1e3, "abs_error": abs(bj_got[j, c] - bj_true[j, c]) * 1e3})
+                rows.append(
+                    {
+                        "state": state,
+                        "quantity": f"B{j + 1}.{ax} (mm)",
+                        "exact": bj_true[j, c] * 1e3,
+                        "computed": bj_got[j, c] * 1e3,
+                        "abs_error": abs(bj_got[j, c] - bj_true[j, c]) * 1e3,
+                    }
+                )
     df = pd.DataFrame(rows)
     g = rng(config, f"{KEY}.table1")
     lo, hi = m.pose_bounds()
     poses = g.uniform(lo, hi, (int(config[KEY]["fk_poses"]), 6))
     err = np.abs(m.fk(m.ik(poses)) - poses)
-    notes = (f"Closed-form linear FK (docs/ye_stewart12.md#s1.5) from the 12 IK lengths; lambda = {m.convention}. "
-             f"Over {len(poses)} random poses of the box |x|,|y|,|z| <= 3 mm, |lambda_i| <= 0.15: max error "
-             f"{err[:, :3].max() * 1e3:.3g} mm in position, {err[:, 3:].max():.3g} in lambda.")
-    paths = write_table(df, outdir / "table1", title="Table 1: FK computed vs exact", notes=notes, floatfmt=".9g")
-    summ = pd.DataFrame([{"poses": len(poses), "max_position_error_mm": err[:, :3].max() * 1e3,
-                          "max_lambda_error": err[:, 3:].max()}])
+    notes = (
+        f"Closed-form linear FK (docs/ye_stewart12.md#s1.5) from the 12 IK lengths; lambda = {m.convention}. "
+        f"Over {len(poses)} random poses of the box |x|,|y|,|z| <= 3 mm, |lambda_i| <= 0.15: max error "
+        f"{err[:, :3].max() * 1e3:.3g} mm in position, {err[:, 3:].max():.3g} in lambda."
+    )
+    paths = write_table(
+        df, outdir / "table1", title="Table 1: FK computed vs exact", notes=notes, floatfmt=".9g"
+    )
+    summ = pd.DataFrame(
+        [
+            {
+                "poses": len(poses),
+                "max_position_error_mm": err[:, :3].max() * 1e3,
+                "max_lambda_error": err[:, 3:].max(),
+            }
+        ]
+    )
     return paths + [write_csv(summ, outdir / "table1_random.csv")]
 
 
@@ -67,46 +95,102 @@ def table3(config: dict, outdir: Path) -> list[Path]:
     rows = []
     for state, pose in _states(config).items():
         f = np.abs(m.compatibility(m.ik(pose))) * 1e6  # m^2 -> mm^2
-        rows.append({"state": state, **{e: v for e, v in zip(EQS, f)}, "composite": float(f.mean())})
+        rows.append(
+            {"state": state, **{e: v for e, v in zip(EQS, f)}, "composite": float(f.mean())}
+        )
     df = pd.DataFrame(rows)
-    return write_table(df, outdir / "table3", title="Table 3: compatibility-equation errors |F| (mm^2)",
-                       notes=("Double precision. F is evaluated exactly (no series truncation): the nonzero "
-                              "values at the test state are rounding only."), floatfmt=".3g")
+    return write_table(
+        df,
+        outdir / "table3",
+        title="Table 3: compatibility-equation errors |F| (mm^2)",
+        notes=(
+            "Double precision. F is evaluated exactly (no series truncation): the nonzero "
+            "values at the test state are rounding only."
+        ),
+        floatfmt=".3g",
+    )
 
 
-def _draw(config: dict, outdir: Path, stem: str, pose: np.ndarray, passive: tuple[int, ...], title: str,
-          labels: bool) -> list[Path]:
+def _draw(
+    config: dict,
+    outdir: Path,
+    stem: str,
+    pose: np.ndarray,
+    passive: tuple[int, ...],
+    title: str,
+    labels: bool,
+) -> list[Path]:
     m = mech(config)
     sk = m.skeleton(pose, passive=passive)
     ax = draw_mechanism(sk, frame_length=0.012, title=title, labels=labels)
-    return [save_figure(ax.figure, outdir / f"{stem}.png"), write_csv(skeleton_table(sk, frame_length=0.012),
-                                                                     outdir / f"{stem}.csv")]
+    return [
+        save_figure(ax.figure, outdir / f"{stem}.png"),
+        write_csv(skeleton_table(sk, frame_length=0.012), outdir / f"{stem}.csv"),
+    ]
 
 
-@artefact("fig01", outputs=["fig01_mechanism.png", "fig01_mechanism.csv"], config=[KEY], tolerance=DESCRIPTIVE)
+@artefact(
+    "fig01",
+    outputs=["fig01_mechanism.png", "fig01_mechanism.csv"],
+    config=[KEY],
+    tolerance=DESCRIPTIVE,
+)
 def fig01(config: dict, outdir: Path) -> list[Path]:
     """Fig. 1: the mechanism at the §3.3 test pose, mode R=0 (passive legs dashed)."""
-    return _draw(config, outdir, "fig01_mechanism", test_pose(config), passive_sets(config)[0],
-                 "12-leg cube mechanism, §3.3 test pose (R = 0; passive legs thin black)", labels=False)
+    return _draw(
+        config,
+        outdir,
+        "fig01_mechanism",
+        test_pose(config),
+        passive_sets(config)[0],
+        "12-leg cube mechanism, §3.3 test pose (R = 0; passive legs thin black)",
+        labels=False,
+    )
 
 
-@artefact("fig02", outputs=["fig02_topology.png", "fig02_topology.csv"], config=[KEY], tolerance=DESCRIPTIVE)
+@artefact(
+    "fig02",
+    outputs=["fig02_topology.png", "fig02_topology.csv"],
+    config=[KEY],
+    tolerance=DESCRIPTIVE,
+)
 def fig02(config: dict, outdir: Path) -> list[Path]:
     """Fig. 2: topology at home — static cube 2(n+L), moving cube 2n, b_k and B_i labelled."""
     c = config[KEY]
-    return _draw(config, outdir, "fig02_topology", mech(config).home(), (),
-                 f"Topology at home: n = {c['n_mm']:g} mm, L = {c['L_mm']:g} mm", labels=True)
+    return _draw(
+        config,
+        outdir,
+        "fig02_topology",
+        mech(config).home(),
+        (),
+        f"Topology at home: n = {c['n_mm']:g} mm, L = {c['L_mm']:g} mm",
+        labels=True,
+    )
 
 
-@artefact("fig06", outputs=["fig06_prototype.png", "fig06_prototype.csv"], config=[KEY], tolerance=DESCRIPTIVE)
+@artefact(
+    "fig06",
+    outputs=["fig06_prototype.png", "fig06_prototype.csv"],
+    config=[KEY],
+    tolerance=DESCRIPTIVE,
+)
 def fig06(config: dict, outdir: Path) -> list[Path]:
     """Fig. 6 (the paper's Mathematica prototype): our model at a larger tilt for visibility."""
     pose = np.array([2e-3, -1.5e-3, 1e-3, 0.12, -0.08, 0.15])
-    return _draw(config, outdir, "fig06_prototype", pose, passive_sets(config)[3],
-                 "Virtual prototype, R = 3 (passive legs thin black)", labels=False)
+    return _draw(
+        config,
+        outdir,
+        "fig06_prototype",
+        pose,
+        passive_sets(config)[3],
+        "Virtual prototype, R = 3 (passive legs thin black)",
+        labels=False,
+    )
 
 
-@artefact("fk_speed", outputs=["extra_fk_speed.csv", "extra_fk_speed.md"], config=[KEY], tolerance=TIMING)
+@artefact(
+    "fk_speed", outputs=["extra_fk_speed.csv", "extra_fk_speed.md"], config=[KEY], tolerance=TIMING
+)
 def fk_speed(config: dict, outdir: Path) -> list[Path]:
     """Extra: batched closed-form FK throughput (poses/s), unchecked and with the assembly check."""
     m = mech(config)
@@ -122,12 +206,20 @@ def fk_speed(config: dict, outdir: Path) -> list[Path]:
             t = time.perf_counter()
             m.fk(lengths, check=check)
             best = min(best, time.perf_counter() - t)
-        rows.append({"variant": "with assembly check" if check else "closed form only", "poses": len(poses),
-                     "wall_s": best, "throughput_poses_per_s": len(poses) / best})
-    return write_table(pd.DataFrame(rows), outdir / "extra_fk_speed", title="Closed-form FK throughput (1 core)",
-                       floatfmt=".4g")
-
-
+        rows.append(
+            {
+                "variant": "with assembly check" if check else "closed form only",
+                "poses": len(poses),
+                "wall_s": best,
+                "throughput_poses_per_s": len(poses) / best,
+            }
+        )
+    return write_table(
+        pd.DataFrame(rows),
+        outdir / "extra_fk_speed",
+        title="Closed-form FK throughput (1 core)",
+        floatfmt=".4g",
+    )
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
@@ -135,17 +227,49 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     p = figdir / "table1_random.csv"
     if p.exists():
         t = pd.read_csv(p).iloc[0]
-        out.append(Claim(KEY, "table1", "fk.max_position_error", "0", float(t["max_position_error_mm"]), "mm",
-                         variant=f"{int(t['poses'])} random poses", tol=1e-10,
-                         reason="C1: the paper: computed pose 'fully consistent' with the exact one"))
+        out.append(
+            Claim(
+                KEY,
+                "table1",
+                "fk.max_position_error",
+                "0",
+                float(t["max_position_error_mm"]),
+                "mm",
+                variant=f"{int(t['poses'])} random poses",
+                tol=1e-10,
+                reason="C1: the paper: computed pose 'fully consistent' with the exact one",
+            )
+        )
     p = figdir / "table3.csv"
     if p.exists():
         t = pd.read_csv(p)
-        out.append(Claim(KEY, "table3", "composite.initial", "0", float(t["composite"].iloc[0]), "mm^2", tol=1e-9,
-                         reason="C3: zero error (ours: rounding of the FK products) at the initial state"))
-        out.append(Claim(KEY, "table3", "composite.arbitrary", "1e-6", float(t["composite"].iloc[1]), "mm^2",
-                         kind="upper", reason=("C3: 'negligible' at an arbitrary state (bound 1e-6 mm^2 is ours; the "
-                                               "values are lost). Rounding only, not the paper's 'Taylor truncation'")))
+        out.append(
+            Claim(
+                KEY,
+                "table3",
+                "composite.initial",
+                "0",
+                float(t["composite"].iloc[0]),
+                "mm^2",
+                tol=1e-9,
+                reason="C3: zero error (ours: rounding of the FK products) at the initial state",
+            )
+        )
+        out.append(
+            Claim(
+                KEY,
+                "table3",
+                "composite.arbitrary",
+                "1e-6",
+                float(t["composite"].iloc[1]),
+                "mm^2",
+                kind="upper",
+                reason=(
+                    "C3: 'negligible' at an arbitrary state (bound 1e-6 mm^2 is ours; the "
+                    "values are lost). Rounding only, not the paper's 'Taylor truncation'"
+                ),
+            )
+        )
     return out
 
 
@@ -154,8 +278,10 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     p = figdir / "table1_random.csv"
     if p.exists():
         t = pd.read_csv(p).iloc[0]
-        parts.append(f"Closed-form FK (Table 1): max error {t['max_position_error_mm']:.2g} mm / "
-                     f"{t['max_lambda_error']:.2g} over {int(t['poses'])} random poses.")
+        parts.append(
+            f"Closed-form FK (Table 1): max error {t['max_position_error_mm']:.2g} mm / "
+            f"{t['max_lambda_error']:.2g} over {int(t['poses'])} random poses."
+        )
     p = figdir / "extra_fk_speed.csv"
     if p.exists():
         t = pd.read_csv(p).iloc[0]
@@ -163,6 +289,8 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     p = figdir / "table3.csv"
     if p.exists():
         t = pd.read_csv(p)
-        parts.append(f"Compatibility errors (Table 3): composite {t['composite'].iloc[0]:.2g} mm^2 at the initial "
-                     f"state, {t['composite'].iloc[1]:.2g} mm^2 at the test pose (rounding).")
+        parts.append(
+            f"Compatibility errors (Table 3): composite {t['composite'].iloc[0]:.2g} mm^2 at the initial "
+            f"state, {t['composite'].iloc[1]:.2g} mm^2 at the test pose (rounding)."
+        )
     return " ".join(parts)

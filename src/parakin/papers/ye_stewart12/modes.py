@@ -17,27 +17,45 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from parakin.claims import Claim, printed_value
 from parakin.io import write_csv, write_table
 from parakin.mechanisms.stewart12 import NESTED_PASSIVE, ActiveLegs, DriveMode
 from parakin.papers.ye_stewart12.common import (
-    KEY, METHODS_USED, MODE_NAMES, mech, passive_caption, passive_sets, run_mode, state_at, steps, test_pose,
+    KEY,
+    METHODS_USED,
+    MODE_NAMES,
+    artefact,
+    mech,
+    passive_caption,
+    passive_sets,
+    run_mode,
+    state_at,
+    steps,
+    test_pose,
 )
 from parakin.plot import new_figure, save_figure, use_style
-from parakin.claims import Claim, printed_value
+from parakin.registry import DESCRIPTIVE, ITERATIVE
 from parakin.solvers import solve_fk
-from parakin.registry import DESCRIPTIVE, ITERATIVE, Tolerance
-from parakin.papers.ye_stewart12.common import artefact
 
 #: step counts of N-R/Broyden over a deviation scan: a step landing at the threshold may take one
 #: more iteration; d_max (the largest deviation that still converges) moves by one grid step then
-SCAN = ITERATIVE.but("deviation scans: step counts within one, d_max within one grid step (the grid is "
-                     "config ye_stewart12.d_grid_pct)",
-                     columns={"steps": (0.0, 1.0), "d_max_pct": (0.0, 5.0), "nr_width_pct": (0.0, 5.0),
-                              "broyden_width_pct": (0.0, 5.0), "median_iterations": (0.0, 1.0),
-                              "p_converge": (0.0, 0.05), "lm_pose_iterations_max": (0.0, 1.0),
-                              "nr_d_max_pct": (0.0, 5.0), "broyden_d_max_pct": (0.0, 5.0),
-                              "lm_pose_d_max_pct": (0.0, 5.0)},
-                     skip=("nr_P", "nr_P_alt", "broyden_P", "broyden_P_alt"))
+SCAN = ITERATIVE.but(
+    "deviation scans: step counts within one, d_max within one grid step (the grid is "
+    "config ye_stewart12.d_grid_pct)",
+    columns={
+        "steps": (0.0, 1.0),
+        "d_max_pct": (0.0, 5.0),
+        "nr_width_pct": (0.0, 5.0),
+        "broyden_width_pct": (0.0, 5.0),
+        "median_iterations": (0.0, 1.0),
+        "p_converge": (0.0, 0.05),
+        "lm_pose_iterations_max": (0.0, 1.0),
+        "nr_d_max_pct": (0.0, 5.0),
+        "broyden_d_max_pct": (0.0, 5.0),
+        "lm_pose_d_max_pct": (0.0, 5.0),
+    },
+    skip=("nr_P", "nr_P_alt", "broyden_P", "broyden_P_alt"),
+)
 
 ACCURATE_MM = 1e-4  #: "converges to the given pose" (docs/ye_stewart12.md#s5.10, ASSUMED)
 
@@ -54,7 +72,9 @@ def structures(config: dict) -> tuple[np.ndarray, np.ndarray]:
     return v, v
 
 
-def scan_case(m, passive, pose, dpct: np.ndarray, method: str, maxiter: int, tols_mm: tuple[float, ...]):
+def scan_case(
+    m, passive, pose, dpct: np.ndarray, method: str, maxiter: int, tols_mm: tuple[float, ...]
+):
     """Steps per tol (-1 = failure) on the d grid, batched over d, and d_max per tol."""
     # stop once the inf-norm step is below min(tol)/sqrt(n): then the 2-norm rule has fired too
     floor = min(tols_mm) * 1e-3 / np.sqrt(len(passive))
@@ -79,8 +99,16 @@ def _scan_nominal(config: dict) -> pd.DataFrame:
             res = scan_case(m, sets[r], pose, dpct, method, int(c["maxiter"]), (1e-6, 1e-9))
             for tol, (k, dmax) in res.items():
                 for d, kk in zip(dpct, k):
-                    rows.append({"R": r, "method": key, "tol": tol, "deviation_pct": d, "steps": int(kk),
-                                 "d_max_pct": dmax})
+                    rows.append(
+                        {
+                            "R": r,
+                            "method": key,
+                            "tol": tol,
+                            "deviation_pct": d,
+                            "steps": int(kk),
+                            "d_max_pct": dmax,
+                        }
+                    )
     return pd.DataFrame(rows)
 
 
@@ -91,7 +119,11 @@ def _fig_steps(df: pd.DataFrame, tol: float, outdir: Path, stem: str, caption: s
     axs = fig.subplots(1, 2, sharey=True)
     for ax, key, name in zip(axs, ("nr", "broyden"), ("N-R (Gauss-Newton)", "Broyden")):
         for r in range(5, -1, -1):
-            s = sub[(sub["method"] == key) & (sub["R"] == r) & (sub["deviation_pct"] <= sub["d_max_pct"])]
+            s = sub[
+                (sub["method"] == key)
+                & (sub["R"] == r)
+                & (sub["deviation_pct"] <= sub["d_max_pct"])
+            ]
             ax.plot(s["deviation_pct"], s["steps"], lw=1.2, label=f"R={r}")
         ax.set_xscale("log")
         ax.set_xlabel("admissible initial deviation d (%)")
@@ -103,14 +135,24 @@ def _fig_steps(df: pd.DataFrame, tol: float, outdir: Path, stem: str, caption: s
     return [save_figure(fig, outdir / f"{stem}.png"), write_csv(out, outdir / f"{stem}.csv")]
 
 
-@artefact("fig10", outputs=["fig10_steps_tol1e-6.png", "fig10_steps_tol1e-6.csv"], config=[KEY], tolerance=SCAN)
+@artefact(
+    "fig10",
+    outputs=["fig10_steps_tol1e-6.png", "fig10_steps_tol1e-6.csv"],
+    config=[KEY],
+    tolerance=SCAN,
+)
 def fig10(config: dict, outdir: Path) -> list[Path]:
     """Fig. 10: steps vs d up to d_max, 6 modes x 2 methods, tol 1e-6 mm (nominal structure)."""
     df = _scan_nominal(config)
     return _fig_steps(df, 1e-6, outdir, "fig10_steps_tol1e-6", passive_caption(config))
 
 
-@artefact("fig11", outputs=["fig11_steps_tol1e-9.png", "fig11_steps_tol1e-9.csv"], config=[KEY], tolerance=SCAN)
+@artefact(
+    "fig11",
+    outputs=["fig11_steps_tol1e-9.png", "fig11_steps_tol1e-9.csv"],
+    config=[KEY],
+    tolerance=SCAN,
+)
 def fig11(config: dict, outdir: Path) -> list[Path]:
     """Fig. 11: the same at tol 1e-9 mm."""
     df = _scan_nominal(config)
@@ -148,8 +190,19 @@ def scan_structures(config: dict) -> tuple[pd.DataFrame, float]:
     return pd.DataFrame([r for ch in chunks for r in ch]), time.perf_counter() - t0
 
 
-@artefact("fig12", outputs=["fig12_dmax_structures.png", "fig12_dmax_structures.csv", "table6.csv", "table6.md",
-                           "extra_scan_speed.csv", "extra_scan_speed.md"], config=[KEY], tolerance=SCAN)
+@artefact(
+    "fig12",
+    outputs=[
+        "fig12_dmax_structures.png",
+        "fig12_dmax_structures.csv",
+        "table6.csv",
+        "table6.md",
+        "extra_scan_speed.csv",
+        "extra_scan_speed.md",
+    ],
+    config=[KEY],
+    tolerance=SCAN,
+)
 def fig12(config: dict, outdir: Path) -> list[Path]:
     """Fig. 12: d_max over the (n, L) grid per mode and method; Table 6 from the same scan; timing
     of the batched scan against a per-case loop on a sample of cases."""
@@ -162,9 +215,17 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
     vmax = np.log10(max(df["d_max_pct"].max(), 1.0))
     for j, r in enumerate(range(5, -1, -1)):
         for i, key in enumerate(("nr", "broyden")):
-            s = df[(df["R"] == r) & (df["method"] == key)].pivot(index="n_mm", columns="L_mm", values="d_max_pct")
-            im = axs[i, j].imshow(np.log10(np.maximum(s.to_numpy(), 1.0)), origin="lower", vmin=0, vmax=vmax,
-                                  extent=(ls[0] - 2.5, ls[-1] + 2.5, ns[0] - 2.5, ns[-1] + 2.5), aspect="auto")
+            s = df[(df["R"] == r) & (df["method"] == key)].pivot(
+                index="n_mm", columns="L_mm", values="d_max_pct"
+            )
+            im = axs[i, j].imshow(
+                np.log10(np.maximum(s.to_numpy(), 1.0)),
+                origin="lower",
+                vmin=0,
+                vmax=vmax,
+                extent=(ls[0] - 2.5, ls[-1] + 2.5, ns[0] - 2.5, ns[-1] + 2.5),
+                aspect="auto",
+            )
             axs[i, j].set_title(f"{'N-R' if key == 'nr' else 'Broyden'}, R={r}", fontsize=7)
             axs[i, j].tick_params(labelsize=6)
             if i == 1:
@@ -174,7 +235,10 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
     cb = fig.colorbar(im, ax=axs, shrink=0.8)
     cb.set_label("log10 d_max (%)", fontsize=7)
     fig.suptitle("Fig. 12: maximum admissible deviation; " + passive_caption(config), fontsize=7)
-    paths = [save_figure(fig, outdir / "fig12_dmax_structures.png"), write_csv(df, outdir / "fig12_dmax_structures.csv")]
+    paths = [
+        save_figure(fig, outdir / "fig12_dmax_structures.png"),
+        write_csv(df, outdir / "fig12_dmax_structures.csv"),
+    ]
     # Table 6
     rows = []
     for r in range(5, -1, -1):
@@ -186,7 +250,9 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
             p_mean = w / v.mean() if v.mean() > 0 else np.nan
             p_min = w / v.min() if v.min() > 0 else np.nan
             # "_P" is the configured reading of the lost eq. (33), "_P_alt" the other one
-            row[f"{key}_P"], row[f"{key}_P_alt"] = (p_mean, p_min) if c["p_definition"] == "w/mean" else (p_min, p_mean)
+            row[f"{key}_P"], row[f"{key}_P_alt"] = (
+                (p_mean, p_min) if c["p_definition"] == "w/mean" else (p_min, p_mean)
+            )
         rows.append(row)
     t6 = pd.DataFrame(rows)
     comp = {"mode": "composite", "R": np.nan}
@@ -194,32 +260,67 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
         comp[col] = t6[col].mean()
     t6 = pd.concat([t6, pd.DataFrame([comp])], ignore_index=True)
     alt = "w/min" if c["p_definition"] == "w/mean" else "w/mean"
-    paths += write_table(t6, outdir / "table6", title="Table 6: perturbation-adaptation index P", floatfmt=".3g",
-                         notes=(f"P = {c['p_definition']} with w = max - min of d_max over {len(ns) * len(ls)} "
-                                f"structures (P_alt: {alt}). Eq. (33) is lost (ASSUMED). {passive_caption(config)}."))
+    paths += write_table(
+        t6,
+        outdir / "table6",
+        title="Table 6: perturbation-adaptation index P",
+        floatfmt=".3g",
+        notes=(
+            f"P = {c['p_definition']} with w = max - min of d_max over {len(ns) * len(ls)} "
+            f"structures (P_alt: {alt}). Eq. (33) is lost (ASSUMED). {passive_caption(config)}."
+        ),
+    )
     # batched vs per-case loop on a sample
     m, pose, sets = mech(config), test_pose(config), passive_sets(config)
     dpct = d_grid(config)
     sample = dpct[:: max(1, len(dpct) // int(c["loop_sample"]))]
     t = time.perf_counter()
     for d in sample:
-        scan_case(m, sets[0], pose, np.array([d]), METHODS_USED["nr"], int(c["maxiter"]), (float(c["tol"]),))
+        scan_case(
+            m,
+            sets[0],
+            pose,
+            np.array([d]),
+            METHODS_USED["nr"],
+            int(c["maxiter"]),
+            (float(c["tol"]),),
+        )
     loop_per_case = (time.perf_counter() - t) / len(sample)
     t = time.perf_counter()
     scan_case(m, sets[0], pose, dpct, METHODS_USED["nr"], int(c["maxiter"]), (float(c["tol"]),))
     batched_per_case = (time.perf_counter() - t) / len(dpct)
-    bench = pd.DataFrame([{"structures": len(ns) * len(ls), "workers": int(c.get("workers", 1)), "cases": len(df) * len(dpct), "scan_wall_s": wall,
-                           "loop_time_per_case_ms": 1e3 * loop_per_case,
-                           "batched_time_per_case_ms": 1e3 * batched_per_case,
-                           "speedup": loop_per_case / batched_per_case}])
-    paths += write_table(bench, outdir / "extra_scan_speed", title="Fig. 12 scan: batched vs per-case loop",
-                         floatfmt=".4g", notes=(f"Per-case loop timed on a sample of the d grid (R = 0, N-R), 1 process; scan with "
-                                f"{int(c.get('workers', 1))} worker process(es)."))
+    bench = pd.DataFrame(
+        [
+            {
+                "structures": len(ns) * len(ls),
+                "workers": int(c.get("workers", 1)),
+                "cases": len(df) * len(dpct),
+                "scan_wall_s": wall,
+                "loop_time_per_case_ms": 1e3 * loop_per_case,
+                "batched_time_per_case_ms": 1e3 * batched_per_case,
+                "speedup": loop_per_case / batched_per_case,
+            }
+        ]
+    )
+    paths += write_table(
+        bench,
+        outdir / "extra_scan_speed",
+        title="Fig. 12 scan: batched vs per-case loop",
+        floatfmt=".4g",
+        notes=(
+            f"Per-case loop timed on a sample of the d grid (R = 0, N-R), 1 process; scan with "
+            f"{int(c.get('workers', 1))} worker process(es)."
+        ),
+    )
     return paths
 
 
-@artefact("conditioning", outputs=["extra_conditioning.csv", "extra_conditioning.md"], config=[KEY],
-          tolerance=SCAN)
+@artefact(
+    "conditioning",
+    outputs=["extra_conditioning.csv", "extra_conditioning.md"],
+    config=[KEY],
+    tolerance=SCAN,
+)
 def conditioning(config: dict, outdir: Path) -> list[Path]:
     """Extra: cond(dF/dX) and the smallest singular value per mode at the test pose, beside d_max,
     plus the pose-space LM (active legs, linear-FK start) as a third method."""
@@ -232,27 +333,55 @@ def conditioning(config: dict, outdir: Path) -> list[Path]:
         dm = DriveMode(m, sets[r])
         xs, act = dm.split(lengths)
         sv = np.linalg.svd(dm.jacobian_pose(xs, act)[:6], compute_uv=False)
-        res = {key: scan_case(m, sets[r], pose, dpct, method, int(c["maxiter"]), (float(c["tol"]),))[float(c["tol"])][1]
-               for key, method in METHODS_USED.items()}
+        res = {
+            key: scan_case(m, sets[r], pose, dpct, method, int(c["maxiter"]), (float(c["tol"]),))[
+                float(c["tol"])
+            ][1]
+            for key, method in METHODS_USED.items()
+        }
         # pose-space LM: passive guesses (1 + d) X* complete the 12 lengths -> linear FK -> LM on active legs
         al = ActiveLegs(m, dm.active)
-        x0 = m.fk(dm.assemble((1 + dpct[:, None] / 100) * xs, np.broadcast_to(act, (len(dpct), len(act)))),
-                  check=False)
-        valid = np.all(np.isfinite(x0), axis=-1) & (np.einsum("...i,...i->...", x0[:, 3:], x0[:, 3:]) < 1)
+        x0 = m.fk(
+            dm.assemble(
+                (1 + dpct[:, None] / 100) * xs, np.broadcast_to(act, (len(dpct), len(act)))
+            ),
+            check=False,
+        )
+        valid = np.all(np.isfinite(x0), axis=-1) & (
+            np.einsum("...i,...i->...", x0[:, 3:], x0[:, 3:]) < 1
+        )
         x0 = np.where(valid[:, None], x0, 0.0)
         lm = solve_fk(al, act, x0=x0, method="lm", tol=1e-13, maxiter=int(c["maxiter"]))
-        ok = valid & lm.success & (np.max(np.abs(dm.split(m.ik(lm.x))[0] - xs), axis=-1) < ACCURATE_MM * 1e-3)
+        ok = (
+            valid
+            & lm.success
+            & (np.max(np.abs(dm.split(m.ik(lm.x))[0] - xs), axis=-1) < ACCURATE_MM * 1e-3)
+        )
         first = int(np.argmin(ok)) if not ok.all() else len(dpct)
-        rows.append({"R": r, "passive": " ".join(map(str, sets[r])), "cond_dF_dX": sv[0] / sv[-1],
-                     "sigma_min_mm": sv[-1] * 1e3, "nr_d_max_pct": res["nr"], "broyden_d_max_pct": res["broyden"],
-                     "lm_pose_d_max_pct": float(dpct[first - 1]) if first > 0 else 0.0,
-                     "lm_pose_iterations_max": int(lm.nit[:first].max()) if first > 0 else 0})
+        rows.append(
+            {
+                "R": r,
+                "passive": " ".join(map(str, sets[r])),
+                "cond_dF_dX": sv[0] / sv[-1],
+                "sigma_min_mm": sv[-1] * 1e3,
+                "nr_d_max_pct": res["nr"],
+                "broyden_d_max_pct": res["broyden"],
+                "lm_pose_d_max_pct": float(dpct[first - 1]) if first > 0 else 0.0,
+                "lm_pose_iterations_max": int(lm.nit[:first].max()) if first > 0 else 0,
+            }
+        )
     df = pd.DataFrame(rows)
-    return write_table(df, outdir / "extra_conditioning", title="Drive modes: conditioning and basin size (test pose)",
-                       floatfmt=".4g",
-                       notes=("cond and sigma_min of dF/dX (6 x (6-R)), F in m^2 and X in m (sigma in mm). "
-                              "lm_pose: Levenberg-Marquardt on the IK residuals of the active legs, started at the "
-                              "linear FK of (active, (1+d) X*); d_max on the same grid and rule."))
+    return write_table(
+        df,
+        outdir / "extra_conditioning",
+        title="Drive modes: conditioning and basin size (test pose)",
+        floatfmt=".4g",
+        notes=(
+            "cond and sigma_min of dF/dX (6 x (6-R)), F in m^2 and X in m (sigma in mm). "
+            "lm_pose: Levenberg-Marquardt on the IK residuals of the active legs, started at the "
+            "linear FK of (active, (1+d) X*); d_max on the same grid and rule."
+        ),
+    )
 
 
 @artefact("basin", outputs=["extra_basin.png", "extra_basin.csv"], config=[KEY], tolerance=SCAN)
@@ -278,13 +407,29 @@ def basin(config: dict, outdir: Path) -> list[Path]:
         x0 = (1 + levels[:, None, None] / 100 * u) * xs
         x0 = np.where(x0 > 0, x0, 1e-6).reshape(-1, k)
         for key, method in METHODS_USED.items():
-            res = solve_fk(dm, act, x0=x0, method=method, tol=0.0, maxiter=int(c["maxiter"]),
-                           xtol=tol * 1e-3 / np.sqrt(k))
-            ok = (res.success & (np.max(np.abs(res.x - xs), axis=-1) < ACCURATE_MM * 1e-3)).reshape(len(levels), trials)
+            res = solve_fk(
+                dm,
+                act,
+                x0=x0,
+                method=method,
+                tol=0.0,
+                maxiter=int(c["maxiter"]),
+                xtol=tol * 1e-3 / np.sqrt(k),
+            )
+            ok = (res.success & (np.max(np.abs(res.x - xs), axis=-1) < ACCURATE_MM * 1e-3)).reshape(
+                len(levels), trials
+            )
             nit = np.where(ok, res.nit.reshape(len(levels), trials), np.nan)
             for lv, o, it in zip(levels, ok, nit):
-                rows.append({"R": r, "method": key, "deviation_rms_pct": lv, "p_converge": o.mean(),
-                             "median_iterations": float(np.nanmedian(it)) if o.any() else np.nan})
+                rows.append(
+                    {
+                        "R": r,
+                        "method": key,
+                        "deviation_rms_pct": lv,
+                        "p_converge": o.mean(),
+                        "median_iterations": float(np.nanmedian(it)) if o.any() else np.nan,
+                    }
+                )
     df = pd.DataFrame(rows)
     fig, _ = new_figure((7.0, 3.4))
     fig.clf()
@@ -301,12 +446,20 @@ def basin(config: dict, outdir: Path) -> list[Path]:
     axs[0].legend(fontsize=7, ncol=2)
     import textwrap
 
-    fig.suptitle(f"Beyond the paper: N-R and Broyden from random per-leg initial deviations, {trials} trials per level\n"
-                 + textwrap.fill(passive_caption(config), 110), fontsize=7)
+    fig.suptitle(
+        f"Beyond the paper: N-R and Broyden from random per-leg initial deviations, {trials} trials per level\n"
+        + textwrap.fill(passive_caption(config), 110),
+        fontsize=7,
+    )
     return [save_figure(fig, outdir / "extra_basin.png"), write_csv(df, outdir / "extra_basin.csv")]
 
 
-@artefact("fig09", outputs=["fig09_drive_modes.png", "fig09_drive_modes.csv"], config=[KEY], tolerance=DESCRIPTIVE)
+@artefact(
+    "fig09",
+    outputs=["fig09_drive_modes.png", "fig09_drive_modes.csv"],
+    config=[KEY],
+    tolerance=DESCRIPTIVE,
+)
 def fig09(config: dict, outdir: Path) -> list[Path]:
     """Fig. 9 (lost): the drive modes -- which legs are active and which passive for R = 0..5, from
     config ``passive_sets`` (default the nested sets of docs/ye_stewart12.md#s5.5, ASSUMED), with each leg's joint and its
@@ -318,39 +471,73 @@ def fig09(config: dict, outdir: Path) -> list[Path]:
     for r in range(5, -1, -1):
         for k in range(12):
             j = k // 2
-            u = b[k] - pj[j]  # from the joint B_j towards the base point b_k (docs/ye_stewart12.md#s1.2)
+            u = (
+                b[k] - pj[j]
+            )  # from the joint B_j towards the base point b_k (docs/ye_stewart12.md#s1.2)
             u = u / np.linalg.norm(u)
             axis = "xyz"[int(np.argmax(np.abs(u)))]
-            rows.append({"R": r, "mode": MODE_NAMES[r], "active_legs": 12 - len(sets[r]), "leg": k + 1,
-                         "joint": f"B{j + 1}", "home_direction": ("+" if u[int(np.argmax(np.abs(u)))] > 0 else "-") + axis,
-                         "active": int(k + 1 not in sets[r])})
+            rows.append(
+                {
+                    "R": r,
+                    "mode": MODE_NAMES[r],
+                    "active_legs": 12 - len(sets[r]),
+                    "leg": k + 1,
+                    "joint": f"B{j + 1}",
+                    "home_direction": ("+" if u[int(np.argmax(np.abs(u)))] > 0 else "-") + axis,
+                    "active": int(k + 1 not in sets[r]),
+                }
+            )
     df = pd.DataFrame(rows)
     fig, ax = new_figure((7.0, 3.2))
-    grid = np.array([[df[(df["R"] == r) & (df["leg"] == k)]["active"].iloc[0] for k in range(1, 13)]
-                     for r in range(5, -1, -1)])
+    grid = np.array(
+        [
+            [df[(df["R"] == r) & (df["leg"] == k)]["active"].iloc[0] for k in range(1, 13)]
+            for r in range(5, -1, -1)
+        ]
+    )
     from matplotlib.colors import ListedColormap
 
     ax.grid(False)
     ax.imshow(grid, cmap=ListedColormap(["#f2f2f2", "#1f77b4"]), vmin=0, vmax=1, aspect="auto")
     for i in range(grid.shape[0]):
         for k in range(12):
-            ax.text(k, i, "A" if grid[i, k] else "P", ha="center", va="center", fontsize=7,
-                    color="white" if grid[i, k] else "0.3")
+            ax.text(
+                k,
+                i,
+                "A" if grid[i, k] else "P",
+                ha="center",
+                va="center",
+                fontsize=7,
+                color="white" if grid[i, k] else "0.3",
+            )
     for x in np.arange(1.5, 11, 2):
         ax.axvline(x, color="k", lw=0.8)
     ax.set_xticks(range(12))
     dirs = df[df["R"] == 0].sort_values("leg")
-    ax.set_xticklabels([f"{k}\n{j}\n{d}" for k, j, d in zip(dirs["leg"], dirs["joint"], dirs["home_direction"])],
-                       fontsize=6)
+    ax.set_xticklabels(
+        [f"{k}\n{j}\n{d}" for k, j, d in zip(dirs["leg"], dirs["joint"], dirs["home_direction"])],
+        fontsize=6,
+    )
     ax.set_yticks(range(6))
-    ax.set_yticklabels([f"{MODE_NAMES[r]}: R={r}, N={12 - len(sets[r])}" for r in range(5, -1, -1)], fontsize=7)
+    ax.set_yticklabels(
+        [f"{MODE_NAMES[r]}: R={r}, N={12 - len(sets[r])}" for r in range(5, -1, -1)], fontsize=7
+    )
     ax.set_xlabel("leg k (joint, direction at home)", fontsize=7)
-    ax.set_title("Drive modes (Fig. 9 of the paper is lost): A = active (driven), P = passive. ASSUMED: "
-                 + ("the nested sets of docs/ye_stewart12.md#s5.5" if all(tuple(sets[r]) == NESTED_PASSIVE[r] for r in range(6))
-                    else "configured sets") + ";\n" + passive_caption(config), fontsize=6.5)
-    return [save_figure(fig, outdir / "fig09_drive_modes.png"), write_csv(df, outdir / "fig09_drive_modes.csv")]
-
-
+    ax.set_title(
+        "Drive modes (Fig. 9 of the paper is lost): A = active (driven), P = passive. ASSUMED: "
+        + (
+            "the nested sets of docs/ye_stewart12.md#s5.5"
+            if all(tuple(sets[r]) == NESTED_PASSIVE[r] for r in range(6))
+            else "configured sets"
+        )
+        + ";\n"
+        + passive_caption(config),
+        fontsize=6.5,
+    )
+    return [
+        save_figure(fig, outdir / "fig09_drive_modes.png"),
+        write_csv(df, outdir / "fig09_drive_modes.csv"),
+    ]
 
 
 def _step_stats(figdir: Path) -> tuple[pd.DataFrame, float] | None:
@@ -367,8 +554,14 @@ def _step_stats(figdir: Path) -> tuple[pd.DataFrame, float] | None:
     rows = []
     for (r, key), g in mm.groupby(["R", "method"]):
         g = g.sort_values("deviation_pct")
-        rows.append({"R": int(r), "method": key, "extra_steps": float((g["steps9"] - g["steps6"]).mean()),
-                     "rise": float(g["steps6"].iloc[-1] - g["steps6"].iloc[0])})
+        rows.append(
+            {
+                "R": int(r),
+                "method": key,
+                "extra_steps": float((g["steps9"] - g["steps6"]).mean()),
+                "rise": float(g["steps6"].iloc[-1] - g["steps6"].iloc[0]),
+            }
+        )
     return pd.DataFrame(rows), common
 
 
@@ -390,22 +583,68 @@ def _claims_steps(figdir: Path) -> list[Claim]:
         tot = (w["nr"] + w["broyden"]).sort_values(ascending=False)
         top3 = sorted(int(r) for r in tot.index[:3])
         listing = ", ".join(f"R{r} {w.loc[r, 'nr']:.2f}/{w.loc[r, 'broyden']:.2f}" for r in w.index)
-        why = (f"C9: mean extra steps tol 1e-6 -> 1e-9 (N-R/Broyden) over d <= {common:g} %: {listing}; d_max is "
-               "the same at both tolerances (the 1e-4 mm accuracy rule)")
-        out.append(Claim(KEY, "text_s4.1", "tol_sensitive.top3_in_R0R1R3", "3",
-                         float(len(set(top3) & {0, 1, 3})), "1", tol=0.0,
-                         reason=why + f". Paper: R = 0, 1, 3 the most sensitive; ours the top 3 are R = {top3}"))
-        out.append(Claim(KEY, "text_s4.1", "tol_sensitive.nr_most_R", "0", float(w["nr"].idxmax()), "1", tol=0.0,
-                         reason="C9: the mode whose N-R steps grow most from tol 1e-6 to 1e-9 (paper: R = 0). N-R "
-                                "converges quadratically, so ~0.5 extra steps in every mode"))
+        why = (
+            f"C9: mean extra steps tol 1e-6 -> 1e-9 (N-R/Broyden) over d <= {common:g} %: {listing}; d_max is "
+            "the same at both tolerances (the 1e-4 mm accuracy rule)"
+        )
+        out.append(
+            Claim(
+                KEY,
+                "text_s4.1",
+                "tol_sensitive.top3_in_R0R1R3",
+                "3",
+                float(len(set(top3) & {0, 1, 3})),
+                "1",
+                tol=0.0,
+                reason=why
+                + f". Paper: R = 0, 1, 3 the most sensitive; ours the top 3 are R = {top3}",
+            )
+        )
+        out.append(
+            Claim(
+                KEY,
+                "text_s4.1",
+                "tol_sensitive.nr_most_R",
+                "0",
+                float(w["nr"].idxmax()),
+                "1",
+                tol=0.0,
+                reason="C9: the mode whose N-R steps grow most from tol 1e-6 to 1e-9 (paper: R = 0). N-R "
+                "converges quadratically, so ~0.5 extra steps in every mode",
+            )
+        )
         rise = s.pivot(index="R", columns="method", values="rise")
-        both = (rise["nr"] + rise["broyden"])
-        out.append(Claim(KEY, "text_s4.1", "least_initial_dependence_R", "3", float(both.idxmin()), "1", tol=0.0,
-                         reason=(f"C8: the mode whose tol-1e-6 steps rise least from d = min to {common:g} % "
-                                 "(N-R + Broyden): " + ", ".join(f"R{r} {v:g}" for r, v in both.items()))))
-        out.append(Claim(KEY, "text_s4.1", "broyden.most_initial_dependence_R", "1", float(rise["broyden"].idxmax()),
-                         "1", tol=0.0, reason=("C8: the mode whose Broyden steps rise most over the same range: "
-                                               + ", ".join(f"R{r} {v:g}" for r, v in rise["broyden"].items()))))
+        both = rise["nr"] + rise["broyden"]
+        out.append(
+            Claim(
+                KEY,
+                "text_s4.1",
+                "least_initial_dependence_R",
+                "3",
+                float(both.idxmin()),
+                "1",
+                tol=0.0,
+                reason=(
+                    f"C8: the mode whose tol-1e-6 steps rise least from d = min to {common:g} % "
+                    "(N-R + Broyden): " + ", ".join(f"R{r} {v:g}" for r, v in both.items())
+                ),
+            )
+        )
+        out.append(
+            Claim(
+                KEY,
+                "text_s4.1",
+                "broyden.most_initial_dependence_R",
+                "1",
+                float(rise["broyden"].idxmax()),
+                "1",
+                tol=0.0,
+                reason=(
+                    "C8: the mode whose Broyden steps rise most over the same range: "
+                    + ", ".join(f"R{r} {v:g}" for r, v in rise["broyden"].items())
+                ),
+            )
+        )
     p = figdir / "fig10_steps_tol1e-6.csv"
     if p.exists():
         df = pd.read_csv(p)
@@ -421,16 +660,56 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                     rho.append(_spearman(g["deviation_pct"].to_numpy(), g["steps"].to_numpy()))
             dec[key] = n_dec
         base = "C10: d-grid points where the tol-1e-6 step count drops as d grows, summed over the 6 modes"
-        out.append(Claim(KEY, "fig10", "nr.step_drops", "0", float(dec["nr"]), "1", tol=1.0,
-                         reason=base + " (paper: N-R 'varies smoothly', read as 0 drops; +-1)"))
-        out.append(Claim(KEY, "fig10", "broyden.step_drops", "1", float(dec["broyden"]), "1", kind="lower",
-                         reason=base + " (paper: Broyden 'fluctuates', read as >= 1 drop)"))
+        out.append(
+            Claim(
+                KEY,
+                "fig10",
+                "nr.step_drops",
+                "0",
+                float(dec["nr"]),
+                "1",
+                tol=1.0,
+                reason=base + " (paper: N-R 'varies smoothly', read as 0 drops; +-1)",
+            )
+        )
+        out.append(
+            Claim(
+                KEY,
+                "fig10",
+                "broyden.step_drops",
+                "1",
+                float(dec["broyden"]),
+                "1",
+                kind="lower",
+                reason=base + " (paper: Broyden 'fluctuates', read as >= 1 drop)",
+            )
+        )
         frac = float(np.mean(np.asarray(near) >= 0.5)) if near else float("nan")
-        out.append(Claim(KEY, "fig10", "broyden.drops_near_dmax", "0.5", frac, "1", kind="lower",
-                         reason="C10: share of Broyden's drops at d >= d_max/2 (paper: fluctuations 'near d_max')"))
-        out.append(Claim(KEY, "fig10", "broyden.trend_spearman", "0", float(min(rho)), "1", kind="lower",
-                         reason="C10: smallest Spearman rank correlation of Broyden's steps with d over the modes "
-                                "(paper: 'a rising trend')"))
+        out.append(
+            Claim(
+                KEY,
+                "fig10",
+                "broyden.drops_near_dmax",
+                "0.5",
+                frac,
+                "1",
+                kind="lower",
+                reason="C10: share of Broyden's drops at d >= d_max/2 (paper: fluctuations 'near d_max')",
+            )
+        )
+        out.append(
+            Claim(
+                KEY,
+                "fig10",
+                "broyden.trend_spearman",
+                "0",
+                float(min(rho)),
+                "1",
+                kind="lower",
+                reason="C10: smallest Spearman rank correlation of Broyden's steps with d over the modes "
+                "(paper: 'a rising trend')",
+            )
+        )
     return out
 
 
@@ -442,15 +721,37 @@ def _claims_structures(figdir: Path) -> list[Claim]:
     if not p.exists():
         return out
     df = pd.read_csv(p)
-    ratio = np.median([_spearman((g["n_mm"] / g["L_mm"]).to_numpy(), g["d_max_pct"].to_numpy())
-                       for _, g in df.groupby(["R", "method"])])
-    for var, kind, word in (("n_mm", "lower", "rises with larger n"), ("L_mm", "upper", "rises with smaller L")):
-        r = [_spearman(g[var].to_numpy(), g["d_max_pct"].to_numpy()) for _, g in df.groupby(["R", "method"])]
+    ratio = np.median(
+        [
+            _spearman((g["n_mm"] / g["L_mm"]).to_numpy(), g["d_max_pct"].to_numpy())
+            for _, g in df.groupby(["R", "method"])
+        ]
+    )
+    for var, kind, word in (
+        ("n_mm", "lower", "rises with larger n"),
+        ("L_mm", "upper", "rises with smaller L"),
+    ):
+        r = [
+            _spearman(g[var].to_numpy(), g["d_max_pct"].to_numpy())
+            for _, g in df.groupby(["R", "method"])
+        ]
         pos = sum(v > 0 for v in r) if kind == "lower" else sum(v < 0 for v in r)
-        out.append(Claim(KEY, "fig12", f"dmax_vs_{var[0]}.spearman", "0", float(np.median(r)), "1", kind=kind,
-                         reason=(f"C11: median over the 12 (R, method) of Spearman(d_max, {var[0]}) over the "
-                                 f"structures; paper: d_max {word} (sign only); {pos}/12 cases have that sign; median "
-                                 f"Spearman(d_max, n/L) {ratio:.2f}")))
+        out.append(
+            Claim(
+                KEY,
+                "fig12",
+                f"dmax_vs_{var[0]}.spearman",
+                "0",
+                float(np.median(r)),
+                "1",
+                kind=kind,
+                reason=(
+                    f"C11: median over the 12 (R, method) of Spearman(d_max, {var[0]}) over the "
+                    f"structures; paper: d_max {word} (sign only); {pos}/12 cases have that sign; median "
+                    f"Spearman(d_max, n/L) {ratio:.2f}"
+                ),
+            )
+        )
     return out
 
 
@@ -466,11 +767,22 @@ def _claims_odd_even(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
         ratio_p = np.mean([paper[r] for r in (0, 2, 4)]) / np.mean([paper[r] for r in (1, 3, 5)])
         ours = t[f"{key}_P"]
         ratio = float(ours.loc[[0, 2, 4]].mean() / ours.loc[[1, 3, 5]].mean())
-        out.append(Claim(KEY, "table6", f"odd_even_ratio.{key}", "1", ratio, "1", kind="lower",
-                         reason=(f"C15: mean P over even R / mean P over odd R (paper: odd R 'stronger perturbation "
-                                 f"resistance'; its Table 6 gives {ratio_p:.2f}); P reading and passive sets ASSUMED")))
+        out.append(
+            Claim(
+                KEY,
+                "table6",
+                f"odd_even_ratio.{key}",
+                "1",
+                ratio,
+                "1",
+                kind="lower",
+                reason=(
+                    f"C15: mean P over even R / mean P over odd R (paper: odd R 'stronger perturbation "
+                    f"resistance'; its Table 6 gives {ratio_p:.2f}); P reading and passive sets ASSUMED"
+                ),
+            )
+        )
     return out
-
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
@@ -478,50 +790,146 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     p = figdir / "table6.csv"
     if p.exists():
         t = pd.read_csv(p)
-        why = ("C14: eq. (33) and Fig. 9 lost; P = (max-min)/mean of d_max over the structures, nested passive sets "
-               "(ASSUMED); Broyden for R > 0 is the direct rank-1 update with pseudo-inverse steps, not the paper's "
-               "inverse update (docs/ye_stewart12.md#s5.6)")
+        why = (
+            "C14: eq. (33) and Fig. 9 lost; P = (max-min)/mean of d_max over the structures, nested passive sets "
+            "(ASSUMED); Broyden for R > 0 is the direct rank-1 update with pseudo-inverse steps, not the paper's "
+            "inverse update (docs/ye_stewart12.md#s5.6)"
+        )
         for _, r in t.iloc[:-1].iterrows():
             for key in ("nr", "broyden"):
-                out.append(Claim(KEY, "table6", f"R{int(r['R'])}.{key}", printed_value(ref, "table6", f"R{int(r['R'])}.{key}"),
-                                 float(r[f"{key}_P"]), "1", reason=why))
+                out.append(
+                    Claim(
+                        KEY,
+                        "table6",
+                        f"R{int(r['R'])}.{key}",
+                        printed_value(ref, "table6", f"R{int(r['R'])}.{key}"),
+                        float(r[f"{key}_P"]),
+                        "1",
+                        reason=why,
+                    )
+                )
         comp = t.iloc[-1]
         for key in ("nr", "broyden"):
-            out.append(Claim(KEY, "table6", f"composite.{key}", printed_value(ref, "table6", f"composite.{key}"),
-                             float(comp[f"{key}_P"]), "1", reason=why))
-        out.append(Claim(KEY, "text_s4.2", "composite_ratio", printed_value(ref, "text_s4.2", "composite_ratio"),
-                         float(comp["nr_P"] / comp["broyden_P"]), "1", reason="C14: composite N-R / Broyden"))
+            out.append(
+                Claim(
+                    KEY,
+                    "table6",
+                    f"composite.{key}",
+                    printed_value(ref, "table6", f"composite.{key}"),
+                    float(comp[f"{key}_P"]),
+                    "1",
+                    reason=why,
+                )
+            )
+        out.append(
+            Claim(
+                KEY,
+                "text_s4.2",
+                "composite_ratio",
+                printed_value(ref, "text_s4.2", "composite_ratio"),
+                float(comp["nr_P"] / comp["broyden_P"]),
+                "1",
+                reason="C14: composite N-R / Broyden",
+            )
+        )
         for r in (5, 2):
             row = t[t["R"] == r].iloc[0]
             for key in ("nr", "broyden"):
-                out.append(Claim(KEY, "text_s4.2", f"width.R{r}.{key}", printed_value(ref, "text_s4.2", f"width.R{r}.{key}"),
-                                 float(row[f"{key}_width_pct"]), "%", reason="C12: max - min of d_max over the structures"
-                                 + ("; Broyden for R > 0 is not the paper's inverse update (docs/ye_stewart12.md#s5.6)"
-                                    if key == "broyden" and r > 0 else "")))
-        best = int(t.iloc[:-1].assign(s=lambda x: x["nr_P"] + x["broyden_P"]).sort_values("s")["R"].iloc[0])
-        out.append(Claim(KEY, "conclusion", "best_R.realtime_robust", printed_value(ref, "conclusion", "best_R.realtime_robust"),
-                         float(best), "1", tol=0.0, reason="C16: the mode with the smallest P (N-R + Broyden)"))
-        wid = int(t.iloc[:-1].assign(s=lambda x: x["nr_width_pct"] + x["broyden_width_pct"]).sort_values("s")["R"].iloc[-1])
-        out.append(Claim(KEY, "conclusion", "best_R.structure_sensitive",
-                         printed_value(ref, "conclusion", "best_R.structure_sensitive"), float(wid), "1", tol=0.0,
-                         reason="C16: the mode with the widest d_max interval"))
+                out.append(
+                    Claim(
+                        KEY,
+                        "text_s4.2",
+                        f"width.R{r}.{key}",
+                        printed_value(ref, "text_s4.2", f"width.R{r}.{key}"),
+                        float(row[f"{key}_width_pct"]),
+                        "%",
+                        reason="C12: max - min of d_max over the structures"
+                        + (
+                            "; Broyden for R > 0 is not the paper's inverse update (docs/ye_stewart12.md#s5.6)"
+                            if key == "broyden" and r > 0
+                            else ""
+                        ),
+                    )
+                )
+        best = int(
+            t.iloc[:-1].assign(s=lambda x: x["nr_P"] + x["broyden_P"]).sort_values("s")["R"].iloc[0]
+        )
+        out.append(
+            Claim(
+                KEY,
+                "conclusion",
+                "best_R.realtime_robust",
+                printed_value(ref, "conclusion", "best_R.realtime_robust"),
+                float(best),
+                "1",
+                tol=0.0,
+                reason="C16: the mode with the smallest P (N-R + Broyden)",
+            )
+        )
+        wid = int(
+            t.iloc[:-1]
+            .assign(s=lambda x: x["nr_width_pct"] + x["broyden_width_pct"])
+            .sort_values("s")["R"]
+            .iloc[-1]
+        )
+        out.append(
+            Claim(
+                KEY,
+                "conclusion",
+                "best_R.structure_sensitive",
+                printed_value(ref, "conclusion", "best_R.structure_sensitive"),
+                float(wid),
+                "1",
+                tol=0.0,
+                reason="C16: the mode with the widest d_max interval",
+            )
+        )
     p = figdir / "fig10_steps_tol1e-6.csv"
     if p.exists():
         df = pd.read_csv(p)
         common = df.groupby("R")["d_max_pct"].min().min()
         mean = df[(df["deviation_pct"] <= common) & (df["steps"] > 0)].groupby("R")["steps"].mean()
-        out.append(Claim(KEY, "text_s4.1", "fewest_steps_R", printed_value(ref, "text_s4.1", "fewest_steps_R"),
-                         float(mean.idxmin()), "1", tol=0.0,
-                         reason=f"C8: mode with the fewest mean steps (both methods) over d <= {common:g} %, tol 1e-6"))
+        out.append(
+            Claim(
+                KEY,
+                "text_s4.1",
+                "fewest_steps_R",
+                printed_value(ref, "text_s4.1", "fewest_steps_R"),
+                float(mean.idxmin()),
+                "1",
+                tol=0.0,
+                reason=f"C8: mode with the fewest mean steps (both methods) over d <= {common:g} %, tol 1e-6",
+            )
+        )
     p = figdir / "fig12_dmax_structures.csv"
     if p.exists():
         df = pd.read_csv(p)
         mean = df.groupby("R")["d_max_pct"].mean()
-        out.append(Claim(KEY, "conclusion", "best_R.largest_dmax", printed_value(ref, "conclusion", "best_R.largest_dmax"),
-                         float(mean.idxmax()), "1", tol=0.0, reason="C16: the mode with the largest mean d_max over structures"))
+        out.append(
+            Claim(
+                KEY,
+                "conclusion",
+                "best_R.largest_dmax",
+                printed_value(ref, "conclusion", "best_R.largest_dmax"),
+                float(mean.idxmax()),
+                "1",
+                tol=0.0,
+                reason="C16: the mode with the largest mean d_max over structures",
+            )
+        )
         s = df[(df["R"] == 0) & (df["method"] == "nr")].groupby("L_mm")["d_max_pct"].mean()
-        out.append(Claim(KEY, "text_s4.2", "bump.R0.L", printed_value(ref, "text_s4.2", "bump.R0.L"), float(s.idxmax()),
-                         "mm", tol=5.0, reason="C13: L of the largest mean d_max (over n), R = 0, N-R; +-1 grid step"))
+        out.append(
+            Claim(
+                KEY,
+                "text_s4.2",
+                "bump.R0.L",
+                printed_value(ref, "text_s4.2", "bump.R0.L"),
+                float(s.idxmax()),
+                "mm",
+                tol=5.0,
+                reason="C13: L of the largest mean d_max (over n), R = 0, N-R; +-1 grid step",
+            )
+        )
     return out + _claims_steps(figdir) + _claims_structures(figdir) + _claims_odd_even(figdir, ref)
 
 
@@ -530,18 +938,29 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     p = figdir / "table6.csv"
     if p.exists():
         t = pd.read_csv(p)
-        parts.append("Table 6 (ours, configured P reading): N-R " + ", ".join(f"R{int(r['R'])} {r['nr_P']:.2f}" for _, r in t.iloc[:-1].iterrows())
-                     + "; Broyden " + ", ".join(f"R{int(r['R'])} {r['broyden_P']:.2f}" for _, r in t.iloc[:-1].iterrows())
-                     + f"; composite {t.iloc[-1]['nr_P']:.2f} / {t.iloc[-1]['broyden_P']:.2f}.")
+        parts.append(
+            "Table 6 (ours, configured P reading): N-R "
+            + ", ".join(f"R{int(r['R'])} {r['nr_P']:.2f}" for _, r in t.iloc[:-1].iterrows())
+            + "; Broyden "
+            + ", ".join(f"R{int(r['R'])} {r['broyden_P']:.2f}" for _, r in t.iloc[:-1].iterrows())
+            + f"; composite {t.iloc[-1]['nr_P']:.2f} / {t.iloc[-1]['broyden_P']:.2f}."
+        )
     p = figdir / "extra_conditioning.csv"
     if p.exists():
         t = pd.read_csv(p)
-        parts.append("cond(dF/dX) per mode at the test pose: " + ", ".join(
-            f"R{int(r['R'])} {r['cond_dF_dX']:.3g} (d_max N-R {r['nr_d_max_pct']:g} %, LM-pose {r['lm_pose_d_max_pct']:g} %)"
-            for _, r in t.iterrows()) + ".")
+        parts.append(
+            "cond(dF/dX) per mode at the test pose: "
+            + ", ".join(
+                f"R{int(r['R'])} {r['cond_dF_dX']:.3g} (d_max N-R {r['nr_d_max_pct']:g} %, LM-pose {r['lm_pose_d_max_pct']:g} %)"
+                for _, r in t.iterrows()
+            )
+            + "."
+        )
     p = figdir / "extra_scan_speed.csv"
     if p.exists():
         t = pd.read_csv(p).iloc[0]
-        parts.append(f"Fig. 12 scan: {int(t['cases'])} solves in {t['scan_wall_s']:.1f} s (batched over d; "
-                     f"{t['speedup']:.1f}x a per-case loop).")
+        parts.append(
+            f"Fig. 12 scan: {int(t['cases'])} solves in {t['scan_wall_s']:.1f} s (batched over d; "
+            f"{t['speedup']:.1f}x a per-case loop)."
+        )
     return " ".join(parts)

@@ -15,23 +15,38 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from parakin.claims import Claim, printed_value
 from parakin.io import write_csv, write_table
 from parakin.papers.ye_stewart12.common import (
-    KEY, METHODS_USED, mech, passive_sets, run_mode, state_at, steps, test_pose, time_solve,
+    KEY,
+    METHODS_USED,
+    artefact,
+    mech,
+    passive_sets,
+    run_mode,
+    state_at,
+    steps,
+    test_pose,
+    time_solve,
 )
 from parakin.plot import new_figure, save_figure
-from parakin.claims import Claim, printed_value
 from parakin.registry import ITERATIVE
-from parakin.papers.ye_stewart12.common import artefact
 
 #: N-R and Broyden converge to 1e-6 / 1e-9 mm: step counts may move by one where a step lands at
 #: the threshold; the final errors are round-off (~1e-13 mm for N-R), so their ratio, the
 #: "accuracy factor", is a ratio of round-off residuals and is not compared
-STEPS = ITERATIVE.but("iteration counts within one step; errors at round-off level within 1e-9 mm; the "
-                      "accuracy factor is a ratio of round-off residuals (not compared)",
-                      columns={"steps": (0.0, 1.0), "nr_steps": (0.0, 1.0), "broyden_steps": (0.0, 1.0),
-                               "nr_steps_inf_rule": (0.0, 1.0), "broyden_steps_inf_rule": (0.0, 1.0)},
-                      skip=("accuracy_factor",))
+STEPS = ITERATIVE.but(
+    "iteration counts within one step; errors at round-off level within 1e-9 mm; the "
+    "accuracy factor is a ratio of round-off residuals (not compared)",
+    columns={
+        "steps": (0.0, 1.0),
+        "nr_steps": (0.0, 1.0),
+        "broyden_steps": (0.0, 1.0),
+        "nr_steps_inf_rule": (0.0, 1.0),
+        "broyden_steps_inf_rule": (0.0, 1.0),
+    },
+    skip=("accuracy_factor",),
+)
 
 METHODS = METHODS_USED
 
@@ -40,7 +55,12 @@ def _cfg(config: dict) -> dict:
     return config[KEY]
 
 
-@artefact("table4", outputs=["table4.csv", "table4.md", "table4_summary.csv"], config=[KEY], tolerance=STEPS)
+@artefact(
+    "table4",
+    outputs=["table4.csv", "table4.md", "table4_summary.csv"],
+    config=[KEY],
+    tolerance=STEPS,
+)
 def table4(config: dict, outdir: Path) -> list[Path]:
     """Table 4 (lost): passive lengths from N-R and Broyden vs exact at the test pose, tol 1e-6 mm."""
     c = _cfg(config)
@@ -54,15 +74,38 @@ def table4(config: dict, outdir: Path) -> list[Path]:
         x = state_at(run["traj"], k)[0]
         errs[key] = np.abs(x - run["xstar"]) * 1e3
         for i, leg in enumerate(passive):
-            rows.append({"method": key, "leg": f"l{leg}", "exact_mm": run["xstar"][i] * 1e3, "computed_mm": x[i] * 1e3,
-                         "abs_error_mm": errs[key][i], "steps": int(k[0])})
+            rows.append(
+                {
+                    "method": key,
+                    "leg": f"l{leg}",
+                    "exact_mm": run["xstar"][i] * 1e3,
+                    "computed_mm": x[i] * 1e3,
+                    "abs_error_mm": errs[key][i],
+                    "steps": int(k[0]),
+                }
+            )
     df = pd.DataFrame(rows)
-    summ = pd.DataFrame([{"deviation_pct": d * 100, "tol_mm": c["tol"], "nr_max_error_mm": errs["nr"].max(),
-                          "broyden_max_error_mm": errs["broyden"].max(),
-                          "accuracy_factor": errs["broyden"].max() / errs["nr"].max()}])
-    paths = write_table(df, outdir / "table4", title="Table 4: accuracy of N-R vs Broyden (test pose)", floatfmt=".9g",
-                        notes=(f"R = 0, passive legs {passive}, X0 = (1 + {d:g}) X*, stop at |dX|_2 < {c['tol']:g} mm. "
-                               f"Max error N-R {errs['nr'].max():.3g} mm, Broyden {errs['broyden'].max():.3g} mm."))
+    summ = pd.DataFrame(
+        [
+            {
+                "deviation_pct": d * 100,
+                "tol_mm": c["tol"],
+                "nr_max_error_mm": errs["nr"].max(),
+                "broyden_max_error_mm": errs["broyden"].max(),
+                "accuracy_factor": errs["broyden"].max() / errs["nr"].max(),
+            }
+        ]
+    )
+    paths = write_table(
+        df,
+        outdir / "table4",
+        title="Table 4: accuracy of N-R vs Broyden (test pose)",
+        floatfmt=".9g",
+        notes=(
+            f"R = 0, passive legs {passive}, X0 = (1 + {d:g}) X*, stop at |dX|_2 < {c['tol']:g} mm. "
+            f"Max error N-R {errs['nr'].max():.3g} mm, Broyden {errs['broyden'].max():.3g} mm."
+        ),
+    )
     return paths + [write_csv(summ, outdir / "table4_summary.csv")]
 
 
@@ -79,22 +122,35 @@ def table5(config: dict, outdir: Path) -> list[Path]:
         cols[f"{key}_steps"] = steps(run["traj"], tol_m, "2")
         cols[f"{key}_steps_inf_rule"] = steps(run["traj"], tol_m, "inf")
     for key, method in METHODS.items():
-        cols[f"{key}_time_ms"] = [1e3 * time_solve(m, passive, pose, d / 100, method, tol_m, int(c["timing_repeats"]))
-                                  for d in devs]
+        cols[f"{key}_time_ms"] = [
+            1e3 * time_solve(m, passive, pose, d / 100, method, tol_m, int(c["timing_repeats"]))
+            for d in devs
+        ]
     df = pd.DataFrame(cols)
     mean = df.mean(numeric_only=True).to_frame().T
     mean["deviation_pct"] = np.nan
     df = pd.concat([df, mean], ignore_index=True)
     frac = df["broyden_time_ms"].iloc[-1] / df["nr_time_ms"].iloc[-1]
-    return write_table(df, outdir / "table5", title="Table 5: steps and time vs initial deviation (test pose)",
-                       floatfmt=".4g",
-                       notes=(f"Last row: means. Times: median of {c['timing_repeats']} single solves through the "
-                              f"generic solvers (inf-norm step rule), this machine; Broyden/N-R time = {frac:.2f}. "
-                              "The paper's times are Mathematica Timing values, multiples of the 15.625 ms Windows "
-                              "clock tick (187.5 = 12, 156.3 = 10 ticks), so its 78 % carries +-1 tick."))
+    return write_table(
+        df,
+        outdir / "table5",
+        title="Table 5: steps and time vs initial deviation (test pose)",
+        floatfmt=".4g",
+        notes=(
+            f"Last row: means. Times: median of {c['timing_repeats']} single solves through the "
+            f"generic solvers (inf-norm step rule), this machine; Broyden/N-R time = {frac:.2f}. "
+            "The paper's times are Mathematica Timing values, multiples of the 15.625 ms Windows "
+            "clock tick (187.5 = 12, 156.3 = 10 ticks), so its 78 % carries +-1 tick."
+        ),
+    )
 
 
-@artefact("fig08", outputs=["fig08_convergence.png", "fig08_convergence.csv"], config=[KEY], tolerance=STEPS)
+@artefact(
+    "fig08",
+    outputs=["fig08_convergence.png", "fig08_convergence.csv"],
+    config=[KEY],
+    tolerance=STEPS,
+)
 def fig08(config: dict, outdir: Path) -> list[Path]:
     """Fig. 8: composite rod length (mean of the passive lengths) vs iteration at 30 % deviation."""
     c = _cfg(config)
@@ -127,8 +183,10 @@ def fig08(config: dict, outdir: Path) -> list[Path]:
     ins.set_xlim(1.5, n - 0.5)
     ins.set_ylim(exact - 0.2, exact + 0.2)
     ins.tick_params(labelsize=6)
-    return [save_figure(fig, outdir / "fig08_convergence.png"), write_csv(df, outdir / "fig08_convergence.csv")]
-
+    return [
+        save_figure(fig, outdir / "fig08_convergence.png"),
+        write_csv(df, outdir / "fig08_convergence.csv"),
+    ]
 
 
 MATCH_MM = 0.01  #: "basically matches" in Fig. 8's text: |composite - exact| < 0.01 mm from then on (ASSUMED)
@@ -154,14 +212,25 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     if p.exists():
         t = pd.read_csv(p).iloc[0]
         floor = max(float(t["nr_max_error_mm"]), ROUNDOFF_MM)
-        out.append(Claim(KEY, "text_s3.3", "accuracy_factor", printed_value(ref, "text_s3.3", "accuracy_factor"),
-                         float(t["broyden_max_error_mm"]) / floor, "1", kind="lower",
-                         variant=f"Broyden error / max(N-R error, {ROUNDOFF_MM:g} mm round-off floor)",
-                         reason=(f"C4: max passive-length error Broyden {t['broyden_max_error_mm']:.2g} mm, N-R "
-                                 f"{t['nr_max_error_mm']:.2g} mm at d = {t['deviation_pct']:g} %. N-R ends at round-off, "
-                                 f"which differs between machines (the raw ratio here is {t['accuracy_factor']:.3g}), "
-                                 "so the ratio is taken against a round-off floor: a lower bound that holds on any "
-                                 "machine")))
+        out.append(
+            Claim(
+                KEY,
+                "text_s3.3",
+                "accuracy_factor",
+                printed_value(ref, "text_s3.3", "accuracy_factor"),
+                float(t["broyden_max_error_mm"]) / floor,
+                "1",
+                kind="lower",
+                variant=f"Broyden error / max(N-R error, {ROUNDOFF_MM:g} mm round-off floor)",
+                reason=(
+                    f"C4: max passive-length error Broyden {t['broyden_max_error_mm']:.2g} mm, N-R "
+                    f"{t['nr_max_error_mm']:.2g} mm at d = {t['deviation_pct']:g} %. N-R ends at round-off, "
+                    f"which differs between machines (the raw ratio here is {t['accuracy_factor']:.3g}), "
+                    "so the ratio is taken against a round-off floor: a lower bound that holds on any "
+                    "machine"
+                ),
+            )
+        )
     p = figdir / "table5.csv"
     if p.exists():
         t = pd.read_csv(p)
@@ -169,24 +238,65 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
         for _, r in rows.iterrows():
             d = int(r["deviation_pct"])
             for key in ("nr", "broyden"):
-                out.append(Claim(KEY, "table5", f"d{d}.{key}_steps", printed_value(ref, "table5", f"d{d}.{key}_steps"),
-                                 float(r[f"{key}_steps"]), "1", tol=1.0,
-                                 reason="C5: |dX|_2 < 1e-6 rule, X0 = (1+d)X*, R = 0 (ASSUMED set-up); tol +-1 step"))
+                out.append(
+                    Claim(
+                        KEY,
+                        "table5",
+                        f"d{d}.{key}_steps",
+                        printed_value(ref, "table5", f"d{d}.{key}_steps"),
+                        float(r[f"{key}_steps"]),
+                        "1",
+                        tol=1.0,
+                        reason="C5: |dX|_2 < 1e-6 rule, X0 = (1+d)X*, R = 0 (ASSUMED set-up); tol +-1 step",
+                    )
+                )
         for key in ("nr", "broyden"):
-            out.append(Claim(KEY, "table5", f"mean.{key}_steps", printed_value(ref, "table5", f"mean.{key}_steps"),
-                             float(mean[f"{key}_steps"]), "1", tol=0.1, reason="C5"))
+            out.append(
+                Claim(
+                    KEY,
+                    "table5",
+                    f"mean.{key}_steps",
+                    printed_value(ref, "table5", f"mean.{key}_steps"),
+                    float(mean[f"{key}_steps"]),
+                    "1",
+                    tol=0.1,
+                    reason="C5",
+                )
+            )
         frac = 100 * mean["broyden_time_ms"] / mean["nr_time_ms"]
-        out.append(Claim(KEY, "text_s3.3", "time_fraction", printed_value(ref, "text_s3.3", "time_fraction"), float(frac),
-                         "%", tol=10.0, reason=("C6: implementation-dependent; the paper's times are multiples of "
-                                                "15.625 ms clock ticks; ours are median wall times here")))
+        out.append(
+            Claim(
+                KEY,
+                "text_s3.3",
+                "time_fraction",
+                printed_value(ref, "text_s3.3", "time_fraction"),
+                float(frac),
+                "%",
+                tol=10.0,
+                reason=(
+                    "C6: implementation-dependent; the paper's times are multiples of "
+                    "15.625 ms clock ticks; ours are median wall times here"
+                ),
+            )
+        )
     p = figdir / "fig08_convergence.csv"
     if p.exists():
         t = pd.read_csv(p)
-        out.append(Claim(KEY, "fig08", "broyden.match_step", printed_value(ref, "fig08", "broyden.match_step"),
-                         _match_step(t, "broyden"), "1", reason=(
-                             f"C7: first iteration from which |composite - exact| stays < {MATCH_MM} mm; N-R matches at step "
-                             f"{_match_step(t, 'nr'):g}. The paper's 'Broyden converges faster' also contradicts its "
-                             "own Table 5 (Broyden needs twice the steps)")))
+        out.append(
+            Claim(
+                KEY,
+                "fig08",
+                "broyden.match_step",
+                printed_value(ref, "fig08", "broyden.match_step"),
+                _match_step(t, "broyden"),
+                "1",
+                reason=(
+                    f"C7: first iteration from which |composite - exact| stays < {MATCH_MM} mm; N-R matches at step "
+                    f"{_match_step(t, 'nr'):g}. The paper's 'Broyden converges faster' also contradicts its "
+                    "own Table 5 (Broyden needs twice the steps)"
+                ),
+            )
+        )
     return out
 
 
@@ -196,18 +306,26 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     if p.exists():
         t = pd.read_csv(p)
         r, mean = t.iloc[:-1], t.iloc[-1]
-        parts.append("Table 5 steps (d = 20..25 %): N-R " + ",".join(str(int(v)) for v in r["nr_steps"])
-                     + ", Broyden " + ",".join(str(int(v)) for v in r["broyden_steps"])
-                     + f" (means {mean['nr_steps']:.2f} / {mean['broyden_steps']:.2f}); Broyden time "
-                     f"{100 * mean['broyden_time_ms'] / mean['nr_time_ms']:.0f} % of N-R's here.")
+        parts.append(
+            "Table 5 steps (d = 20..25 %): N-R "
+            + ",".join(str(int(v)) for v in r["nr_steps"])
+            + ", Broyden "
+            + ",".join(str(int(v)) for v in r["broyden_steps"])
+            + f" (means {mean['nr_steps']:.2f} / {mean['broyden_steps']:.2f}); Broyden time "
+            f"{100 * mean['broyden_time_ms'] / mean['nr_time_ms']:.0f} % of N-R's here."
+        )
     p = figdir / "table4_summary.csv"
     if p.exists():
         t = pd.read_csv(p).iloc[0]
-        parts.append(f"Accuracy at tol 1e-6: N-R {t['nr_max_error_mm']:.2g} mm vs Broyden "
-                     f"{t['broyden_max_error_mm']:.2g} mm (factor {t['accuracy_factor']:.3g}).")
+        parts.append(
+            f"Accuracy at tol 1e-6: N-R {t['nr_max_error_mm']:.2g} mm vs Broyden "
+            f"{t['broyden_max_error_mm']:.2g} mm (factor {t['accuracy_factor']:.3g})."
+        )
     p = figdir / "fig08_convergence.csv"
     if p.exists():
         t = pd.read_csv(p)
-        parts.append(f"Fig. 8 (30 %): composite length within {MATCH_MM} mm at step {_match_step(t, 'nr'):g} (N-R) "
-                     f"vs {_match_step(t, 'broyden'):g} (Broyden).")
+        parts.append(
+            f"Fig. 8 (30 %): composite length within {MATCH_MM} mm at step {_match_step(t, 'nr'):g} (N-R) "
+            f"vs {_match_step(t, 'broyden'):g} (Broyden)."
+        )
     return " ".join(parts)

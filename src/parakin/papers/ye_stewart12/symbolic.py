@@ -16,11 +16,10 @@ from pathlib import Path
 import pandas as pd
 import sympy as sp
 
-from parakin.io import write_table
-from parakin.papers.ye_stewart12.common import KEY
 from parakin.claims import Claim, printed_value
+from parakin.io import write_table
+from parakin.papers.ye_stewart12.common import KEY, artefact
 from parakin.registry import EXACT
-from parakin.papers.ye_stewart12.common import artefact
 
 
 @lru_cache(maxsize=1)
@@ -35,14 +34,32 @@ def equations() -> dict[str, object]:
     def sq(v: sp.Matrix) -> sp.Expr:
         return (v.T * v)[0]
 
-    c = [sq(b[0] - base[1]) - l1**2, sq(b[1] - base[3]) - l3**2, sq(b[2] - base[5]) - l5**2,
-         sq(b[0] - m) - 2 * n**2, sq(b[1] - m) - 2 * n**2, sq(b[2] - m) - 2 * n**2,
-         sq(b[0] - b[1]) - 2 * n**2, sq(b[1] - b[2]) - 6 * n**2, sq(b[0] - b[2]) - 2 * n**2]
-    f = [c[0] - c[3], c[1] - c[4], c[2] - c[5], -(c[0] + c[1] - c[6]), -(c[1] + c[2] - c[7]),
-         -(c[0] + c[2] - c[8])]
+    c = [
+        sq(b[0] - base[1]) - l1**2,
+        sq(b[1] - base[3]) - l3**2,
+        sq(b[2] - base[5]) - l5**2,
+        sq(b[0] - m) - 2 * n**2,
+        sq(b[1] - m) - 2 * n**2,
+        sq(b[2] - m) - 2 * n**2,
+        sq(b[0] - b[1]) - 2 * n**2,
+        sq(b[1] - b[2]) - 6 * n**2,
+        sq(b[0] - b[2]) - 2 * n**2,
+    ]
+    f = [
+        c[0] - c[3],
+        c[1] - c[4],
+        c[2] - c[5],
+        -(c[0] + c[1] - c[6]),
+        -(c[1] + c[2] - c[7]),
+        -(c[0] + c[2] - c[8]),
+    ]
     weights = {s: 2 for s in m} | {s: 4 for v in b for s in v} | {l1: 1, l3: 1, l5: 1}
-    return {"before": [sp.expand(e) for e in c], "after": [sp.expand(e) for e in f], "weights": weights,
-            "M": list(m)}
+    return {
+        "before": [sp.expand(e) for e in c],
+        "after": [sp.expand(e) for e in f],
+        "weights": weights,
+        "M": list(m),
+    }
 
 
 def _terms(expr: sp.Expr, weights: dict) -> list[tuple[int, sp.Expr]]:
@@ -60,14 +77,19 @@ def features() -> dict[str, dict[str, int]]:
     for stage in ("before", "after"):
         terms = [_terms(e, w) for e in eq[stage]]
         top = max(d for t in terms for d, _ in t)
-        res[stage] = {"equations": len(eq[stage]), "highest_degree": top,
-                      "highest_terms": sum(1 for t in terms for d, _ in t if d == top)}
+        res[stage] = {
+            "equations": len(eq[stage]),
+            "highest_degree": top,
+            "highest_terms": sum(1 for t in terms for d, _ in t if d == top),
+        }
     # the paper's remarks: 8th-degree terms vanish from f, g, v; 6th-degree (x0 x_i) from u, w, h
     after = [_terms(e, w) for e in eq["after"]]
     before = [_terms(e, w) for e in eq["before"]]
-    res["remarks"] = {"fgv_max_degree": max(d for t in after[:3] for d, _ in t),
-                      "fgv_parts_max_degree": max(d for t in before[:6] for d, _ in t),
-                      "uwh_degree6_terms": sum(1 for t in after[3:] for d, _ in t if d == 6)}
+    res["remarks"] = {
+        "fgv_max_degree": max(d for t in after[:3] for d, _ in t),
+        "fgv_parts_max_degree": max(d for t in before[:6] for d, _ in t),
+        "uwh_degree6_terms": sum(1 for t in after[3:] for d, _ in t if d == 6),
+    }
     return res
 
 
@@ -75,17 +97,33 @@ def features() -> dict[str, dict[str, int]]:
 def table2(config: dict, outdir: Path) -> list[Path]:
     """Table 2: number of equations, highest degree in l, number of highest-degree terms."""
     f = features()
-    df = pd.DataFrame([{"feature": k, "before": f["before"][k], "after": f["after"][k]}
-                       for k in ("equations", "highest_degree", "highest_terms")]
-                      + [{"feature": "max degree of f, g, v (before: of (12)-(17))", "before": f["remarks"]["fgv_parts_max_degree"],
-                          "after": f["remarks"]["fgv_max_degree"]},
-                         {"feature": "degree-6 terms in u, w, h", "before": None,
-                          "after": f["remarks"]["uwh_degree6_terms"]}])
-    return write_table(df, outdir / "table2", title="Table 2: equation features before/after simplification",
-                       notes=("Counted with sympy in the B-coordinate form (x_i, y_i, z_i of degree 4 and x0, y0, z0 "
-                              "of degree 2 in the leg lengths, through our linear FK)."))
-
-
+    df = pd.DataFrame(
+        [
+            {"feature": k, "before": f["before"][k], "after": f["after"][k]}
+            for k in ("equations", "highest_degree", "highest_terms")
+        ]
+        + [
+            {
+                "feature": "max degree of f, g, v (before: of (12)-(17))",
+                "before": f["remarks"]["fgv_parts_max_degree"],
+                "after": f["remarks"]["fgv_max_degree"],
+            },
+            {
+                "feature": "degree-6 terms in u, w, h",
+                "before": None,
+                "after": f["remarks"]["uwh_degree6_terms"],
+            },
+        ]
+    )
+    return write_table(
+        df,
+        outdir / "table2",
+        title="Table 2: equation features before/after simplification",
+        notes=(
+            "Counted with sympy in the B-coordinate form (x_i, y_i, z_i of degree 4 and x0, y0, z0 "
+            "of degree 2 in the leg lengths, through our linear FK)."
+        ),
+    )
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
@@ -96,8 +134,18 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     out = []
     for feat in ("equations", "highest_degree", "highest_terms"):
         for stage in ("before", "after"):
-            out.append(Claim(KEY, "table2", f"{feat}.{stage}", printed_value(ref, "table2", f"{feat}.{stage}"),
-                             float(t.loc[feat, stage]), "1", tol=0.0, reason="C2; counted in the B-coordinate form"))
+            out.append(
+                Claim(
+                    KEY,
+                    "table2",
+                    f"{feat}.{stage}",
+                    printed_value(ref, "table2", f"{feat}.{stage}"),
+                    float(t.loc[feat, stage]),
+                    "1",
+                    tol=0.0,
+                    reason="C2; counted in the B-coordinate form",
+                )
+            )
     return out
 
 
@@ -106,7 +154,9 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     if not p.exists():
         return ""
     t = pd.read_csv(p).set_index("feature")
-    return (f"Table 2 (sympy): {int(t.loc['equations', 'before'])} -> {int(t.loc['equations', 'after'])} equations, "
-            f"highest degree {int(t.loc['highest_degree', 'before'])} -> {int(t.loc['highest_degree', 'after'])}, "
-            f"highest-degree terms {int(t.loc['highest_terms', 'before'])} -> {int(t.loc['highest_terms', 'after'])}; "
-            f"f, g, v drop to degree {int(t.loc['max degree of f, g, v (before: of (12)-(17))', 'after'])}.")
+    return (
+        f"Table 2 (sympy): {int(t.loc['equations', 'before'])} -> {int(t.loc['equations', 'after'])} equations, "
+        f"highest degree {int(t.loc['highest_degree', 'before'])} -> {int(t.loc['highest_degree', 'after'])}, "
+        f"highest-degree terms {int(t.loc['highest_terms', 'before'])} -> {int(t.loc['highest_terms', 'after'])}; "
+        f"f, g, v drop to degree {int(t.loc['max degree of f, g, v (before: of (12)-(17))', 'after'])}."
+    )

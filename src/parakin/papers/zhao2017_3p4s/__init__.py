@@ -8,9 +8,9 @@ paper; each has ``ARTEFACTS``, ``claims(figdir, ref)`` and ``summary(figdir, ref
 
 from __future__ import annotations
 
+from parakin.papers.sections import combine
 from parakin.papers.zhao2017_3p4s import dynamics, fk, kinematics, optimization
 from parakin.papers.zhao2017_3p4s.common import KEY, TITLE
-from parakin.papers.sections import combine
 
 #: the sections of the reproduction, in the paper's order
 SECTIONS = [kinematics, fk, dynamics, optimization]

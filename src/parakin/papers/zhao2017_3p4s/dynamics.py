@@ -21,35 +21,51 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from parakin.mechanisms import p3p4s_dynamics as dyn
+from parakin.claims import Claim, printed_value
 from parakin.errors import ConfigError
 from parakin.io import write_csv, write_table
 from parakin.mechanisms import P3P4S
-from parakin.claims import Claim, printed_value
-
-from parakin.papers.zhao2017_3p4s.common import KEY
+from parakin.mechanisms import p3p4s_dynamics as dyn
+from parakin.papers.zhao2017_3p4s.common import KEY, artefact
 from parakin.registry import ROUNDING
-from parakin.papers.zhao2017_3p4s.common import artefact
 
 #: tolerances stated in the figures and tested (relative to the peak of the analytic curve)
 TOL_FD = 1e-6  #: analytic eqs 8, 13 vs 4th-order finite differences of the IK
 TOL_MUJOCO_KIN = 1e-9  #: analytic eqs 8, 13 vs MuJoCo's constraint kinematics
 TOL_MUJOCO_FORCE = 1e-2  #: issue goal: forces within 1 % of the peak force
 TOL_ENERGY = 1e-6  #: power balance, relative to max |dE/dt|
-TOL_TRACKING = 1e-3  #: open-loop MuJoCo simulation with our forces: max platform deviation / amplitude
+TOL_TRACKING = (
+    1e-3  #: open-loop MuJoCo simulation with our forces: max platform deviation / amplitude
+)
 FLOOR = 1e-10  #: relative differences below this are drawn at this level (rounding noise)
 TRACK_DT = 1e-4  #: time step (s) of the open-loop MuJoCo simulation (RK4)
 
 #: the printed-dynamics variants compared in extra_dynamics_slips (label, equations, options)
 VARIANTS: list[tuple[str, str, str, dict]] = [
-    ("corrected (ours)", "eqs 13-23 as corrected", "H = P^T P/(l n.m); no r x m_d g term; rods x2",
-     {}),
-    ("H without 1/l", "eq 13 (-> 14, 15, 17-19)", "H_i = P_i^T P_i / (n_i^T m_i)",
-     {"h_form": "paper"}),
-    ("spurious gravity moment", "eq 21", "+ 2 sum_i J_wdi^T (r_di x m_d g) in tau^G",
-     {"gravity_moment": True}),
-    ("rod inertia without factor 2", "eq 23 (vs eq 20)", "M, N with m_d/2 J_vdi^T ... and J_wdi^T I_di, once",
-     {"rod_inertia_factor": 1.0}),
+    (
+        "corrected (ours)",
+        "eqs 13-23 as corrected",
+        "H = P^T P/(l n.m); no r x m_d g term; rods x2",
+        {},
+    ),
+    (
+        "H without 1/l",
+        "eq 13 (-> 14, 15, 17-19)",
+        "H_i = P_i^T P_i / (n_i^T m_i)",
+        {"h_form": "paper"},
+    ),
+    (
+        "spurious gravity moment",
+        "eq 21",
+        "+ 2 sum_i J_wdi^T (r_di x m_d g) in tau^G",
+        {"gravity_moment": True},
+    ),
+    (
+        "rod inertia without factor 2",
+        "eq 23 (vs eq 20)",
+        "M, N with m_d/2 J_vdi^T ... and J_wdi^T I_di, once",
+        {"rod_inertia_factor": 1.0},
+    ),
     ("all three (as printed)", "eqs 13, 21, 23", "all of the above", dict(dyn.PAPER_PRINTED)),
 ]
 
@@ -64,10 +80,19 @@ def settings(config: dict) -> dict:
             f"config has no '{KEY}.dynamics' section (keys z0, t_end, samples_per_period, fd_step)"
         ) from None
     checks = {
-        "z0": (lambda v: isinstance(v, (int, float)) and 0.3 <= v <= 0.8, "a number in [0.3, 0.8] m"),
+        "z0": (
+            lambda v: isinstance(v, (int, float)) and 0.3 <= v <= 0.8,
+            "a number in [0.3, 0.8] m",
+        ),
         "t_end": (lambda v: isinstance(v, (int, float)) and 0 < v <= 10, "a number in (0, 10] s"),
-        "samples_per_period": (lambda v: isinstance(v, int) and 8 <= v <= 100000, "an integer in [8, 100000]"),
-        "fd_step": (lambda v: isinstance(v, (int, float)) and 1e-6 <= v <= 5e-3, "a number in [1e-6, 5e-3] s"),
+        "samples_per_period": (
+            lambda v: isinstance(v, int) and 8 <= v <= 100000,
+            "an integer in [8, 100000]",
+        ),
+        "fd_step": (
+            lambda v: isinstance(v, (int, float)) and 1e-6 <= v <= 5e-3,
+            "a number in [1e-6, 5e-3] s",
+        ),
     }
     for key, (ok, what) in checks.items():
         if key not in cfg:
@@ -79,7 +104,12 @@ def settings(config: dict) -> dict:
 
 def _key(config: dict) -> tuple[float, float, int, float]:
     cfg = settings(config)
-    return float(cfg["z0"]), float(cfg["t_end"]), int(cfg["samples_per_period"]), float(cfg["fd_step"])
+    return (
+        float(cfg["z0"]),
+        float(cfg["t_end"]),
+        int(cfg["samples_per_period"]),
+        float(cfg["fd_step"]),
+    )
 
 
 def _mech() -> P3P4S:
@@ -105,10 +135,23 @@ def _trajectory(key: tuple) -> dict:
     kin = dyn.limb_kinematics(mech, p, v, a)
     kin_paper = dyn.limb_kinematics(mech, p, v, a, h_form="paper")
     _, qdot_fd, qddot_fd = dyn.ik_finite_differences(mech, motion, t, fd_step)
-    forces = {label: dyn.inverse_dynamics(mech, params, p, v, a, **opts) for label, _, _, opts in VARIANTS}
-    return {"t": t, "p": p, "v": v, "a": a, "kin": kin, "qddot_paper": kin_paper.qddot,
-            "qdot_fd": qdot_fd, "qddot_fd": qddot_fd, "forces": forces,
-            "mech": mech, "params": params, "motion": motion}
+    forces = {
+        label: dyn.inverse_dynamics(mech, params, p, v, a, **opts) for label, _, _, opts in VARIANTS
+    }
+    return {
+        "t": t,
+        "p": p,
+        "v": v,
+        "a": a,
+        "kin": kin,
+        "qddot_paper": kin_paper.qddot,
+        "qdot_fd": qdot_fd,
+        "qddot_fd": qddot_fd,
+        "forces": forces,
+        "mech": mech,
+        "params": params,
+        "motion": motion,
+    }
 
 
 @lru_cache(maxsize=4)
@@ -129,8 +172,12 @@ def _tracking(key: tuple, label: str, rods: str = "equivalent"):
     mech, params, motion = tr["mech"], tr["params"], tr["motion"]
     opts = next(o for lab, _, _, o in VARIANTS if lab == label)
     model = mujoco_check.build(mech, params, rods, reference_pose=tr["p"][0], timestep=TRACK_DT)
-    return mujoco_check.track(model, motion, float(tr["t"][-1]),
-                              lambda t: dyn.inverse_dynamics(mech, params, *motion.state(t), **opts))
+    return mujoco_check.track(
+        model,
+        motion,
+        float(tr["t"][-1]),
+        lambda t: dyn.inverse_dynamics(mech, params, *motion.state(t), **opts),
+    )
 
 
 @lru_cache(maxsize=16)
@@ -141,8 +188,10 @@ def _balance(key: tuple, label: str) -> dyn.PowerBalance:
 
 
 def _motion_label(motion: dyn.SineMotion, z_note: str = "") -> str:
-    return (f"$x = y = {motion.amplitude:g}\\,\\sin({motion.omega / np.pi:g}\\pi t)$ m, "
-            f"$z = {motion.z0:g}$ m{z_note}")
+    return (
+        f"$x = y = {motion.amplitude:g}\\,\\sin({motion.omega / np.pi:g}\\pi t)$ m, "
+        f"$z = {motion.z0:g}$ m{z_note}"
+    )
 
 
 def _rel(diff: np.ndarray, peak: float) -> np.ndarray:
@@ -191,12 +240,31 @@ def _series_figure(t, values, ylabel, title, path: Path, extra=None) -> Path:
         ax.set_ylabel(ylabel)
         ax.set_xlim(t[0], t[-1])
         ax.set_title(title)
-        ax.legend(loc="upper right", ncols=4, fontsize="small", framealpha=0.9, frameon=True, edgecolor="none")
+        ax.legend(
+            loc="upper right",
+            ncols=4,
+            fontsize="small",
+            framealpha=0.9,
+            frameon=True,
+            edgecolor="none",
+        )
     return save_figure(fig, path)
 
 
-def _check_figure(t, analytic, checks, tolerances, ylabel, title, path: Path, marker_every: int, *,
-                  reference: str = "analytic", n_markers: int | None = None, ymax: float = 1e2) -> Path:
+def _check_figure(
+    t,
+    analytic,
+    checks,
+    tolerances,
+    ylabel,
+    title,
+    path: Path,
+    marker_every: int,
+    *,
+    reference: str = "analytic",
+    n_markers: int | None = None,
+    ymax: float = 1e2,
+) -> Path:
     """Top: the reference curves (lines, one colour per drive) with the first ``n_markers``
     independent computations as markers; bottom: max over the drives of |difference| / peak for
     every check (log scale) with the tested tolerances (dotted)."""
@@ -209,22 +277,51 @@ def _check_figure(t, analytic, checks, tolerances, ylabel, title, path: Path, ma
         fig, top, bottom = _two_panels()
         handles = []
         for i in range(3):
-            handles += top.plot(t, analytic[:, i], color=_LIMB_COLOURS[i], label=f"drive {i + 1}: {reference}")
+            handles += top.plot(
+                t, analytic[:, i], color=_LIMB_COLOURS[i], label=f"drive {i + 1}: {reference}"
+            )
         sl = slice(0, None, marker_every)
         for (label, values, _), mk in zip(checks[:n_markers], ("o", "x", "+")):
             for i in range(3):
-                top.plot(t[sl], values[sl, i], mk, color=_LIMB_COLOURS[i], ms=3.5, mfc="none", mew=0.8)
-            handles.append(Line2D([], [], ls="none", marker=mk, color="0.25", ms=3.5, mfc="none", mew=0.8,
-                                  label=label))
+                top.plot(
+                    t[sl], values[sl, i], mk, color=_LIMB_COLOURS[i], ms=3.5, mfc="none", mew=0.8
+                )
+            handles.append(
+                Line2D(
+                    [],
+                    [],
+                    ls="none",
+                    marker=mk,
+                    color="0.25",
+                    ms=3.5,
+                    mfc="none",
+                    mew=0.8,
+                    label=label,
+                )
+            )
         _headroom(top, analytic)
         top.set_ylabel(ylabel)
         top.set_title(title)
-        top.legend(handles=handles, loc="upper right", ncols=3, fontsize="small", framealpha=0.9, frameon=True,
-                   edgecolor="none")
+        top.legend(
+            handles=handles,
+            loc="upper right",
+            ncols=3,
+            fontsize="small",
+            framealpha=0.9,
+            frameon=True,
+            edgecolor="none",
+        )
         peak = float(np.max(np.abs(analytic)))
         for (label, values, colour), ls in zip(checks, ("-", "-", "-.", "--")):
             rel = np.maximum(_rel(values - analytic, peak), FLOOR)
-            bottom.semilogy(t, rel, ls, color=colour, lw=1.8 if ls == "-" else 1.1, label=f"{label} − {reference}")
+            bottom.semilogy(
+                t,
+                rel,
+                ls,
+                color=colour,
+                lw=1.8 if ls == "-" else 1.1,
+                label=f"{label} − {reference}",
+            )
         for label, tol, colour in tolerances:
             bottom.axhline(tol, color=colour, lw=1.0, ls=":", label=label)
         _floor_band(bottom, FLOOR, f"below {FLOOR:g}: rounding, drawn at {FLOOR:g}")
@@ -232,12 +329,21 @@ def _check_figure(t, analytic, checks, tolerances, ylabel, title, path: Path, ma
         bottom.set_xlim(t[0], t[-1])
         bottom.set_xlabel("time $t$ (s)")
         bottom.set_ylabel("max$_i$ |difference| / peak")
-        bottom.legend(loc="upper right", ncols=3, fontsize="small", framealpha=0.9, frameon=True, edgecolor="none")
+        bottom.legend(
+            loc="upper right",
+            ncols=3,
+            fontsize="small",
+            framealpha=0.9,
+            frameon=True,
+            edgecolor="none",
+        )
     return save_figure(fig, path)
 
 
-_KIN_TOLERANCES = [(f"FD tolerance {TOL_FD:g}", TOL_FD, "#CC79A7"),
-                   (f"MuJoCo tolerance {TOL_MUJOCO_KIN:g}", TOL_MUJOCO_KIN, "#E69F00")]
+_KIN_TOLERANCES = [
+    (f"FD tolerance {TOL_FD:g}", TOL_FD, "#CC79A7"),
+    (f"MuJoCo tolerance {TOL_MUJOCO_KIN:g}", TOL_MUJOCO_KIN, "#E69F00"),
+]
 
 
 def _marker_every(t: np.ndarray, motion: dyn.SineMotion) -> int:
@@ -246,36 +352,83 @@ def _marker_every(t: np.ndarray, motion: dyn.SineMotion) -> int:
 
 
 # ---------------------------------------------------------------------------------------- Figs 5-8
-@artefact("fig05", outputs=["fig05_drive_velocities.png", "fig05_drive_velocities.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
+@artefact(
+    "fig05",
+    outputs=["fig05_drive_velocities.png", "fig05_drive_velocities.csv"],
+    config=["zhao2017_3p4s.dynamics"],
+    tolerance=ROUNDING,
+)
 def fig05(config: dict, outdir: Path) -> list[Path]:
     """Fig. 5: drive velocities ``qdot_i(t)`` by eq (8)."""
     tr = _trajectory(_key(config))
     t, kin, motion = tr["t"], tr["kin"], tr["motion"]
-    data = pd.DataFrame({"t_s": t, "x_m": tr["p"][:, 0], "y_m": tr["p"][:, 1], "z_m": tr["p"][:, 2],
-                         **{f"qdot{i + 1}_m_s": kin.qdot[:, i] for i in range(3)}})
+    data = pd.DataFrame(
+        {
+            "t_s": t,
+            "x_m": tr["p"][:, 0],
+            "y_m": tr["p"][:, 1],
+            "z_m": tr["p"][:, 2],
+            **{f"qdot{i + 1}_m_s": kin.qdot[:, i] for i in range(3)},
+        }
+    )
     paths = [write_csv(data, outdir / "fig05_drive_velocities.csv")]
-    title = "Fig. 5: drive velocities, eq. (8)\n" + _motion_label(motion, " (z assumed: §2.4's height)")
-    paths.append(_series_figure(t, kin.qdot, r"drive velocity $\dot q_i$ (m/s)", title,
-                                outdir / "fig05_drive_velocities.png"))
+    title = "Fig. 5: drive velocities, eq. (8)\n" + _motion_label(
+        motion, " (z assumed: §2.4's height)"
+    )
+    paths.append(
+        _series_figure(
+            t,
+            kin.qdot,
+            r"drive velocity $\dot q_i$ (m/s)",
+            title,
+            outdir / "fig05_drive_velocities.png",
+        )
+    )
     return paths
 
 
-@artefact("fig06", outputs=["fig06_drive_accelerations.png", "fig06_drive_accelerations.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
+@artefact(
+    "fig06",
+    outputs=["fig06_drive_accelerations.png", "fig06_drive_accelerations.csv"],
+    config=["zhao2017_3p4s.dynamics"],
+    tolerance=ROUNDING,
+)
 def fig06(config: dict, outdir: Path) -> list[Path]:
     """Fig. 6: drive accelerations ``qddot_i(t)`` by eq (13) with the corrected H."""
     tr = _trajectory(_key(config))
     t, kin, motion = tr["t"], tr["kin"], tr["motion"]
-    data = pd.DataFrame({"t_s": t, "x_m": tr["p"][:, 0], "y_m": tr["p"][:, 1], "z_m": tr["p"][:, 2],
-                         **{f"qddot{i + 1}_m_s2": kin.qddot[:, i] for i in range(3)}})
+    data = pd.DataFrame(
+        {
+            "t_s": t,
+            "x_m": tr["p"][:, 0],
+            "y_m": tr["p"][:, 1],
+            "z_m": tr["p"][:, 2],
+            **{f"qddot{i + 1}_m_s2": kin.qddot[:, i] for i in range(3)},
+        }
+    )
     paths = [write_csv(data, outdir / "fig06_drive_accelerations.csv")]
-    title = ("Fig. 6: drive accelerations, eq. (13) with $H_i = P_i^TP_i/(l\\,n_i^Tm_i)$\n"
-             + _motion_label(motion, " (z assumed: §2.4's height)"))
-    paths.append(_series_figure(t, kin.qddot, r"drive acceleration $\ddot q_i$ (m/s$^2$)", title,
-                                outdir / "fig06_drive_accelerations.png"))
+    title = (
+        "Fig. 6: drive accelerations, eq. (13) with $H_i = P_i^TP_i/(l\\,n_i^Tm_i)$\n"
+        + _motion_label(motion, " (z assumed: §2.4's height)")
+    )
+    paths.append(
+        _series_figure(
+            t,
+            kin.qddot,
+            r"drive acceleration $\ddot q_i$ (m/s$^2$)",
+            title,
+            outdir / "fig06_drive_accelerations.png",
+        )
+    )
     return paths
 
 
-@artefact("fig07", outputs=["fig07_velocity_check.png", "fig07_velocity_check.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
+@artefact(
+    "fig07",
+    outputs=["fig07_velocity_check.png", "fig07_velocity_check.csv"],
+    config=["zhao2017_3p4s.dynamics"],
+    tolerance=ROUNDING,
+)
 def fig07(config: dict, outdir: Path) -> list[Path]:
     """Fig. 7 (the paper: ADAMS): eq (8) against IK finite differences and MuJoCo."""
     key = _key(config)
@@ -291,16 +444,34 @@ def fig07(config: dict, outdir: Path) -> list[Path]:
         data[f"diff{i + 1}_fd_m_s"] = tr["qdot_fd"][:, i] - kin.qdot[:, i]
         data[f"diff{i + 1}_mujoco_m_s"] = mj.qdot[:, i] - kin.qdot[:, i]
     paths = [write_csv(data, outdir / "fig07_velocity_check.csv")]
-    title = ("Fig. 7: drive velocities, eq. (8) vs independent checks (the paper: ADAMS)\n"
-             + _motion_label(motion) + f"; FD step {key[3]:g} s")
+    title = (
+        "Fig. 7: drive velocities, eq. (8) vs independent checks (the paper: ADAMS)\n"
+        + _motion_label(motion)
+        + f"; FD step {key[3]:g} s"
+    )
     checks = [("IK finite differences", tr["qdot_fd"], "#CC79A7"), ("MuJoCo", mj.qdot, "#E69F00")]
     tols = _KIN_TOLERANCES
-    paths.append(_check_figure(t, kin.qdot, checks, tols, r"$\dot q_i$ (m/s)", title,
-                               outdir / "fig07_velocity_check.png", _marker_every(t, motion)))
+    paths.append(
+        _check_figure(
+            t,
+            kin.qdot,
+            checks,
+            tols,
+            r"$\dot q_i$ (m/s)",
+            title,
+            outdir / "fig07_velocity_check.png",
+            _marker_every(t, motion),
+        )
+    )
     return paths
 
 
-@artefact("fig08", outputs=["fig08_acceleration_check.png", "fig08_acceleration_check.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
+@artefact(
+    "fig08",
+    outputs=["fig08_acceleration_check.png", "fig08_acceleration_check.csv"],
+    config=["zhao2017_3p4s.dynamics"],
+    tolerance=ROUNDING,
+)
 def fig08(config: dict, outdir: Path) -> list[Path]:
     """Fig. 8 (the paper: ADAMS): eq (13) against IK finite differences and MuJoCo; the printed
     H (no 1/l) is shown against the same finite differences."""
@@ -319,18 +490,39 @@ def fig08(config: dict, outdir: Path) -> list[Path]:
         data[f"diff{i + 1}_mujoco_m_s2"] = mj.qddot[:, i] - kin.qddot[:, i]
         data[f"diff{i + 1}_printed_h_m_s2"] = tr["qddot_paper"][:, i] - kin.qddot[:, i]
     paths = [write_csv(data, outdir / "fig08_acceleration_check.csv")]
-    title = ("Fig. 8: drive accelerations, eq. (13) vs independent checks (the paper: ADAMS)\n"
-             + _motion_label(motion) + f"; FD step {key[3]:g} s")
-    checks = [("IK finite differences", tr["qddot_fd"], "#CC79A7"), ("MuJoCo", mj.qddot, "#E69F00"),
-              ("eq. (13) as printed (no 1/l)", tr["qddot_paper"], "#56B4E9")]
+    title = (
+        "Fig. 8: drive accelerations, eq. (13) vs independent checks (the paper: ADAMS)\n"
+        + _motion_label(motion)
+        + f"; FD step {key[3]:g} s"
+    )
+    checks = [
+        ("IK finite differences", tr["qddot_fd"], "#CC79A7"),
+        ("MuJoCo", mj.qddot, "#E69F00"),
+        ("eq. (13) as printed (no 1/l)", tr["qddot_paper"], "#56B4E9"),
+    ]
     tols = _KIN_TOLERANCES
-    paths.append(_check_figure(t, kin.qddot, checks, tols, r"$\ddot q_i$ (m/s$^2$)", title,
-                               outdir / "fig08_acceleration_check.png", _marker_every(t, motion)))
+    paths.append(
+        _check_figure(
+            t,
+            kin.qddot,
+            checks,
+            tols,
+            r"$\ddot q_i$ (m/s$^2$)",
+            title,
+            outdir / "fig08_acceleration_check.png",
+            _marker_every(t, motion),
+        )
+    )
     return paths
 
 
 # ---------------------------------------------------------------------------------------- Figs 9-10
-@artefact("fig09", outputs=["fig09_driving_forces.png", "fig09_driving_forces.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
+@artefact(
+    "fig09",
+    outputs=["fig09_driving_forces.png", "fig09_driving_forces.csv"],
+    config=["zhao2017_3p4s.dynamics"],
+    tolerance=ROUNDING,
+)
 def fig09(config: dict, outdir: Path) -> list[Path]:
     """Fig. 9: motor forces along +m_i by the corrected Newton-Euler / virtual-power model."""
     key = _key(config)
@@ -338,22 +530,46 @@ def fig09(config: dict, outdir: Path) -> list[Path]:
     t, motion, mech, params = tr["t"], tr["motion"], tr["mech"], tr["params"]
     f = tr["forces"]["corrected (ours)"]
     static = dyn.inverse_dynamics(mech, params, [0.0, 0.0, motion.z0], np.zeros(3), np.zeros(3))
-    data = pd.DataFrame({"t_s": t, "x_m": tr["p"][:, 0], "y_m": tr["p"][:, 1], "z_m": tr["p"][:, 2],
-                         **{f"f{i + 1}_N": f[:, i] for i in range(3)},
-                         "static_centre_N": np.full(len(t), static[0])})
+    data = pd.DataFrame(
+        {
+            "t_s": t,
+            "x_m": tr["p"][:, 0],
+            "y_m": tr["p"][:, 1],
+            "z_m": tr["p"][:, 2],
+            **{f"f{i + 1}_N": f[:, i] for i in range(3)},
+            "static_centre_N": np.full(len(t), static[0]),
+        }
+    )
     paths = [write_csv(data, outdir / "fig09_driving_forces.csv")]
 
     def extra(ax):
-        ax.axhline(static[0], color="0.4", lw=0.8, ls=(0, (4, 2)),
-                   label=f"static load at (0, 0, {motion.z0:g}) m: {static[0]:.2f} N")
+        ax.axhline(
+            static[0],
+            color="0.4",
+            lw=0.8,
+            ls=(0, (4, 2)),
+            label=f"static load at (0, 0, {motion.z0:g}) m: {static[0]:.2f} N",
+        )
 
-    title = ("Fig. 9: motor forces along $+m_i$ (eqs 16-23 corrected, rods ×2, gravity at the centroids)\n"
-             + _motion_label(motion) + f"; masses §2.4, $g$ = {-params.g[2]:g} m/s$^2$")
-    paths.append(_series_figure(t, f, r"motor force $f_i$ (N)", title, outdir / "fig09_driving_forces.png", extra))
+    title = (
+        "Fig. 9: motor forces along $+m_i$ (eqs 16-23 corrected, rods ×2, gravity at the centroids)\n"
+        + _motion_label(motion)
+        + f"; masses §2.4, $g$ = {-params.g[2]:g} m/s$^2$"
+    )
+    paths.append(
+        _series_figure(
+            t, f, r"motor force $f_i$ (N)", title, outdir / "fig09_driving_forces.png", extra
+        )
+    )
     return paths
 
 
-@artefact("fig10", outputs=["fig10_mujoco_forces.png", "fig10_mujoco_forces.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
+@artefact(
+    "fig10",
+    outputs=["fig10_mujoco_forces.png", "fig10_mujoco_forces.csv"],
+    config=["zhao2017_3p4s.dynamics"],
+    tolerance=ROUNDING,
+)
 def fig10(config: dict, outdir: Path) -> list[Path]:
     """Fig. 10 (the paper: ADAMS): our forces against MuJoCo (equivalent-rod and 6-rod models)."""
     key = _key(config)
@@ -375,18 +591,38 @@ def fig10(config: dict, outdir: Path) -> list[Path]:
     data["mujoco_loop_error_m"] = np.maximum(eq.loop_error, par.loop_error)
     data["mujoco_lstsq_residual"] = np.maximum(eq.lstsq_residual, par.lstsq_residual)
     paths = [write_csv(data, outdir / "fig10_mujoco_forces.csv")]
-    title = ("Fig. 10: motor forces, ours vs MuJoCo (the paper: ADAMS)\n" + _motion_label(motion))
-    checks = [("MuJoCo, equivalent rods", eq.force, "#E69F00"), ("MuJoCo, 6 side rods", par.force, "#009E73"),
-              ("eqs (13, 21, 23) as printed", printed, "#56B4E9")]
+    title = "Fig. 10: motor forces, ours vs MuJoCo (the paper: ADAMS)\n" + _motion_label(motion)
+    checks = [
+        ("MuJoCo, equivalent rods", eq.force, "#E69F00"),
+        ("MuJoCo, 6 side rods", par.force, "#009E73"),
+        ("eqs (13, 21, 23) as printed", printed, "#56B4E9"),
+    ]
     tols = [(f"goal: {TOL_MUJOCO_FORCE:.0%} of peak", TOL_MUJOCO_FORCE, "0.3")]
-    paths.append(_check_figure(t, f, checks, tols, r"motor force $f_i$ (N)", title,
-                               outdir / "fig10_mujoco_forces.png", _marker_every(t, motion),
-                               reference="ours", n_markers=2, ymax=1e3))
+    paths.append(
+        _check_figure(
+            t,
+            f,
+            checks,
+            tols,
+            r"motor force $f_i$ (N)",
+            title,
+            outdir / "fig10_mujoco_forces.png",
+            _marker_every(t, motion),
+            reference="ours",
+            n_markers=2,
+            ymax=1e3,
+        )
+    )
     return paths
 
 
 # ---------------------------------------------------------------------------------------- extras
-@artefact("power_balance", outputs=["extra_power_balance.png", "extra_power_balance.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
+@artefact(
+    "power_balance",
+    outputs=["extra_power_balance.png", "extra_power_balance.csv"],
+    config=["zhao2017_3p4s.dynamics"],
+    tolerance=ROUNDING,
+)
 def power_balance(config: dict, outdir: Path) -> list[Path]:
     """extra_power_balance: ``sum f_i qdot_i`` vs ``dE/dt`` (E from positions and velocities of
     every body, independent of the Newton-Euler code), for ours and each printed variant."""
@@ -396,7 +632,9 @@ def power_balance(config: dict, outdir: Path) -> list[Path]:
     tr = _trajectory(key)
     t, motion = tr["t"], tr["motion"]
     ours = _balance(key, "corrected (ours)")
-    data = pd.DataFrame({"t_s": t, "power_W": ours.power, "dEdt_W": ours.dEdt, "residual_W": ours.residual})
+    data = pd.DataFrame(
+        {"t_s": t, "power_W": ours.power, "dEdt_W": ours.dEdt, "residual_W": ours.residual}
+    )
     for label, _, _, _ in VARIANTS[1:]:
         data[f"residual_{_slug(label)}_W"] = _balance(key, label).residual
     paths = [write_csv(data, outdir / "extra_power_balance.csv")]
@@ -405,36 +643,67 @@ def power_balance(config: dict, outdir: Path) -> list[Path]:
     with use_style():
         fig, top, bottom = _two_panels()
         top.plot(t, ours.power, color="#0072B2", label=r"$\sum_i f_i\,\dot q_i$ (motor power)")
-        top.plot(t, ours.dEdt, ls="--", color="#D55E00", label=r"$dE/dt$ (6th-order difference of E)")
+        top.plot(
+            t, ours.dEdt, ls="--", color="#D55E00", label=r"$dE/dt$ (6th-order difference of E)"
+        )
         _headroom(top, np.concatenate([ours.power, ours.dEdt]), 0.25)
         top.set_ylabel("power (W)")
-        top.set_title("Power balance: motor power = rate of kinetic + potential energy of all 10 bodies\n"
-                      + _motion_label(motion))
-        top.legend(loc="upper right", fontsize="small", framealpha=0.9, frameon=True, edgecolor="none")
+        top.set_title(
+            "Power balance: motor power = rate of kinetic + potential energy of all 10 bodies\n"
+            + _motion_label(motion)
+        )
+        top.legend(
+            loc="upper right", fontsize="small", framealpha=0.9, frameon=True, edgecolor="none"
+        )
         colours = ("#0072B2", "#56B4E9", "#CC79A7", "#E69F00", "0.3")
         for (label, _, _, _), colour, ls in zip(VARIANTS, colours, ("-", "--", "-.", ":", "-")):
             res = _balance(key, label).residual
-            bottom.semilogy(t, np.maximum(np.abs(res) / scale, floor), ls, color=colour, label=label,
-                            lw=1.6 if label.startswith("corrected") else 1.0)
-        bottom.axhline(TOL_ENERGY, color="k", lw=0.8, ls=(0, (4, 2)), label=f"tolerance {TOL_ENERGY:g}")
-        _floor_band(bottom, floor, f"below {floor:g}: difference-quotient noise, drawn at {floor:g}")
+            bottom.semilogy(
+                t,
+                np.maximum(np.abs(res) / scale, floor),
+                ls,
+                color=colour,
+                label=label,
+                lw=1.6 if label.startswith("corrected") else 1.0,
+            )
+        bottom.axhline(
+            TOL_ENERGY, color="k", lw=0.8, ls=(0, (4, 2)), label=f"tolerance {TOL_ENERGY:g}"
+        )
+        _floor_band(
+            bottom, floor, f"below {floor:g}: difference-quotient noise, drawn at {floor:g}"
+        )
         bottom.set_ylim(floor * 0.3, 1e4)
         bottom.set_xlim(t[0], t[-1])
         bottom.set_xlabel("time $t$ (s)")
         bottom.set_ylabel(r"|$\sum f\dot q - dE/dt$| / max|$dE/dt$|")
-        bottom.legend(loc="upper right", ncols=3, fontsize="small", framealpha=0.9, frameon=True, edgecolor="none")
+        bottom.legend(
+            loc="upper right",
+            ncols=3,
+            fontsize="small",
+            framealpha=0.9,
+            frameon=True,
+            edgecolor="none",
+        )
     paths.append(save_figure(fig, outdir / "extra_power_balance.png"))
     return paths
 
 
 def _slug(label: str) -> str:
-    return {"H without 1/l": "h_without_1_over_l", "spurious gravity moment": "gravity_moment",
-            "rod inertia without factor 2": "rods_once", "all three (as printed)": "printed",
-            "corrected (ours)": "ours"}[label]
+    return {
+        "H without 1/l": "h_without_1_over_l",
+        "spurious gravity moment": "gravity_moment",
+        "rod inertia without factor 2": "rods_once",
+        "all three (as printed)": "printed",
+        "corrected (ours)": "ours",
+    }[label]
 
 
-@artefact("dynamics_slips", outputs=["extra_dynamics_slips.csv", "extra_dynamics_slips.md"],
-          config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
+@artefact(
+    "dynamics_slips",
+    outputs=["extra_dynamics_slips.csv", "extra_dynamics_slips.md"],
+    config=["zhao2017_3p4s.dynamics"],
+    tolerance=ROUNDING,
+)
 def dynamics_slips(config: dict, outdir: Path) -> list[Path]:
     """extra_dynamics_slips: each slip of the printed dynamics against four checks.
 
@@ -469,11 +738,16 @@ def dynamics_slips(config: dict, outdir: Path) -> list[Path]:
             "max_force_change_N": float(np.max(np.abs(f - ours))),
             "force_change_pct_of_peak": 100 * float(np.max(np.abs(f - ours))) / peak_f,
             "static_centre_force_N": float(static[0]),
-            "static_centre_change_N": float(static[0] - dyn.inverse_dynamics(
-                mech, params, centre, np.zeros(3), np.zeros(3))[0]),
+            "static_centre_change_N": float(
+                static[0] - dyn.inverse_dynamics(mech, params, centre, np.zeros(3), np.zeros(3))[0]
+            ),
         }
-        fails = (row["fd_qddot_rel"] > TOL_FD or row["power_balance_rel"] > TOL_ENERGY
-                 or row["mujoco_force_rel"] > TOL_MUJOCO_KIN or row["tracking_rel"] > TOL_TRACKING)
+        fails = (
+            row["fd_qddot_rel"] > TOL_FD
+            or row["power_balance_rel"] > TOL_ENERGY
+            or row["mujoco_force_rel"] > TOL_MUJOCO_KIN
+            or row["tracking_rel"] > TOL_TRACKING
+        )
         if label.startswith("corrected"):
             row["verdict"] = "fails a check" if fails else "passes all checks"
         else:
@@ -496,16 +770,30 @@ def dynamics_slips(config: dict, outdir: Path) -> list[Path]:
         "as a slip. The eq 21 term depends on the origin chosen for r_di (here {O}, eq 10), a sign that it is "
         "spurious: gravity already acts at the rod centroids through J_vdi."
     )
-    return write_table(df, outdir / "extra_dynamics_slips",
-                       title="The printed dynamics (eqs 13, 21, 23) against four independent checks",
-                       notes=notes, floatfmt={"fd_qddot_rel": ".3g", "power_balance_rel": ".3g",
-                                              "mujoco_force_rel": ".3g", "tracking_rel": ".3g",
-                                              "max_force_change_N": ".4g",
-                                              "force_change_pct_of_peak": ".3g", "static_centre_force_N": ".5g",
-                                              "static_centre_change_N": ".4g"})
+    return write_table(
+        df,
+        outdir / "extra_dynamics_slips",
+        title="The printed dynamics (eqs 13, 21, 23) against four independent checks",
+        notes=notes,
+        floatfmt={
+            "fd_qddot_rel": ".3g",
+            "power_balance_rel": ".3g",
+            "mujoco_force_rel": ".3g",
+            "tracking_rel": ".3g",
+            "max_force_change_N": ".4g",
+            "force_change_pct_of_peak": ".3g",
+            "static_centre_force_N": ".5g",
+            "static_centre_change_N": ".4g",
+        },
+    )
 
 
-@artefact("dynamics_printed", outputs=["extra_dynamics_printed.png", "extra_dynamics_printed.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
+@artefact(
+    "dynamics_printed",
+    outputs=["extra_dynamics_printed.png", "extra_dynamics_printed.csv"],
+    config=["zhao2017_3p4s.dynamics"],
+    tolerance=ROUNDING,
+)
 def dynamics_printed(config: dict, outdir: Path) -> list[Path]:
     """extra_dynamics_printed: Fig. 9 as the printed equations give it, and each slip's share."""
     from parakin.plot import save_figure, use_style
@@ -524,13 +812,31 @@ def dynamics_printed(config: dict, outdir: Path) -> list[Path]:
         printed = tr["forces"]["all three (as printed)"]
         for i in range(3):
             top.plot(t, ours[:, i], color=_LIMB_COLOURS[i], label=f"drive {i + 1}: corrected")
-            top.plot(t, printed[:, i], ls="--", color=_LIMB_COLOURS[i], label=f"drive {i + 1}: as printed")
+            top.plot(
+                t,
+                printed[:, i],
+                ls="--",
+                color=_LIMB_COLOURS[i],
+                label=f"drive {i + 1}: as printed",
+            )
         _headroom(top, np.concatenate([ours, printed]))
         top.set_ylabel(r"motor force $f_i$ (N)")
-        top.set_title("Fig. 9 with the printed eqs (13, 21, 23) vs corrected\n" + _motion_label(motion))
-        top.legend(loc="upper right", ncols=3, fontsize="small", framealpha=0.9, frameon=True, edgecolor="none")
-        colours = {"H without 1/l": "#56B4E9", "spurious gravity moment": "#CC79A7",
-                   "rod inertia without factor 2": "#E69F00"}
+        top.set_title(
+            "Fig. 9 with the printed eqs (13, 21, 23) vs corrected\n" + _motion_label(motion)
+        )
+        top.legend(
+            loc="upper right",
+            ncols=3,
+            fontsize="small",
+            framealpha=0.9,
+            frameon=True,
+            edgecolor="none",
+        )
+        colours = {
+            "H without 1/l": "#56B4E9",
+            "spurious gravity moment": "#CC79A7",
+            "rod inertia without factor 2": "#E69F00",
+        }
         diffs = []
         for label, colour in colours.items():
             diff = tr["forces"][label] - ours
@@ -543,12 +849,24 @@ def dynamics_printed(config: dict, outdir: Path) -> list[Path]:
         bottom.set_xlim(t[0], t[-1])
         bottom.set_xlabel("time $t$ (s)")
         bottom.set_ylabel(r"$f_{\rm printed\ slip} - f$ (N)")
-        bottom.legend(loc="upper right", ncols=2, fontsize="small", framealpha=0.9, frameon=True, edgecolor="none")
+        bottom.legend(
+            loc="upper right",
+            ncols=2,
+            fontsize="small",
+            framealpha=0.9,
+            frameon=True,
+            edgecolor="none",
+        )
     paths.append(save_figure(fig, outdir / "extra_dynamics_printed.png"))
     return paths
 
 
-@artefact("mujoco_tracking", outputs=["extra_mujoco_tracking.png", "extra_mujoco_tracking.csv"], config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING)
+@artefact(
+    "mujoco_tracking",
+    outputs=["extra_mujoco_tracking.png", "extra_mujoco_tracking.csv"],
+    config=["zhao2017_3p4s.dynamics"],
+    tolerance=ROUNDING,
+)
 def mujoco_tracking(config: dict, outdir: Path) -> list[Path]:
     """extra_mujoco_tracking: MuJoCo's forward dynamics driven open loop by each variant's forces;
     how far the platform strays from the motion law (ours: both MuJoCo models)."""
@@ -557,36 +875,72 @@ def mujoco_tracking(config: dict, outdir: Path) -> list[Path]:
     key = _key(config)
     tr = _trajectory(key)
     motion = tr["motion"]
-    runs = [("corrected (ours)", "parallelogram")] + [(label, "equivalent") for label, _, _, _ in VARIANTS]
+    runs = [("corrected (ours)", "parallelogram")] + [
+        (label, "equivalent") for label, _, _, _ in VARIANTS
+    ]
     results = {(label, rods): _tracking(key, label, rods) for label, rods in runs}
     t = results[runs[0]].t
     data = pd.DataFrame({"t_s": t})
     for (label, rods), res in results.items():
         data[f"error_{_slug(label)}_{rods}_m"] = res.error
-    data["loop_error_ours_m"] = np.maximum(results[("corrected (ours)", "equivalent")].loop_error,
-                                           results[("corrected (ours)", "parallelogram")].loop_error)
+    data["loop_error_ours_m"] = np.maximum(
+        results[("corrected (ours)", "equivalent")].loop_error,
+        results[("corrected (ours)", "parallelogram")].loop_error,
+    )
     paths = [write_csv(data, outdir / "extra_mujoco_tracking.csv")]
     floor = 1e-12
-    colours = {"corrected (ours)": "#0072B2", "H without 1/l": "#56B4E9", "spurious gravity moment": "#CC79A7",
-               "rod inertia without factor 2": "#E69F00", "all three (as printed)": "0.3"}
+    colours = {
+        "corrected (ours)": "#0072B2",
+        "H without 1/l": "#56B4E9",
+        "spurious gravity moment": "#CC79A7",
+        "rod inertia without factor 2": "#E69F00",
+        "all three (as printed)": "0.3",
+    }
     with use_style():
         fig, ax = new_figure((7.0, 3.6))
         for (label, rods), res in results.items():
             ours = label.startswith("corrected")
             ls = "--" if rods == "parallelogram" else ("-." if label.startswith("all") else "-")
-            ax.semilogy(t, np.maximum(res.error, floor), color=colours[label], ls=ls, lw=1.6 if ours else 1.1,
-                        zorder=1 if label.startswith("all") else 2,
-                        label=f"{label}, {'6 side rods' if rods == 'parallelogram' else 'equivalent rods'}")
-        ax.axhline(motion.amplitude, color="k", lw=0.8, ls=":", label=f"motion amplitude {motion.amplitude:g} m")
-        ax.axhline(TOL_TRACKING * motion.amplitude, color="k", lw=0.8, ls=(0, (4, 2)),
-                   label=f"tolerance {TOL_TRACKING:g} × amplitude")
+            ax.semilogy(
+                t,
+                np.maximum(res.error, floor),
+                color=colours[label],
+                ls=ls,
+                lw=1.6 if ours else 1.1,
+                zorder=1 if label.startswith("all") else 2,
+                label=f"{label}, {'6 side rods' if rods == 'parallelogram' else 'equivalent rods'}",
+            )
+        ax.axhline(
+            motion.amplitude,
+            color="k",
+            lw=0.8,
+            ls=":",
+            label=f"motion amplitude {motion.amplitude:g} m",
+        )
+        ax.axhline(
+            TOL_TRACKING * motion.amplitude,
+            color="k",
+            lw=0.8,
+            ls=(0, (4, 2)),
+            label=f"tolerance {TOL_TRACKING:g} × amplitude",
+        )
         ax.set_ylim(floor, 1.0)
         ax.set_xlim(t[0], t[-1])
         ax.set_xlabel("time $t$ (s)")
         ax.set_ylabel("platform deviation max$_{x,y,z}$ |p − p$_{target}$| (m)")
-        ax.set_title("MuJoCo forward dynamics driven open loop by the motor forces of each model\n"
-                     + _motion_label(motion) + f"; RK4, $\\Delta t$ = {TRACK_DT:g} s, stiff loop constraints")
-        ax.legend(loc="upper left", ncols=2, fontsize="small", framealpha=0.9, frameon=True, edgecolor="none")
+        ax.set_title(
+            "MuJoCo forward dynamics driven open loop by the motor forces of each model\n"
+            + _motion_label(motion)
+            + f"; RK4, $\\Delta t$ = {TRACK_DT:g} s, stiff loop constraints"
+        )
+        ax.legend(
+            loc="upper left",
+            ncols=2,
+            fontsize="small",
+            framealpha=0.9,
+            frameon=True,
+            edgecolor="none",
+        )
     paths.append(save_figure(fig, outdir / "extra_mujoco_tracking.png"))
     return paths
 
@@ -608,34 +962,82 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     why = "paper: ADAMS, 'exactly equal', no number printed; ours: "
 
     def claim(artefact, quantity, value, variant, tol, reason, evidence=""):
-        out.append(Claim(KEY, artefact, quantity, printed_value(ref, artefact, quantity), 100 * value, "% of peak",
-                         variant, tol=100 * tol, reason=reason, evidence=evidence))
+        out.append(
+            Claim(
+                KEY,
+                artefact,
+                quantity,
+                printed_value(ref, artefact, quantity),
+                100 * value,
+                "% of peak",
+                variant,
+                tol=100 * tol,
+                reason=reason,
+                evidence=evidence,
+            )
+        )
 
     if (figdir / "fig07_velocity_check.csv").exists():
         df = pd.read_csv(figdir / "fig07_velocity_check.csv")
-        for src, tol, label in (("mujoco", TOL_MUJOCO_KIN, "MuJoCo"), ("fd", TOL_FD, "IK finite differences")):
-            claim("fig07", "max |qdot(eq 8) - simulation|", _max_rel(df, "diff{i}_" + src + "_m_s", "qdot{i}_eq8_m_s"),
-                  label, tol, why + label)
+        for src, tol, label in (
+            ("mujoco", TOL_MUJOCO_KIN, "MuJoCo"),
+            ("fd", TOL_FD, "IK finite differences"),
+        ):
+            claim(
+                "fig07",
+                "max |qdot(eq 8) - simulation|",
+                _max_rel(df, "diff{i}_" + src + "_m_s", "qdot{i}_eq8_m_s"),
+                label,
+                tol,
+                why + label,
+            )
     if (figdir / "fig08_acceleration_check.csv").exists():
         df = pd.read_csv(figdir / "fig08_acceleration_check.csv")
-        for src, tol, label in (("mujoco", TOL_MUJOCO_KIN, "MuJoCo"), ("fd", TOL_FD, "IK finite differences")):
-            claim("fig08", "max |qddot(eq 13) - simulation|",
-                  _max_rel(df, "diff{i}_" + src + "_m_s2", "qddot{i}_eq13_m_s2"), f"{label}, H with 1/l", tol,
-                  why + label)
-        claim("fig08", "max |qddot(eq 13) - simulation|",
-              _max_rel(df, "diff{i}_printed_h_m_s2", "qddot{i}_eq13_m_s2"), "eq 13 as printed (H without 1/l)",
-              TOL_FD, "the printed H lacks 1/l (docs/zhao2017_3p4s.md#g8); vs IK finite differences and MuJoCo",
-              evidence=f"{KEY}/extra_dynamics_slips.md")
+        for src, tol, label in (
+            ("mujoco", TOL_MUJOCO_KIN, "MuJoCo"),
+            ("fd", TOL_FD, "IK finite differences"),
+        ):
+            claim(
+                "fig08",
+                "max |qddot(eq 13) - simulation|",
+                _max_rel(df, "diff{i}_" + src + "_m_s2", "qddot{i}_eq13_m_s2"),
+                f"{label}, H with 1/l",
+                tol,
+                why + label,
+            )
+        claim(
+            "fig08",
+            "max |qddot(eq 13) - simulation|",
+            _max_rel(df, "diff{i}_printed_h_m_s2", "qddot{i}_eq13_m_s2"),
+            "eq 13 as printed (H without 1/l)",
+            TOL_FD,
+            "the printed H lacks 1/l (docs/zhao2017_3p4s.md#g8); vs IK finite differences and MuJoCo",
+            evidence=f"{KEY}/extra_dynamics_slips.md",
+        )
     if (figdir / "fig10_mujoco_forces.csv").exists():
         df = pd.read_csv(figdir / "fig10_mujoco_forces.csv")
-        for model, what in (("equivalent", "one equivalent rod"), ("parallelogram", "two side rods")):
-            claim("fig10", "max |f(eq 23) - simulation|",
-                  _max_rel(df, "diff{i}_mujoco_" + model + "_N", "f{i}_ours_N"),
-                  f"corrected eqs vs MuJoCo, {what} per limb", TOL_MUJOCO_FORCE, why + f"MuJoCo, {what} per limb")
-        claim("fig10", "max |f(eq 23) - simulation|", _max_rel(df, "diff{i}_printed_N", "f{i}_ours_N"),
-              "eqs 13, 21, 23 as printed vs MuJoCo", TOL_MUJOCO_FORCE,
-              "printed slips: eq 13 H without 1/l, eq 21 gravity-moment term, eq 23 without factor 2 "
-              "(extra_dynamics_slips.md)", evidence=f"{KEY}/extra_dynamics_slips.md")
+        for model, what in (
+            ("equivalent", "one equivalent rod"),
+            ("parallelogram", "two side rods"),
+        ):
+            claim(
+                "fig10",
+                "max |f(eq 23) - simulation|",
+                _max_rel(df, "diff{i}_mujoco_" + model + "_N", "f{i}_ours_N"),
+                f"corrected eqs vs MuJoCo, {what} per limb",
+                TOL_MUJOCO_FORCE,
+                why + f"MuJoCo, {what} per limb",
+            )
+        claim(
+            "fig10",
+            "max |f(eq 23) - simulation|",
+            _max_rel(df, "diff{i}_printed_N", "f{i}_ours_N"),
+            "eqs 13, 21, 23 as printed vs MuJoCo",
+            TOL_MUJOCO_FORCE,
+            "printed slips: eq 13 H without 1/l, eq 21 gravity-moment term, eq 23 without factor 2 "
+            "(extra_dynamics_slips.md)",
+            evidence=f"{KEY}/extra_dynamics_slips.md",
+        )
     return out
 
 
@@ -657,12 +1059,37 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
         )
     checks = []
     for name, diff, refcol, what in (
-        ("fig07_velocity_check.csv", "diff{i}_fd_m_s", "qdot{i}_eq8_m_s", "eq 8 vs IK finite differences"),
+        (
+            "fig07_velocity_check.csv",
+            "diff{i}_fd_m_s",
+            "qdot{i}_eq8_m_s",
+            "eq 8 vs IK finite differences",
+        ),
         ("fig07_velocity_check.csv", "diff{i}_mujoco_m_s", "qdot{i}_eq8_m_s", "eq 8 vs MuJoCo"),
-        ("fig08_acceleration_check.csv", "diff{i}_fd_m_s2", "qddot{i}_eq13_m_s2", "eq 13 vs IK finite differences"),
-        ("fig08_acceleration_check.csv", "diff{i}_mujoco_m_s2", "qddot{i}_eq13_m_s2", "eq 13 vs MuJoCo"),
-        ("fig10_mujoco_forces.csv", "diff{i}_mujoco_equivalent_N", "f{i}_ours_N", "forces vs MuJoCo (equivalent rods)"),
-        ("fig10_mujoco_forces.csv", "diff{i}_mujoco_parallelogram_N", "f{i}_ours_N", "forces vs MuJoCo (6 side rods)"),
+        (
+            "fig08_acceleration_check.csv",
+            "diff{i}_fd_m_s2",
+            "qddot{i}_eq13_m_s2",
+            "eq 13 vs IK finite differences",
+        ),
+        (
+            "fig08_acceleration_check.csv",
+            "diff{i}_mujoco_m_s2",
+            "qddot{i}_eq13_m_s2",
+            "eq 13 vs MuJoCo",
+        ),
+        (
+            "fig10_mujoco_forces.csv",
+            "diff{i}_mujoco_equivalent_N",
+            "f{i}_ours_N",
+            "forces vs MuJoCo (equivalent rods)",
+        ),
+        (
+            "fig10_mujoco_forces.csv",
+            "diff{i}_mujoco_parallelogram_N",
+            "f{i}_ours_N",
+            "forces vs MuJoCo (6 side rods)",
+        ),
     ):
         if (figdir / name).exists():
             checks.append(f"{what} {_max_rel(pd.read_csv(figdir / name), diff, refcol):.1e}")
@@ -698,7 +1125,7 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
                 f"static load at the centre by {r['static_centre_change_N']:+.2f} N; power-balance error "
                 f"{r['power_balance_rel']:.1e}, distance to MuJoCo {r['mujoco_force_rel']:.1e} of peak"
             )
-        parts.append("Slips of the printed dynamics (`extra_dynamics_slips.md`): " + "; ".join(items) + ".")
+        parts.append(
+            "Slips of the printed dynamics (`extra_dynamics_slips.md`): " + "; ".join(items) + "."
+        )
     return "\n\n".join(parts)
-
-

@@ -15,36 +15,50 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from parakin.claims import Claim, printed_value
 from parakin.config import rng, seed_for
 from parakin.io import atomic_write_text, atomic_writer, write_csv, write_table
 from parakin.mechanisms import P3P4S
-from parakin.papers.zhao2017_3p4s.common import KEY
+from parakin.papers.zhao2017_3p4s.common import KEY, artefact
 from parakin.papers.zhao2017_3p4s.kinematics import table1_inputs
-from parakin.claims import Claim, printed_value
+from parakin.registry import EXACT, ITERATIVE, Tolerance
 from parakin.solvers import solve_fk
 from parakin.workspace import sample_reachable
-from parakin.registry import EXACT, ITERATIVE, Tolerance
-from parakin.papers.zhao2017_3p4s.common import artefact
 
 #: LM training follows another trajectory once a BLAS kernel rounds one product differently; the
 #: trained network's test error is stable to within a factor of two, its weights and log are not
-TRAINING = Tolerance("statistical", 0.0, 0.0,
-                     "network training: the per-epoch log is one chaotic trajectory (not compared); the "
-                     "test error of the trained network is compared within a factor of two",
-                     columns={"test_rms_m": (1.0, 0.0), "test_max_m": (1.0, 0.0), "test_p95_m": (1.0, 0.0),
-                              "samples": (0.0, 0.0), "hidden": (0.0, 0.0), "weights": (0.0, 0.0)},
-                     files=("extra_bp_training.csv", "extra_bp_training.png"))
+TRAINING = Tolerance(
+    "statistical",
+    0.0,
+    0.0,
+    "network training: the per-epoch log is one chaotic trajectory (not compared); the "
+    "test error of the trained network is compared within a factor of two",
+    columns={
+        "test_rms_m": (1.0, 0.0),
+        "test_max_m": (1.0, 0.0),
+        "test_p95_m": (1.0, 0.0),
+        "samples": (0.0, 0.0),
+        "hidden": (0.0, 0.0),
+        "weights": (0.0, 0.0),
+    },
+    files=("extra_bp_training.csv", "extra_bp_training.png"),
+)
 #: the hybrid's quasi-Newton refinement converges to the same root from any nearby network guess
-HYBRID = ITERATIVE.but("the network's guess differs with the training (not compared); the refined pose "
-                       "converges to eps = 1e-7 in the step, far below 1e-9 m in the pose",
-                       skip=("guess_x", "guess_y", "guess_z", "e3_guess", "e3"),
-                       columns={"iterations": (0.0, 1.0)})
+HYBRID = ITERATIVE.but(
+    "the network's guess differs with the training (not compared); the refined pose "
+    "converges to eps = 1e-7 in the step, far below 1e-9 m in the pose",
+    skip=("guess_x", "guess_y", "guess_z", "e3_guess", "e3"),
+    columns={"iterations": (0.0, 1.0)},
+)
 #: solver statistics over seeded random inputs; PSO rows are chaotic searches
-SOLVER_STATS = Tolerance("statistical", 0.0, 0.0,
-                         "solver statistics: success rates within 5 points (PSO is a chaotic search), "
-                         "median iterations within one; errors at round-off level and extremes not compared",
-                         columns={"n_accuracy": (0.0, 0.0), "success_rate": (0.0, 0.05),
-                                  "median_nit": (0.0, 1.0)})
+SOLVER_STATS = Tolerance(
+    "statistical",
+    0.0,
+    0.0,
+    "solver statistics: success rates within 5 points (PSO is a chaotic search), "
+    "median iterations within one; errors at round-off level and extremes not compared",
+    columns={"n_accuracy": (0.0, 0.0), "success_rate": (0.0, 0.05), "median_nit": (0.0, 1.0)},
+)
 
 PAPER_TIME_MS = 20.0  # §1.1: "求解效率在20 ms以内"
 
@@ -65,7 +79,13 @@ def _mech() -> P3P4S:
 
 
 # ---------------------------------------------------------------------------------- samples
-@artefact("samples", outputs=[], generated=["bp_samples.npz"], config=["zhao2017_3p4s.fk"], tolerance=EXACT)
+@artefact(
+    "samples",
+    outputs=[],
+    generated=["bp_samples.npz"],
+    config=["zhao2017_3p4s.fk"],
+    tolerance=EXACT,
+)
 def samples(config: dict, outdir: Path) -> list[Path]:
     """Training samples: poses uniform in the workspace box, strokes by the IK (eq 5).
 
@@ -81,19 +101,36 @@ def samples(config: dict, outdir: Path) -> list[Path]:
 
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as fh:
-            np.savez(fh, poses=poses, strokes=strokes, bounds_low=lo, bounds_high=hi,
-                     seed=seed_for(config, f"{KEY}.samples"), count=len(poses),
-                     parameters=json.dumps(mech.parameters()))
+            np.savez(
+                fh,
+                poses=poses,
+                strokes=strokes,
+                bounds_low=lo,
+                bounds_high=hi,
+                seed=seed_for(config, f"{KEY}.samples"),
+                count=len(poses),
+                parameters=json.dumps(mech.parameters()),
+            )
 
     return [atomic_writer(path, write)]
 
 
 # ---------------------------------------------------------------------------------- training
-@artefact("train", outputs=["extra_bp_accuracy.csv", "extra_bp_accuracy.md", "extra_bp_training.csv",
-                            "extra_bp_training.png"],
-          generated=["bp_network.npz", "bp_training_log.csv", "bp_training_summary.json"],
-          needs=["zhao2017_3p4s:samples"], config=["zhao2017_3p4s.fk"], tolerance=TRAINING,
-          threads=2, resources={"runtime": 30, "mem_mb": 2000})
+@artefact(
+    "train",
+    outputs=[
+        "extra_bp_accuracy.csv",
+        "extra_bp_accuracy.md",
+        "extra_bp_training.csv",
+        "extra_bp_training.png",
+    ],
+    generated=["bp_network.npz", "bp_training_log.csv", "bp_training_summary.json"],
+    needs=["zhao2017_3p4s:samples"],
+    config=["zhao2017_3p4s.fk"],
+    tolerance=TRAINING,
+    threads=2,
+    resources={"runtime": 30, "mem_mb": 2000},
+)
 def train(config: dict, outdir: Path) -> list[Path]:
     """The paper's BP network (3 strokes -> 10 tanh -> 3 coordinates) trained by
     Levenberg-Marquardt with MATLAB trainlm's rules; weights and log to the generated folder,
@@ -107,39 +144,76 @@ def train(config: dict, outdir: Path) -> list[Path]:
 
     def progress(epoch: int, train_mse: float, val_mse: float) -> None:
         if epoch % every == 0 or epoch == 1:
-            print(f"  train: LM epoch {epoch:4d}/{cfg['max_epochs']} ({100 * epoch // int(cfg['max_epochs'])} % of the "
-                  f"budget; stops earlier on validation): train mse {train_mse:.3e}, val mse {val_mse:.3e}",
-                  file=sys.stderr, flush=True)
+            print(
+                f"  train: LM epoch {epoch:4d}/{cfg['max_epochs']} ({100 * epoch // int(cfg['max_epochs'])} % of the "
+                f"budget; stops earlier on validation): train mse {train_mse:.3e}, val mse {val_mse:.3e}",
+                file=sys.stderr,
+                flush=True,
+            )
 
     def fit(strokes, poses, stream: str, report=None):
-        return train_lm(strokes, poses, hidden=cfg["hidden"], seed=seed_for(config, stream),
-                        max_epochs=cfg["max_epochs"], val_fraction=cfg["val_fraction"],
-                        test_fraction=cfg["test_fraction"], progress=report)
+        return train_lm(
+            strokes,
+            poses,
+            hidden=cfg["hidden"],
+            seed=seed_for(config, stream),
+            max_epochs=cfg["max_epochs"],
+            val_fraction=cfg["val_fraction"],
+            test_fraction=cfg["test_fraction"],
+            progress=report,
+        )
 
     net, log, summary = fit(data["strokes"], data["poses"], f"{KEY}.train", progress)
     paths = [net.save(network_path(config))]
     paths.append(write_csv(log, generated(config) / "bp_training_log.csv"))
-    paths.append(atomic_write_text(generated(config) / "bp_training_summary.json", json.dumps(summary, indent=2, sort_keys=True) + "\n"))
+    paths.append(
+        atomic_write_text(
+            generated(config) / "bp_training_summary.json",
+            json.dumps(summary, indent=2, sort_keys=True) + "\n",
+        )
+    )
     keys = ("epochs", "stop_reason", "best_epoch", "test_rms_m", "test_max_m", "test_p95_m")
     lo, hi = data["bounds_low"], data["bounds_high"]
-    rows = [{"box": "workspace (pipeline's network)", "low": _fmt_box(lo), "high": _fmt_box(hi),
-             "samples": int(data["count"]), **{k: summary[k] for k in keys}}]
+    rows = [
+        {
+            "box": "workspace (pipeline's network)",
+            "low": _fmt_box(lo),
+            "high": _fmt_box(hi),
+            "samples": int(data["count"]),
+            **{k: summary[k] for k in keys},
+        }
+    ]
     # The paper does not say where it sampled; the network's accuracy depends on it. The same
     # training on smaller boxes shows how (one network per box, same sample count and settings).
     mech = _mech()
     for box in cfg["accuracy_boxes"]:
-        poses = sample_reachable(mech, cfg["samples"], rng(config, f"{KEY}.samples.{box['name']}"),
-                                 bounds=(box["low"], box["high"]))
+        poses = sample_reachable(
+            mech,
+            cfg["samples"],
+            rng(config, f"{KEY}.samples.{box['name']}"),
+            bounds=(box["low"], box["high"]),
+        )
         _, _, s_box = fit(mech.ik(poses), poses, f"{KEY}.train.{box['name']}")
-        rows.append({"box": box["name"], "low": _fmt_box(box["low"]), "high": _fmt_box(box["high"]),
-                     "samples": len(poses), **{k: s_box[k] for k in keys}})
+        rows.append(
+            {
+                "box": box["name"],
+                "low": _fmt_box(box["low"]),
+                "high": _fmt_box(box["high"]),
+                "samples": len(poses),
+                **{k: s_box[k] for k in keys},
+            }
+        )
     acc = pd.DataFrame(rows)
     acc.insert(4, "hidden", cfg["hidden"])
     acc.insert(5, "weights", net.n_weights)
-    paths += write_table(acc, outdir / "extra_bp_accuracy", title="BP network accuracy on held-out test sets",
-                         notes="Errors: |predicted - true| platform position (m, 3-D) on samples the training never saw "
-                               "(paper §1.1: 'output accuracy at the 10^-4 level', sampling region not stated). Row 1 is "
-                               "the network the hybrid solver uses; the others retrain on smaller boxes of poses (m).")
+    paths += write_table(
+        acc,
+        outdir / "extra_bp_accuracy",
+        title="BP network accuracy on held-out test sets",
+        notes="Errors: |predicted - true| platform position (m, 3-D) on samples the training never saw "
+        "(paper §1.1: 'output accuracy at the 10^-4 level', sampling region not stated). Row 1 is "
+        "the network the hybrid solver uses; the others retrain on smaller boxes of poses (m).",
+    )
     paths += _training_figure(log, outdir)
     return paths
 
@@ -176,8 +250,13 @@ def _median_time_ms(fn, repeats: int) -> float:
     return float(np.median(times) * 1e3)
 
 
-@artefact("table2", outputs=["table2.csv", "table2.md"], needs=["zhao2017_3p4s:train"], config=["zhao2017_3p4s.fk"],
-          tolerance=HYBRID)
+@artefact(
+    "table2",
+    outputs=["table2.csv", "table2.md"],
+    needs=["zhao2017_3p4s:train"],
+    config=["zhao2017_3p4s.fk"],
+    tolerance=HYBRID,
+)
 def table2(config: dict, outdir: Path) -> list[Path]:
     """Table 2: the hybrid FK of each Table 1 case, from the exact IK strokes of its pose.
 
@@ -195,41 +274,82 @@ def table2(config: dict, outdir: Path) -> list[Path]:
     for k, pose in enumerate(poses):
         q = mech.ik(pose)  # exact strokes: the printed ones are rounded to 0.01 m
         guess = net.predict(q)
-        res = solve_fk(mech, q, method="hybrid", network=net, eps=cfg["epsilon"], tol=0.0, maxiter=cfg["maxiter"])
-        t_ms = _median_time_ms(lambda: solve_fk(mech, q, method="hybrid", network=net, eps=cfg["epsilon"],
-                                                tol=0.0, maxiter=cfg["maxiter"]), cfg["timing_repeats"])
-        rows.append({
-            "case": k + 1, "target_x": pose[0], "target_y": pose[1], "target_z": pose[2],
-            "l1": q[0], "l2": q[1], "l3": q[2],
-            "guess_x": guess[0], "guess_y": guess[1], "guess_z": guess[2],
-            "e3_guess": float(np.mean(np.abs(guess - pose))),
-            "solved_x": res.x[0], "solved_y": res.x[1], "solved_z": res.x[2],
-            "e3": float(np.mean(np.abs(res.x - pose))),
-            "iterations": int(res.nit), "converged": bool(res.success), "time_ms": t_ms,
-        })
+        res = solve_fk(
+            mech,
+            q,
+            method="hybrid",
+            network=net,
+            eps=cfg["epsilon"],
+            tol=0.0,
+            maxiter=cfg["maxiter"],
+        )
+        t_ms = _median_time_ms(
+            lambda q=q: solve_fk(
+                mech,
+                q,
+                method="hybrid",
+                network=net,
+                eps=cfg["epsilon"],
+                tol=0.0,
+                maxiter=cfg["maxiter"],
+            ),
+            cfg["timing_repeats"],
+        )
+        rows.append(
+            {
+                "case": k + 1,
+                "target_x": pose[0],
+                "target_y": pose[1],
+                "target_z": pose[2],
+                "l1": q[0],
+                "l2": q[1],
+                "l3": q[2],
+                "guess_x": guess[0],
+                "guess_y": guess[1],
+                "guess_z": guess[2],
+                "e3_guess": float(np.mean(np.abs(guess - pose))),
+                "solved_x": res.x[0],
+                "solved_y": res.x[1],
+                "solved_z": res.x[2],
+                "e3": float(np.mean(np.abs(res.x - pose))),
+                "iterations": int(res.nit),
+                "converged": bool(res.success),
+                "time_ms": t_ms,
+            }
+        )
     tab = pd.DataFrame(rows)
     ref_e3 = [printed_value(_ref(), "table2", f"case{k}.e3") for k in range(1, 6)]
     ref_it = [printed_value(_ref(), "table2", f"case{k}.iterations") for k in range(1, 6)]
-    wide = pd.DataFrame({
-        "case": tab["case"],
-        "target (x, y, z) / m": [f"({r.target_x:g}, {r.target_y:g}, {r.target_z:g})" for r in tab.itertuples()],
-        "network guess E_3 / m": [f"{v:.2e}" for v in tab["e3_guess"]],
-        "solved x_p / m": [f"{v:.10f}" for v in tab["solved_x"]],
-        "solved y_p / m": [f"{v:.10f}" for v in tab["solved_y"]],
-        "solved z_p / m": [f"{v:.10f}" for v in tab["solved_z"]],
-        "E_3 / m (paper)": ref_e3,
-        "E_3 / m (ours)": [f"{v:.2e}" for v in tab["e3"]],
-        "iterations (paper)": ref_it,
-        "iterations (ours)": tab["iterations"],
-        "time / ms (ours)": [f"{v:.3f}" for v in tab["time_ms"]],
-    })
+    wide = pd.DataFrame(
+        {
+            "case": tab["case"],
+            "target (x, y, z) / m": [
+                f"({r.target_x:g}, {r.target_y:g}, {r.target_z:g})" for r in tab.itertuples()
+            ],
+            "network guess E_3 / m": [f"{v:.2e}" for v in tab["e3_guess"]],
+            "solved x_p / m": [f"{v:.10f}" for v in tab["solved_x"]],
+            "solved y_p / m": [f"{v:.10f}" for v in tab["solved_y"]],
+            "solved z_p / m": [f"{v:.10f}" for v in tab["solved_z"]],
+            "E_3 / m (paper)": ref_e3,
+            "E_3 / m (ours)": [f"{v:.2e}" for v in tab["e3"]],
+            "iterations (paper)": ref_it,
+            "iterations (ours)": tab["iterations"],
+            "time / ms (ours)": [f"{v:.3f}" for v in tab["time_ms"]],
+        }
+    )
     notes = (
         f"Hybrid FK: BP network guess, then Broyden's quasi-Newton method until the step is below eps = {cfg['epsilon']:g} m "
         "(the paper's 'iteration error'). Inputs: the exact IK strokes of each Table 1 pose (stated geometry). "
         "E_3 = mean |pose error| over x, y, z. Times: median of single solves on this machine "
         "(the paper: < 20 ms at 3.2 GHz; its per-row times are lost in the extraction)."
     )
-    return write_table(tab, outdir / "table2", title="Table 2 — hybrid forward kinematics", notes=notes, markdown=wide)
+    return write_table(
+        tab,
+        outdir / "table2",
+        title="Table 2 — hybrid forward kinematics",
+        notes=notes,
+        markdown=wide,
+    )
 
 
 def _ref() -> pd.DataFrame:
@@ -239,8 +359,13 @@ def _ref() -> pd.DataFrame:
 
 
 # ---------------------------------------------------------------------------------- benchmark
-@artefact("fk_benchmark", outputs=["fk_benchmark.csv", "fk_benchmark.md"], needs=["zhao2017_3p4s:train"],
-          config=["zhao2017_3p4s.fk", "zhao2017_3p4s.bench"], tolerance=SOLVER_STATS)
+@artefact(
+    "fk_benchmark",
+    outputs=["fk_benchmark.csv", "fk_benchmark.md"],
+    needs=["zhao2017_3p4s:train"],
+    config=["zhao2017_3p4s.fk", "zhao2017_3p4s.bench"],
+    tolerance=SOLVER_STATS,
+)
 def fk_benchmark(config: dict, outdir: Path) -> list[Path]:
     """Every FK solver on the same random reachable strokes (our addition to §1.1)."""
     from parakin.bench import SolverSpec, bench_fk
@@ -249,14 +374,25 @@ def fk_benchmark(config: dict, outdir: Path) -> list[Path]:
     cfg = config[KEY]["bench"]
     eps = config[KEY]["fk"]["epsilon"]
     mech = _mech()
-    net = load_network(network_path(config), fallback=True)  # `parakin bench` before any pipeline run
+    net = load_network(
+        network_path(config), fallback=True
+    )  # `parakin bench` before any pipeline run
     gen = rng(config, f"{KEY}.bench")
     x1 = sample_reachable(mech, cfg["n_single"], gen)
     x2 = sample_reachable(mech, cfg["n_batch"], gen)
     specs = [
-        SolverSpec("hybrid (network + Broyden, eps 1e-7)", "hybrid", {"network": net, "eps": eps}, start="network"),
-        SolverSpec("hybrid (network + BFGS, eps 1e-7)", "hybrid", {"network": net, "eps": eps, "refine": "bfgs"},
-                   start="network"),
+        SolverSpec(
+            "hybrid (network + Broyden, eps 1e-7)",
+            "hybrid",
+            {"network": net, "eps": eps},
+            start="network",
+        ),
+        SolverSpec(
+            "hybrid (network + BFGS, eps 1e-7)",
+            "hybrid",
+            {"network": net, "eps": eps, "refine": "bfgs"},
+            start="network",
+        ),
         SolverSpec("quasi-Newton (BFGS) from home", "bfgs"),
         SolverSpec("Broyden from home", "broyden"),
         SolverSpec("Newton-Raphson from home", "newton"),
@@ -264,29 +400,51 @@ def fk_benchmark(config: dict, outdir: Path) -> list[Path]:
         SolverSpec("scipy.optimize.root (hybr), loop", "scipy-root", batched=False),
         SolverSpec("closed form (three spheres)", "closed-form", start="-"),
     ]
-    df = bench_fk(mech, specs, (mech.ik(x1), x1), (mech.ik(x2), x2), tol=cfg["tol"], maxiter=cfg["maxiter"],
-                  success_tol=cfg["success_tol"], repeats=cfg["repeats"],
-                  progress=lambda label: print(f"  bench: {label}", file=sys.stderr))
+    df = bench_fk(
+        mech,
+        specs,
+        (mech.ik(x1), x1),
+        (mech.ik(x2), x2),
+        tol=cfg["tol"],
+        maxiter=cfg["maxiter"],
+        success_tol=cfg["success_tol"],
+        repeats=cfg["repeats"],
+        progress=lambda label: print(f"  bench: {label}", file=sys.stderr),
+    )
     df["speedup_vs_paper_20ms"] = PAPER_TIME_MS * 1e3 / df["median_latency_us"]
-    md = pd.DataFrame({
-        "solver": df["solver"],
-        "success": [f"{v:.1%}" for v in df["success_rate"]],
-        "median / max error (m)": [f"{a:.1e} / {b:.1e}" for a, b in zip(df["median_err_m"], df["max_err_m"])],
-        "iterations (median / max)": [f"{a:g} / {b}" for a, b in zip(df["median_nit"], df["max_nit"])],
-        "single solve (µs, median)": [f"{v:.0f}" for v in df["median_latency_us"]],
-        "batched (solves/s)": [f"{v:.3g}" + ("" if b else " (loop)") for v, b in zip(df["throughput_per_s"], df["batched"])],
-        "× scipy root (single)": [f"{v:.2f}" for v in df["speedup_single"]],
-        "× scipy root (per solve, batched)": [f"{v:.3g}" for v in df["speedup_per_solve"]],
-        "× paper's 20 ms": [f"{v:.0f}" for v in df["speedup_vs_paper_20ms"]],
-    })
+    md = pd.DataFrame(
+        {
+            "solver": df["solver"],
+            "success": [f"{v:.1%}" for v in df["success_rate"]],
+            "median / max error (m)": [
+                f"{a:.1e} / {b:.1e}" for a, b in zip(df["median_err_m"], df["max_err_m"])
+            ],
+            "iterations (median / max)": [
+                f"{a:g} / {b}" for a, b in zip(df["median_nit"], df["max_nit"])
+            ],
+            "single solve (µs, median)": [f"{v:.0f}" for v in df["median_latency_us"]],
+            "batched (solves/s)": [
+                f"{v:.3g}" + ("" if b else " (loop)")
+                for v, b in zip(df["throughput_per_s"], df["batched"])
+            ],
+            "× scipy root (single)": [f"{v:.2f}" for v in df["speedup_single"]],
+            "× scipy root (per solve, batched)": [f"{v:.3g}" for v in df["speedup_per_solve"]],
+            "× paper's 20 ms": [f"{v:.0f}" for v in df["speedup_vs_paper_20ms"]],
+        }
+    )
     notes = (
         f"Same seeded random reachable strokes for every solver: {cfg['n_single']} solved one per call (latency), "
         f"{cfg['n_batch']} in one batched call (accuracy, throughput; best of {cfg['repeats']}). Success = converged "
         f"and within {cfg['success_tol']:g} m of the true pose. Starts: the home pose (0, 0, 0.592) m, or the network's "
         "guess for the hybrid. Timings are wall-clock on this machine; ratios are measured in the same run."
     )
-    return write_table(df, outdir / "fk_benchmark", title="Forward kinematics of the 3-P(4S): every solver",
-                       notes=notes, markdown=md)
+    return write_table(
+        df,
+        outdir / "fk_benchmark",
+        title="Forward kinematics of the 3-P(4S): every solver",
+        notes=notes,
+        markdown=md,
+    )
 
 
 # ---------------------------------------------------------------------------------- report
@@ -296,56 +454,135 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     if t2.exists():
         tab = pd.read_csv(t2)
         for r in tab.itertuples():
-            out.append(Claim(KEY, "table2", f"case{r.case}.e3", printed_value(ref, "table2", f"case{r.case}.e3"),
-                             r.e3, "m", "hybrid (Broyden)",
-                             reason="ours converges far below the paper's E_3 in as many iterations; why the paper's "
-                                    "last iterate stayed at ~5e-8 (its solver is not printed) is not shown"))
-            out.append(Claim(KEY, "table2", f"case{r.case}.iterations",
-                             printed_value(ref, "table2", f"case{r.case}.iterations"), r.iterations, "1",
-                             "hybrid (Broyden)", reason="iteration counts within one (a step at the threshold)"))
+            out.append(
+                Claim(
+                    KEY,
+                    "table2",
+                    f"case{r.case}.e3",
+                    printed_value(ref, "table2", f"case{r.case}.e3"),
+                    r.e3,
+                    "m",
+                    "hybrid (Broyden)",
+                    reason="ours converges far below the paper's E_3 in as many iterations; why the paper's "
+                    "last iterate stayed at ~5e-8 (its solver is not printed) is not shown",
+                )
+            )
+            out.append(
+                Claim(
+                    KEY,
+                    "table2",
+                    f"case{r.case}.iterations",
+                    printed_value(ref, "table2", f"case{r.case}.iterations"),
+                    r.iterations,
+                    "1",
+                    "hybrid (Broyden)",
+                    reason="iteration counts within one (a step at the threshold)",
+                )
+            )
             for ax in "xyz":
                 q = f"case{r.case}.solved.{ax}_p"
-                out.append(Claim(KEY, "table2", q, printed_value(ref, "table2", q), float(getattr(r, f"solved_{ax}")),
-                                 "m", "hybrid (Broyden)", evidence=f"{KEY}/table2.md",
-                                 reason="tolerance = the paper's eps 1e-7: a solve stopped there fixes the position to "
-                                        "about eps; a larger difference contradicts the row's own printed E_3 (see the "
-                                        "reference note)"))
+                out.append(
+                    Claim(
+                        KEY,
+                        "table2",
+                        q,
+                        printed_value(ref, "table2", q),
+                        float(getattr(r, f"solved_{ax}")),
+                        "m",
+                        "hybrid (Broyden)",
+                        evidence=f"{KEY}/table2.md",
+                        reason="tolerance = the paper's eps 1e-7: a solve stopped there fixes the position to "
+                        "about eps; a larger difference contradicts the row's own printed E_3 (see the "
+                        "reference note)",
+                    )
+                )
         for art in ("text_s1.1", "abstract"):
-            out.append(Claim(KEY, art, "fk_accuracy", printed_value(ref, art, "fk_accuracy"),
-                             float(tab["e3"].max()), "m", "max E_3 over Table 2"))
-            out.append(Claim(KEY, art, "fk_iterations", printed_value(ref, art, "fk_iterations"),
-                             float(tab["iterations"].max()), "1", "max over Table 2"))
-            out.append(Claim(KEY, art, "fk_time_max", printed_value(ref, art, "fk_time_max"),
-                             float(tab["time_ms"].max()), "ms", "max median single-solve time, this machine",
-                             reason="a wall-clock time: load on a shared machine only lengthens it, and the bound "
-                                    "must be met 10 times over (declared margin)"))
+            out.append(
+                Claim(
+                    KEY,
+                    art,
+                    "fk_accuracy",
+                    printed_value(ref, art, "fk_accuracy"),
+                    float(tab["e3"].max()),
+                    "m",
+                    "max E_3 over Table 2",
+                )
+            )
+            out.append(
+                Claim(
+                    KEY,
+                    art,
+                    "fk_iterations",
+                    printed_value(ref, art, "fk_iterations"),
+                    float(tab["iterations"].max()),
+                    "1",
+                    "max over Table 2",
+                )
+            )
+            out.append(
+                Claim(
+                    KEY,
+                    art,
+                    "fk_time_max",
+                    printed_value(ref, art, "fk_time_max"),
+                    float(tab["time_ms"].max()),
+                    "ms",
+                    "max median single-solve time, this machine",
+                    reason="a wall-clock time: load on a shared machine only lengthens it, and the bound "
+                    "must be met 10 times over (declared margin)",
+                )
+            )
     acc = figdir / "extra_bp_accuracy.csv"
     if acc.exists():
         a = pd.read_csv(acc).iloc[0]
-        out.append(Claim(KEY, "text_s1.1", "network_accuracy", printed_value(ref, "text_s1.1", "network_accuracy"),
-                         float(a["test_rms_m"]), "m", "test-set RMS error",
-                         reason=f"training stopped at its epoch limit ({a['stop_reason']}, best epoch {int(a['best_epoch'])} "
-                                f"of {int(a['epochs'])}: still improving); smaller sampling boxes give smaller errors "
-                                "(extra_bp_accuracy.md) but neither the region nor convergence is shown to be the cause"))
+        out.append(
+            Claim(
+                KEY,
+                "text_s1.1",
+                "network_accuracy",
+                printed_value(ref, "text_s1.1", "network_accuracy"),
+                float(a["test_rms_m"]),
+                "m",
+                "test-set RMS error",
+                reason=f"training stopped at its epoch limit ({a['stop_reason']}, best epoch {int(a['best_epoch'])} "
+                f"of {int(a['epochs'])}: still improving); smaller sampling boxes give smaller errors "
+                "(extra_bp_accuracy.md) but neither the region nor convergence is shown to be the cause",
+            )
+        )
     bench = figdir / "fk_benchmark.csv"
     if bench.exists():
         b = pd.read_csv(bench).set_index("method")
         h, qn = b.loc["hybrid"], b.loc["broyden"]
         h = h.iloc[0] if isinstance(h, pd.DataFrame) else h
-        out.append(Claim(KEY, "conclusion", "hybrid.iteration_ratio_vs_quasi_newton",
-                         printed_value(ref, "conclusion", "hybrid.iteration_ratio_vs_quasi_newton"),
-                         float(qn["median_nit"] / h["median_nit"]), "1",
-                         f"median iterations: Broyden from home {qn['median_nit']:g} / hybrid {h['median_nit']:g}",
-                         reason="iteration counts, not wall-clock: the network's guess saves quasi-Newton iterations"))
+        out.append(
+            Claim(
+                KEY,
+                "conclusion",
+                "hybrid.iteration_ratio_vs_quasi_newton",
+                printed_value(ref, "conclusion", "hybrid.iteration_ratio_vs_quasi_newton"),
+                float(qn["median_nit"] / h["median_nit"]),
+                "1",
+                f"median iterations: Broyden from home {qn['median_nit']:g} / hybrid {h['median_nit']:g}",
+                reason="iteration counts, not wall-clock: the network's guess saves quasi-Newton iterations",
+            )
+        )
         worst = b[(b["start"] == "home") & b.index.isin(["broyden", "bfgs"])]
         fail = 1.0 - float(worst["success_rate"].min())
-        out.append(Claim(KEY, "conclusion", "quasi_newton.failure_rate_from_home",
-                         printed_value(ref, "conclusion", "quasi_newton.failure_rate_from_home"), fail, "1",
-                         f"largest failure rate of quasi-Newton from the home pose ({', '.join(worst.index)}; "
-                         f"{int(worst['n_accuracy'].min())} reachable inputs each)",
-                         evidence=f"{KEY}/fk_benchmark.md",
-                         reason="every quasi-Newton start from home converges on this mechanism's workspace: the "
-                                "hybrid's lower start sensitivity has nothing to improve on"))
+        out.append(
+            Claim(
+                KEY,
+                "conclusion",
+                "quasi_newton.failure_rate_from_home",
+                printed_value(ref, "conclusion", "quasi_newton.failure_rate_from_home"),
+                fail,
+                "1",
+                f"largest failure rate of quasi-Newton from the home pose ({', '.join(worst.index)}; "
+                f"{int(worst['n_accuracy'].min())} reachable inputs each)",
+                evidence=f"{KEY}/fk_benchmark.md",
+                reason="every quasi-Newton start from home converges on this mechanism's workspace: the "
+                "hybrid's lower start sensitivity has nothing to improve on",
+            )
+        )
     return out
 
 
@@ -386,5 +623,3 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
             "for a loop over scipy.optimize.root (`zhao2017_3p4s/fk_benchmark.md`)."
         )
     return "\n\n".join(parts)
-
-

@@ -9,13 +9,11 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares, minimize
 
+from parakin.claims import Claim, load_reference, printed_value
 from parakin.io import write_csv, write_table
 from parakin.mechanisms import P3P4S
-from parakin.claims import Claim, load_reference, printed_value
-
-from parakin.papers.zhao2017_3p4s.common import KEY
+from parakin.papers.zhao2017_3p4s.common import KEY, artefact
 from parakin.registry import DESCRIPTIVE, EXACT, ROUNDING
-from parakin.papers.zhao2017_3p4s.common import artefact
 
 HALF_DIGIT = 0.005  # Table 1 prints strokes to 0.01 m: half a unit of the last digit
 
@@ -25,9 +23,14 @@ def table1_inputs(ref: pd.DataFrame | None = None) -> tuple[np.ndarray, list[lis
     """Table 1's five poses (m) and printed strokes (strings, as printed) from the reference CSV."""
     ref = load_reference(KEY) if ref is None else ref
     poses = np.array(
-        [[float(printed_value(ref, "table1", f"case{k}.{c}")) for c in ("x_p", "y_p", "z_p")] for k in range(1, 6)]
+        [
+            [float(printed_value(ref, "table1", f"case{k}.{c}")) for c in ("x_p", "y_p", "z_p")]
+            for k in range(1, 6)
+        ]
     )
-    strokes = [[printed_value(ref, "table1", f"case{k}.l{j}") for j in (1, 2, 3)] for k in range(1, 6)]
+    strokes = [
+        [printed_value(ref, "table1", f"case{k}.l{j}") for j in (1, 2, 3)] for k in range(1, 6)
+    ]
     return poses, strokes
 
 
@@ -74,16 +77,22 @@ class GeometryFit:
         }
 
 
-def error_map(poses: np.ndarray, printed: np.ndarray, L: float, deltas: np.ndarray, phis: np.ndarray) -> np.ndarray:
+def error_map(
+    poses: np.ndarray, printed: np.ndarray, L: float, deltas: np.ndarray, phis: np.ndarray
+) -> np.ndarray:
     """Max |stroke error| (m) over Table 1 on a grid (len(phis), len(deltas)); inf = unreachable."""
     out = np.empty((len(phis), len(deltas)))
     for i, phi in enumerate(phis):
         for j, delta in enumerate(deltas):
-            out[i, j] = np.max(np.abs(stroke_errors(P3P4S.from_delta(delta, L, phi), poses, printed)))
+            out[i, j] = np.max(
+                np.abs(stroke_errors(P3P4S.from_delta(delta, L, phi), poses, printed))
+            )
     return out
 
 
-def fit_geometry(poses: np.ndarray, printed: np.ndarray, L: float, delta_range, phi_range_deg, grid: int) -> P3P4S:
+def fit_geometry(
+    poses: np.ndarray, printed: np.ndarray, L: float, delta_range, phi_range_deg, grid: int
+) -> P3P4S:
     """Least-squares fit of (delta, phi) to the printed strokes with ``L`` held fixed.
 
     A coarse grid (``grid`` points per axis, minimising the RMS error) seeds
@@ -100,9 +109,13 @@ def fit_geometry(poses: np.ndarray, printed: np.ndarray, L: float, delta_range, 
         e = stroke_errors(P3P4S.from_delta(v[0], L, v[1]), poses, printed).ravel()
         return np.where(np.isfinite(e), e, 1.0)
 
-    rms = np.array([[np.sqrt(np.mean(residuals(np.array([d, p])) ** 2)) for d in deltas] for p in phis])
+    rms = np.array(
+        [[np.sqrt(np.mean(residuals(np.array([d, p])) ** 2)) for d in deltas] for p in phis]
+    )
     i, j = np.unravel_index(np.argmin(rms), rms.shape)
-    fit = least_squares(residuals, x0=np.array([deltas[j], phis[i]]), bounds=(lo, hi), xtol=1e-14, ftol=1e-14)
+    fit = least_squares(
+        residuals, x0=np.array([deltas[j], phis[i]]), bounds=(lo, hi), xtol=1e-14, ftol=1e-14
+    )
     return P3P4S.from_delta(float(fit.x[0]), L, float(fit.x[1]))
 
 
@@ -112,16 +125,27 @@ def minimax_geometry(poses: np.ndarray, printed: np.ndarray, start: P3P4S) -> P3
     For data rounded to 0.01 m the natural consistency test is max error <= 0.005 m; the
     least-squares fit need not satisfy it even where a consistent geometry exists.
     """
-    def worst(v: np.ndarray) -> float:
-        return float(np.max(np.abs(stroke_errors(P3P4S.from_delta(v[0], start.L, v[1]), poses, printed))))
 
-    res = minimize(worst, x0=np.array([start.delta, start.phi]), method="Nelder-Mead",
-                   options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 4000})
+    def worst(v: np.ndarray) -> float:
+        return float(
+            np.max(np.abs(stroke_errors(P3P4S.from_delta(v[0], start.L, v[1]), poses, printed)))
+        )
+
+    res = minimize(
+        worst,
+        x0=np.array([start.delta, start.phi]),
+        method="Nelder-Mead",
+        options={"xatol": 1e-10, "fatol": 1e-12, "maxiter": 4000},
+    )
     return P3P4S.from_delta(float(res.x[0]), start.L, float(res.x[1]))
 
 
-@artefact("table1", outputs=["table1.csv", "table1.md", "extra_table1_fit.csv", "extra_table1_fit.md"],
-          config=["zhao2017_3p4s.table1"], tolerance=ROUNDING)
+@artefact(
+    "table1",
+    outputs=["table1.csv", "table1.md", "extra_table1_fit.csv", "extra_table1_fit.md"],
+    config=["zhao2017_3p4s.table1"],
+    tolerance=ROUNDING,
+)
 def table1(config: dict, outdir: Path) -> list[Path]:
     """Table 1 recomputed by our IK (eq 5) for three geometries, beside the printed strokes.
 
@@ -134,19 +158,31 @@ def table1(config: dict, outdir: Path) -> list[Path]:
     cfg = config[KEY]["table1"]["fit"]
     poses, printed_str = table1_inputs()
     printed = np.array(printed_str, dtype=float)
-    best = fit_geometry(poses, printed, cfg["L"], cfg["delta_range"], cfg["phi_range_deg"], cfg["grid"])
+    best = fit_geometry(
+        poses, printed, cfg["L"], cfg["delta_range"], cfg["phi_range_deg"], cfg["grid"]
+    )
     consistent = minimax_geometry(poses, printed, best)
     fits = [
         GeometryFit("stated", P3P4S.zhao2017(), stroke_errors(P3P4S.zhao2017(), poses, printed)),
         GeometryFit("best fit", best, stroke_errors(best, poses, printed)),
         GeometryFit("minimax", consistent, stroke_errors(consistent, poses, printed)),
-        GeometryFit("optimised", P3P4S.zhao2017_optimised(), stroke_errors(P3P4S.zhao2017_optimised(), poses, printed)),
+        GeometryFit(
+            "optimised",
+            P3P4S.zhao2017_optimised(),
+            stroke_errors(P3P4S.zhao2017_optimised(), poses, printed),
+        ),
     ]
     rows = []
     for k in range(5):
         for j in range(3):
-            row = {"case": k + 1, "x_p": poses[k, 0], "y_p": poses[k, 1], "z_p": poses[k, 2],
-                   "joint": f"l{j + 1}", "paper": printed_str[k][j]}
+            row = {
+                "case": k + 1,
+                "x_p": poses[k, 0],
+                "y_p": poses[k, 1],
+                "z_p": poses[k, 2],
+                "joint": f"l{j + 1}",
+                "paper": printed_str[k][j],
+            }
             for f, col in zip(fits, ("stated", "fit", "minimax", "optimised")):
                 row[col] = printed[k, j] + f.errors[k, j]
                 row[f"{col}_diff"] = f.errors[k, j]
@@ -158,7 +194,9 @@ def table1(config: dict, outdir: Path) -> list[Path]:
             "pose (x, y, z) / m": [f"({p[0]:g}, {p[1]:g}, {p[2]:g})" for p in poses],
             "paper l1, l2, l3": [", ".join(s) for s in printed_str],
             **{
-                f"{f.label} l1, l2, l3": [", ".join(f"{v:.4f}" for v in printed[k] + f.errors[k]) for k in range(5)]
+                f"{f.label} l1, l2, l3": [
+                    ", ".join(f"{v:.4f}" for v in printed[k] + f.errors[k]) for k in range(5)
+                ]
                 for f in fits
             },
         }
@@ -178,17 +216,31 @@ def table1(config: dict, outdir: Path) -> list[Path]:
         "Table 1 was most likely computed with a geometry near the optimised one. Geometries: "
         "extra_table1_fit.md."
     )
-    paths = write_table(long, outdir / "table1", title="Table 1 — IK of the paper's five poses (eq. 5)",
-                        notes=notes, markdown=wide)
-    paths += write_table(geo, outdir / "extra_table1_fit", title="Which geometry reproduces Table 1",
-                         floatfmt=".6g",
-                         notes="delta = r_b - r_a cos(theta) is the only radial dimension the IK sees; "
-                               "the best fit holds L fixed (Table 1 alone does not identify it).")
+    paths = write_table(
+        long,
+        outdir / "table1",
+        title="Table 1 — IK of the paper's five poses (eq. 5)",
+        notes=notes,
+        markdown=wide,
+    )
+    paths += write_table(
+        geo,
+        outdir / "extra_table1_fit",
+        title="Which geometry reproduces Table 1",
+        floatfmt=".6g",
+        notes="delta = r_b - r_a cos(theta) is the only radial dimension the IK sees; "
+        "the best fit holds L fixed (Table 1 alone does not identify it).",
+    )
     return paths
 
 
-@artefact("table1_region", outputs=["extra_table1_region.png", "extra_table1_region.csv"],
-          needs=["zhao2017_3p4s:table1"], config=["zhao2017_3p4s.table1"], tolerance=EXACT)
+@artefact(
+    "table1_region",
+    outputs=["extra_table1_region.png", "extra_table1_region.csv"],
+    needs=["zhao2017_3p4s:table1"],
+    config=["zhao2017_3p4s.table1"],
+    tolerance=EXACT,
+)
 def table1_region(config: dict, outdir: Path) -> list[Path]:
     """extra_table1_region: max stroke error over (delta, phi) at L fixed, with the 5 mm contour."""
     from parakin.plot import new_figure, save_figure, use_style
@@ -211,12 +263,24 @@ def table1_region(config: dict, outdir: Path) -> list[Path]:
         cs = ax.contourf(dd, pp, np.clip(mm, 0, levels[-1]), levels=levels, cmap="viridis_r")
         ax.contour(dd, pp, mm, levels=[HALF_DIGIT * 1e3], colors="k", linewidths=1.0)
         fig.colorbar(cs, ax=ax, label="max stroke error over Table 1 (mm)")
-        markers = {"stated": ("o", "tab:red"), "best fit": ("*", "w"), "minimax": ("D", "tab:cyan"),
-                   "optimised": ("s", "tab:orange")}
+        markers = {
+            "stated": ("o", "tab:red"),
+            "best fit": ("*", "w"),
+            "minimax": ("D", "tab:cyan"),
+            "optimised": ("s", "tab:orange"),
+        }
         for _, g in geo.iterrows():
             marker, colour = markers[g["geometry"]]
-            ax.plot(g["delta"], g["phi_deg"], marker, color=colour, mec="k", ms=9 if marker == "*" else 6,
-                    label=f"{g['geometry']}: {1e3 * g['max_abs_err']:.1f} mm", clip_on=False)
+            ax.plot(
+                g["delta"],
+                g["phi_deg"],
+                marker,
+                color=colour,
+                mec="k",
+                ms=9 if marker == "*" else 6,
+                label=f"{g['geometry']}: {1e3 * g['max_abs_err']:.1f} mm",
+                clip_on=False,
+            )
         ax.set_xlabel(r"$\Delta = r_b - r_a\cos\theta$ (m)")
         ax.set_ylabel(r"rail inclination $\varphi$ (deg)")
         ax.set_title(f"L = {L} m; black line: 5 mm (print rounding)")
@@ -241,15 +305,17 @@ def _mechanism_figure(outdir: Path, slug: str, labels: bool, title: str) -> list
 @artefact("fig01", outputs=["fig01_mechanism.png", "fig01_mechanism.csv"], tolerance=DESCRIPTIVE)
 def fig01(config: dict, outdir: Path) -> list[Path]:
     """Fig. 1: the 3-P(4S) mechanism (the paper shows a CAD model; we draw our kinematic model)."""
-    return _mechanism_figure(outdir, "fig01_mechanism", labels=False,
-                             title="3-P(4S) at (0, 0, 0.592) m, stated geometry")
+    return _mechanism_figure(
+        outdir, "fig01_mechanism", labels=False, title="3-P(4S) at (0, 0, 0.592) m, stated geometry"
+    )
 
 
 @artefact("fig02", outputs=["fig02_sketch.png", "fig02_sketch.csv"], tolerance=DESCRIPTIVE)
 def fig02(config: dict, outdir: Path) -> list[Path]:
     """Fig. 2: sketch with the frames {O}, {P}, {u_i} and the points u_i, c_i, d_i of §1.1."""
-    return _mechanism_figure(outdir, "fig02_sketch", labels=True,
-                             title="Frames and points of §1.1 (eqs 1-5)")
+    return _mechanism_figure(
+        outdir, "fig02_sketch", labels=True, title="Frames and points of §1.1 (eqs 1-5)"
+    )
 
 
 # ---------------------------------------------------------------------------------------- report
@@ -268,12 +334,34 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
         fit_label = f"best fit (delta {fit['delta']:.4f} m, phi {fit['phi_deg']:.2f} deg)"
         for _, r in tab.iterrows():
             q = f"case{r['case']}.{r['joint']}"
-            out.append(Claim(KEY, "table1", q, r["paper"], r["stated"], "m", "stated geometry",
-                             reason="" if abs(r["stated_diff"]) <= HALF_DIGIT else
-                             "stated parameters do not give Table 1; a geometry near the optimised design does",
-                             evidence=f"{KEY}/extra_table1_fit.md"))
-            out.append(Claim(KEY, "table1", q, r["paper"], r["fit"], "m", fit_label,
-                             basis="(delta, phi) fitted to these 15 numbers", evidence=f"{KEY}/extra_table1_fit.md"))
+            out.append(
+                Claim(
+                    KEY,
+                    "table1",
+                    q,
+                    r["paper"],
+                    r["stated"],
+                    "m",
+                    "stated geometry",
+                    reason=""
+                    if abs(r["stated_diff"]) <= HALF_DIGIT
+                    else "stated parameters do not give Table 1; a geometry near the optimised design does",
+                    evidence=f"{KEY}/extra_table1_fit.md",
+                )
+            )
+            out.append(
+                Claim(
+                    KEY,
+                    "table1",
+                    q,
+                    r["paper"],
+                    r["fit"],
+                    "m",
+                    fit_label,
+                    basis="(delta, phi) fitted to these 15 numbers",
+                    evidence=f"{KEY}/extra_table1_fit.md",
+                )
+            )
     return out
 
 
@@ -282,7 +370,12 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     parts = []
     if (figdir / "extra_table1_fit.csv").exists():
         geo = _geometry_rows(figdir)
-        s, f, mm, o = geo.loc["stated"], geo.loc["best fit"], geo.loc["minimax"], geo.loc["optimised"]
+        s, f, mm, o = (
+            geo.loc["stated"],
+            geo.loc["best fit"],
+            geo.loc["minimax"],
+            geo.loc["optimised"],
+        )
         parts.append(
             f"**Table 1 (IK).** With the parameters the paper states (phi {s['phi_deg']:.0f} deg, delta "
             f"{s['delta']:.4f} m) our IK misses the printed strokes by up to {s['max_abs_err']:.4f} m "
@@ -296,5 +389,3 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
             "(map: `zhao2017_3p4s/extra_table1_region.png`)."
         )
     return "\n\n".join(parts)
-
-

@@ -26,40 +26,61 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from parakin.mechanisms import p3p4s_indices as ix
+from parakin.claims import Claim, load_reference, printed_value
 from parakin.config import seed_for
 from parakin.errors import ConfigError
 from parakin.io import write_csv, write_table
 from parakin.mechanisms import P3P4S
+from parakin.mechanisms import p3p4s_indices as ix
 from parakin.optimize import GAOptions, ga, normalised_sum, nsga2
+from parakin.papers.zhao2017_3p4s.common import KEY, artefact
 from parakin.progress import Progress, counting
-from parakin.claims import Claim, load_reference, printed_value
-
-from parakin.papers.zhao2017_3p4s.common import KEY
 from parakin.registry import EXACT, ROUNDING, TIMING, Tolerance
-from parakin.papers.zhao2017_3p4s.common import artefact
 
 #: a genetic algorithm is a chaotic search: one rounding difference sends a seed's population
 #: elsewhere. Stable across machines (and across the record's three seeds) are the design corner
 #: it reaches (r_a, r_b and phi at their bounds) and the indices there (the record's seeds spread
 #: 3.6 % in sigma1); L, d and the near-zero composite objective f are flat directions, not compared
-GA = Tolerance("statistical", 0.0, 0.0,
-               "genetic algorithm: the bound-hitting design variables within 2 % of the box and the "
-               "indices within 5 % (the record's seeds spread 3.6 %); flat directions (L, d, f) and the "
-               "per-generation trajectories not compared",
-               columns={"r_a_m": (0.0, 0.003), "r_b_m": (0.0, 0.005), "phi_deg": (0.0, 0.5),
-                        "sigma1": (0.05, 0.0), "sigma2": (0.05, 0.0), "sigma3": (0.05, 0.0)},
-               files=("fig14_ga_convergence.csv", "fig14_ga_convergence.png", "extra_pareto.csv"))
+GA = Tolerance(
+    "statistical",
+    0.0,
+    0.0,
+    "genetic algorithm: the bound-hitting design variables within 2 % of the box and the "
+    "indices within 5 % (the record's seeds spread 3.6 %); flat directions (L, d, f) and the "
+    "per-generation trajectories not compared",
+    columns={
+        "r_a_m": (0.0, 0.003),
+        "r_b_m": (0.0, 0.005),
+        "phi_deg": (0.0, 0.5),
+        "sigma1": (0.05, 0.0),
+        "sigma2": (0.05, 0.0),
+        "sigma3": (0.05, 0.0),
+    },
+    files=("fig14_ga_convergence.csv", "fig14_ga_convergence.png", "extra_pareto.csv"),
+)
 #: inside the paper's box the optimum is a corner, which every seed reaches to ~1e-5
-GA_CORNER = GA.but("genetic algorithm in the paper's box: the optimum is a corner of the box; every seed "
-                   "reaches it to ~1e-5 (design within 1e-4, indices within 0.1 %)",
-                   columns={"r_a_m": (0.0, 1e-4), "r_b_m": (0.0, 1e-4), "L_m": (0.0, 1e-4), "d_m": (0.0, 1e-4),
-                            "phi_deg": (0.0, 1e-2), "delta_m": (0.0, 1e-4), "sigma1": (1e-3, 0.0),
-                            "sigma2": (1e-3, 0.0), "sigma3": (1e-3, 0.0), "dist_to_paper_after": (0.0, 1e-3)})
+GA_CORNER = GA.but(
+    "genetic algorithm in the paper's box: the optimum is a corner of the box; every seed "
+    "reaches it to ~1e-5 (design within 1e-4, indices within 0.1 %)",
+    columns={
+        "r_a_m": (0.0, 1e-4),
+        "r_b_m": (0.0, 1e-4),
+        "L_m": (0.0, 1e-4),
+        "d_m": (0.0, 1e-4),
+        "phi_deg": (0.0, 1e-2),
+        "delta_m": (0.0, 1e-4),
+        "sigma1": (1e-3, 0.0),
+        "sigma2": (1e-3, 0.0),
+        "sigma3": (1e-3, 0.0),
+        "dist_to_paper_after": (0.0, 1e-3),
+    },
+)
 #: the config sections every index and optimisation artefact reads (their caches key on both)
 INDEX_CONFIG = [f"{KEY}.indices", f"{KEY}.optimization"]
 
-TOL_REL = 0.05  #: "reproduced" for a global index: within 5 % of the printed value (W is not defined)
+TOL_REL = (
+    0.05  #: "reproduced" for a global index: within 5 % of the printed value (W is not defined)
+)
 NAMES = {"sigma1": "dynamic", "sigma2": "stiffness", "sigma3": "speed"}
 VARS = ("r_a", "r_b", "L", "d", "phi")
 
@@ -88,20 +109,26 @@ def index_settings(config: dict) -> dict:
         cfg = config[KEY]["indices"]
     except (KeyError, TypeError):
         raise ConfigError(f"config has no '{KEY}.indices' section") from None
-    return _check("indices", cfg, {
-        "z0": (lambda v: _num(v, 0.4, 0.8), "a number in [0.4, 0.8] m"),
-        "half_width": (lambda v: _num(v, 1e-3, 0.2), "a number in [0.001, 0.2] m"),
-        "z_half_height": (lambda v: _num(v, 0.0, 0.1), "a number in [0, 0.1] m"),
-        "quadrature": (lambda v: v in ("gauss", "midpoint"), "'gauss' or 'midpoint'"),
-        "nodes": (lambda v: _int(v, 2, 256), "an integer in [2, 256] (nodes per axis)"),
-        "atlas_grid": (lambda v: _int(v, 5, 401), "an integer in [5, 401]"),
-        "k": (lambda v: _num(v, 1e-12, 1e12), "a number in [1e-12, 1e12] N/m"),
-        "stiffness": (lambda v: v in ("lambda", "sqrt"), "'lambda' or 'sqrt'"),
-        "convergence_nodes": (lambda v: isinstance(v, list) and len(v) >= 2 and all(_int(n, 1, 256) for n in v),
-                              "a list of >= 2 integers in [1, 256]"),
-        "benchmark_poses": (lambda v: _int(v, 100, 10**6), "an integer in [100, 1e6]"),
-        "loop_poses": (lambda v: _int(v, 10, 10**5), "an integer in [10, 1e5]"),
-    })
+    return _check(
+        "indices",
+        cfg,
+        {
+            "z0": (lambda v: _num(v, 0.4, 0.8), "a number in [0.4, 0.8] m"),
+            "half_width": (lambda v: _num(v, 1e-3, 0.2), "a number in [0.001, 0.2] m"),
+            "z_half_height": (lambda v: _num(v, 0.0, 0.1), "a number in [0, 0.1] m"),
+            "quadrature": (lambda v: v in ("gauss", "midpoint"), "'gauss' or 'midpoint'"),
+            "nodes": (lambda v: _int(v, 2, 256), "an integer in [2, 256] (nodes per axis)"),
+            "atlas_grid": (lambda v: _int(v, 5, 401), "an integer in [5, 401]"),
+            "k": (lambda v: _num(v, 1e-12, 1e12), "a number in [1e-12, 1e12] N/m"),
+            "stiffness": (lambda v: v in ("lambda", "sqrt"), "'lambda' or 'sqrt'"),
+            "convergence_nodes": (
+                lambda v: isinstance(v, list) and len(v) >= 2 and all(_int(n, 1, 256) for n in v),
+                "a list of >= 2 integers in [1, 256]",
+            ),
+            "benchmark_poses": (lambda v: _int(v, 100, 10**6), "an integer in [100, 1e6]"),
+            "loop_poses": (lambda v: _int(v, 10, 10**5), "an integer in [10, 1e5]"),
+        },
+    )
 
 
 def opt_settings(config: dict) -> dict:
@@ -110,27 +137,53 @@ def opt_settings(config: dict) -> dict:
         cfg = config[KEY]["optimization"]
     except (KeyError, TypeError):
         raise ConfigError(f"config has no '{KEY}.optimization' section") from None
-    _check("optimization", cfg, {
-        "seeds": (lambda v: isinstance(v, list) and 1 <= len(v) <= 20 and all(_int(s, 0, 2**31) for s in v),
-                  "a list of 1-20 integer seeds"),
-        "population": (lambda v: _int(v, 4, 1000), "an integer in [4, 1000]"),
-        "generations": (lambda v: _int(v, 1, 1000), "an integer in [1, 1000]"),
-        "elite": (lambda v: _int(v, 0, 100), "an integer in [0, 100]"),
-        "crossover_fraction": (lambda v: _num(v, 0.0, 1.0), "a number in [0, 1]"),
-        "ga_nodes": (lambda v: _int(v, 2, 64), "an integer in [2, 64]"),
-        "max_speed": (lambda v: _num(v, 1.0, 1e6), "a number in [1, 1e6] (cond(J) limit over W)"),
-        "bounds": (lambda v: isinstance(v, dict) and set(v) == {"r_a", "r_b", "L", "d", "phi_deg"}
-                   and all(isinstance(b, list) and len(b) == 2 and _num(b[0], 0, 90) and _num(b[1], 0, 90)
-                           and b[0] <= b[1] for b in v.values()),
-                   "a mapping r_a, r_b, L, d (m), phi_deg (deg) -> [low, high]"),
-        "nsga2_population": (lambda v: _int(v, 4, 1000), "an integer in [4, 1000]"),
-        "nsga2_generations": (lambda v: _int(v, 1, 1000), "an integer in [1, 1000]"),
-    })
+    _check(
+        "optimization",
+        cfg,
+        {
+            "seeds": (
+                lambda v: (
+                    isinstance(v, list) and 1 <= len(v) <= 20 and all(_int(s, 0, 2**31) for s in v)
+                ),
+                "a list of 1-20 integer seeds",
+            ),
+            "population": (lambda v: _int(v, 4, 1000), "an integer in [4, 1000]"),
+            "generations": (lambda v: _int(v, 1, 1000), "an integer in [1, 1000]"),
+            "elite": (lambda v: _int(v, 0, 100), "an integer in [0, 100]"),
+            "crossover_fraction": (lambda v: _num(v, 0.0, 1.0), "a number in [0, 1]"),
+            "ga_nodes": (lambda v: _int(v, 2, 64), "an integer in [2, 64]"),
+            "max_speed": (
+                lambda v: _num(v, 1.0, 1e6),
+                "a number in [1, 1e6] (cond(J) limit over W)",
+            ),
+            "bounds": (
+                lambda v: (
+                    isinstance(v, dict)
+                    and set(v) == {"r_a", "r_b", "L", "d", "phi_deg"}
+                    and all(
+                        isinstance(b, list)
+                        and len(b) == 2
+                        and _num(b[0], 0, 90)
+                        and _num(b[1], 0, 90)
+                        and b[0] <= b[1]
+                        for b in v.values()
+                    )
+                ),
+                "a mapping r_a, r_b, L, d (m), phi_deg (deg) -> [low, high]",
+            ),
+            "nsga2_population": (lambda v: _int(v, 4, 1000), "an integer in [4, 1000]"),
+            "nsga2_generations": (lambda v: _int(v, 1, 1000), "an integer in [1, 1000]"),
+        },
+    )
     if cfg["elite"] >= cfg["population"]:
-        raise ConfigError(f"{KEY}.optimization.elite = {cfg['elite']} must be < population = {cfg['population']}")
+        raise ConfigError(
+            f"{KEY}.optimization.elite = {cfg['elite']} must be < population = {cfg['population']}"
+        )
     b = cfg["bounds"]
     if not b["d"][1] < 2 * b["r_a"][0]:
-        raise ConfigError(f"{KEY}.optimization.bounds: d max {b['d'][1]} must be < 2 r_a min {2 * b['r_a'][0]}")
+        raise ConfigError(
+            f"{KEY}.optimization.bounds: d max {b['d'][1]} must be < 2 r_a min {2 * b['r_a'][0]}"
+        )
     return cfg
 
 
@@ -156,15 +209,21 @@ def _vec(m: P3P4S) -> np.ndarray:
 
 def _globals(m: P3P4S, W: ix.Workspace, n: int, rule: str, k: float) -> dict:
     g = ix.global_indices(m.delta, m.L, m.phi, W, n, rule=rule, k=k)
-    return {"sigma1": float(g.sigma1[0]), "sigma2_lambda": float(g.sigma2_lambda[0]),
-            "sigma2_sqrt": float(g.sigma2_sqrt[0]), "sigma3": float(g.sigma3[0]),
-            "max_speed": float(g.max_speed[0])}
+    return {
+        "sigma1": float(g.sigma1[0]),
+        "sigma2_lambda": float(g.sigma2_lambda[0]),
+        "sigma2_sqrt": float(g.sigma2_sqrt[0]),
+        "sigma3": float(g.sigma3[0]),
+        "max_speed": float(g.max_speed[0]),
+    }
 
 
 # ---------------------------------------------------------------------------------------- Figs 11-12
 def _ellipsoid_data(m: P3P4S, pose: np.ndarray, n_lat: int = 13, n_lon: int = 25):
     J = m.velocity_jacobian(pose)
-    u, v = np.meshgrid(np.linspace(0, np.pi, n_lat), np.linspace(0, 2 * np.pi, n_lon), indexing="ij")
+    u, v = np.meshgrid(
+        np.linspace(0, np.pi, n_lat), np.linspace(0, 2 * np.pi, n_lon), indexing="ij"
+    )
     qd = np.stack([np.sin(u) * np.cos(v), np.sin(u) * np.sin(v), np.cos(u)], axis=-1)
     vel = np.linalg.solve(J, qd.reshape(-1, 3).T).T.reshape(qd.shape)  # v = J^-1 qdot, eq (35)
     U, s, Vt = np.linalg.svd(J)
@@ -180,8 +239,14 @@ def _sphere_figure(pts, path, title, labels, axes=None, semi=None):
         if axes is not None:
             for i, (d, r) in enumerate(zip(axes, semi)):
                 seg = np.stack([-r * d, r * d])
-                ax.plot(seg[:, 0], seg[:, 1], seg[:, 2], color=("#D55E00", "#009E73", "#CC79A7")[i], lw=2.0,
-                        label=f"semi-axis {r:.3g} m/s")
+                ax.plot(
+                    seg[:, 0],
+                    seg[:, 1],
+                    seg[:, 2],
+                    color=("#D55E00", "#009E73", "#CC79A7")[i],
+                    lw=2.0,
+                    label=f"semi-axis {r:.3g} m/s",
+                )
             ax.legend(loc="upper left", fontsize="small")
         lim = float(np.max(np.abs(pts)))
         ax.set_xlim(-lim, lim), ax.set_ylim(-lim, lim), ax.set_zlim(-lim, lim)
@@ -191,25 +256,47 @@ def _sphere_figure(pts, path, title, labels, axes=None, semi=None):
     return save_figure(fig, path)
 
 
-@artefact("fig11", outputs=["fig11_velocity_sphere.png", "fig11_velocity_sphere.csv"], config=INDEX_CONFIG,
-          tolerance=EXACT)
+@artefact(
+    "fig11",
+    outputs=["fig11_velocity_sphere.png", "fig11_velocity_sphere.csv"],
+    config=INDEX_CONFIG,
+    tolerance=EXACT,
+)
 def fig11(config: dict, outdir: Path) -> list[Path]:
     """Fig. 11: the unit sphere of drive velocities ``qdot^T qdot = 1`` (eq 35) at the home pose."""
     m = P3P4S.zhao2017()
     pose = m.home()
     _, qd, _, _, _ = _ellipsoid_data(m, pose)
-    df = pd.DataFrame({"qdot1_m_s": qd[..., 0].ravel(), "qdot2_m_s": qd[..., 1].ravel(),
-                       "qdot3_m_s": qd[..., 2].ravel()})
+    df = pd.DataFrame(
+        {
+            "qdot1_m_s": qd[..., 0].ravel(),
+            "qdot2_m_s": qd[..., 1].ravel(),
+            "qdot3_m_s": qd[..., 2].ravel(),
+        }
+    )
     paths = [write_csv(df, outdir / "fig11_velocity_sphere.csv")]
-    paths.append(_sphere_figure(qd, outdir / "fig11_velocity_sphere.png",
-                                "Fig. 11: unit sphere of drive velocities, eq. (35)\n"
-                                f"$\\dot q^T\\dot q = 1$, before design, home pose p = (0, 0, {pose[2]:g}) m",
-                                (r"$\dot q_1$ (m/s)", r"$\dot q_2$ (m/s)", r"$\dot q_3$ (m/s)")))
+    paths.append(
+        _sphere_figure(
+            qd,
+            outdir / "fig11_velocity_sphere.png",
+            "Fig. 11: unit sphere of drive velocities, eq. (35)\n"
+            f"$\\dot q^T\\dot q = 1$, before design, home pose p = (0, 0, {pose[2]:g}) m",
+            (r"$\dot q_1$ (m/s)", r"$\dot q_2$ (m/s)", r"$\dot q_3$ (m/s)"),
+        )
+    )
     return paths
 
 
-@artefact("fig12", outputs=["fig12_velocity_ellipsoid.png", "fig12_velocity_ellipsoid.csv",
-                           "fig12_velocity_ellipsoid_axes.csv"], config=INDEX_CONFIG, tolerance=EXACT)
+@artefact(
+    "fig12",
+    outputs=[
+        "fig12_velocity_ellipsoid.png",
+        "fig12_velocity_ellipsoid.csv",
+        "fig12_velocity_ellipsoid_axes.csv",
+    ],
+    config=INDEX_CONFIG,
+    tolerance=EXACT,
+)
 def fig12(config: dict, outdir: Path) -> list[Path]:
     """Fig. 12: the output velocity ellipsoid ``v = J^-1 qdot`` of the unit sphere (eq 35); its
     semi-axes are ``1/sigma_i(J)`` along the right singular vectors (the paper says
@@ -217,15 +304,35 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
     m = P3P4S.zhao2017()
     pose = m.home()
     J, _, vel, s, Vt = _ellipsoid_data(m, pose)
-    df = pd.DataFrame({"vx_m_s": vel[..., 0].ravel(), "vy_m_s": vel[..., 1].ravel(), "vz_m_s": vel[..., 2].ravel()})
+    df = pd.DataFrame(
+        {
+            "vx_m_s": vel[..., 0].ravel(),
+            "vy_m_s": vel[..., 1].ravel(),
+            "vz_m_s": vel[..., 2].ravel(),
+        }
+    )
     paths = [write_csv(df, outdir / "fig12_velocity_ellipsoid.csv")]
-    axes_df = pd.DataFrame({"sigma_J": s, "semi_axis_m_s": 1 / s, "dir_x": Vt[:, 0], "dir_y": Vt[:, 1],
-                            "dir_z": Vt[:, 2]})
+    axes_df = pd.DataFrame(
+        {
+            "sigma_J": s,
+            "semi_axis_m_s": 1 / s,
+            "dir_x": Vt[:, 0],
+            "dir_y": Vt[:, 1],
+            "dir_z": Vt[:, 2],
+        }
+    )
     paths.append(write_csv(axes_df, outdir / "fig12_velocity_ellipsoid_axes.csv"))
-    paths.append(_sphere_figure(vel, outdir / "fig12_velocity_ellipsoid.png",
-                                "Fig. 12: platform velocity ellipsoid $v = J^{-1}\\dot q$, $|\\dot q| = 1$\n"
-                                f"semi-axes $1/\\sigma_i(J)$; cond(J) = {s[0] / s[-1]:.3f}",
-                                (r"$v_x$ (m/s)", r"$v_y$ (m/s)", r"$v_z$ (m/s)"), Vt, 1 / s))
+    paths.append(
+        _sphere_figure(
+            vel,
+            outdir / "fig12_velocity_ellipsoid.png",
+            "Fig. 12: platform velocity ellipsoid $v = J^{-1}\\dot q$, $|\\dot q| = 1$\n"
+            f"semi-axes $1/\\sigma_i(J)$; cond(J) = {s[0] / s[-1]:.3f}",
+            (r"$v_x$ (m/s)", r"$v_y$ (m/s)", r"$v_z$ (m/s)"),
+            Vt,
+            1 / s,
+        )
+    )
     return paths
 
 
@@ -236,12 +343,24 @@ ATLASES = [
     (17, "dynamic", "after", r"dynamic index $\sigma$ (kg)", "sigma.range.after", "fig17"),
     (19, "stiffness", "before", r"stiffness index $\sigma^*$", "sigma_star.range.before", "fig19"),
     (21, "stiffness", "after", r"stiffness index $\sigma^*$", "sigma_star.range.after", "fig21"),
-    (23, "speed", "before", r"speed index $\hat\sigma$ = cond(J)", "sigma_hat.range.before", "fig23"),
+    (
+        23,
+        "speed",
+        "before",
+        r"speed index $\hat\sigma$ = cond(J)",
+        "sigma_hat.range.before",
+        "fig23",
+    ),
     (25, "speed", "after", r"speed index $\hat\sigma$ = cond(J)", "sigma_hat.range.after", "fig25"),
 ]
-PAPER_RANGES = {("dynamic", "before"): (24, 42), ("dynamic", "after"): (14, 17),
-                ("stiffness", "before"): (0.04, 0.16), ("stiffness", "after"): (0.3, 0.4),
-                ("speed", "before"): (9, 15), ("speed", "after"): (4.3, 4.8)}
+PAPER_RANGES = {
+    ("dynamic", "before"): (24, 42),
+    ("dynamic", "after"): (14, 17),
+    ("stiffness", "before"): (0.04, 0.16),
+    ("stiffness", "after"): (0.3, 0.4),
+    ("speed", "before"): (9, 15),
+    ("speed", "after"): (4.3, 4.8),
+}
 
 
 def _atlas_values(config: dict, which: str):
@@ -250,9 +369,19 @@ def _atlas_values(config: dict, which: str):
     m = _designs()[which]
     X, Y, P = W.grid(int(c["atlas_grid"]))
     ind = ix.mech_indices(m, P, k=float(c["k"]))
-    return X, Y, {"dynamic": ind.dynamic, "stiffness": ind.stiffness_lambda if c["stiffness"] == "lambda"
-                  else ind.stiffness_sqrt, "stiffness_lambda": ind.stiffness_lambda,
-                  "stiffness_sqrt": ind.stiffness_sqrt, "speed": ind.speed}, W, m
+    return (
+        X,
+        Y,
+        {
+            "dynamic": ind.dynamic,
+            "stiffness": ind.stiffness_lambda if c["stiffness"] == "lambda" else ind.stiffness_sqrt,
+            "stiffness_lambda": ind.stiffness_lambda,
+            "stiffness_sqrt": ind.stiffness_sqrt,
+            "speed": ind.speed,
+        },
+        W,
+        m,
+    )
 
 
 def _atlas(config: dict, outdir: Path, number: int) -> list[Path]:
@@ -263,25 +392,41 @@ def _atlas(config: dict, outdir: Path, number: int) -> list[Path]:
     X, Y, vals, W, m = _atlas_values(config, which)
     Z = vals[key]
     lo, hi = PAPER_RANGES[(key, which)]
-    form = r"$\lambda_{min}(J^TkJ)$" if c["stiffness"] == "lambda" else r"$\sqrt{\lambda_{min}(J^TkJ)}$"
+    form = (
+        r"$\lambda_{min}(J^TkJ)$"
+        if c["stiffness"] == "lambda"
+        else r"$\sqrt{\lambda_{min}(J^TkJ)}$"
+    )
     stiff = f" = {form}, k = {c['k']:g} N/m" if key == "stiffness" else ""
     slug = f"{key}_{which}"
-    df = pd.DataFrame({"x_m": X.ravel(), "y_m": Y.ravel(), "z_m": W.z[0] if W.planar else 0.5 * sum(W.z),
-                       f"{key}": Z.ravel()})
+    df = pd.DataFrame(
+        {
+            "x_m": X.ravel(),
+            "y_m": Y.ravel(),
+            "z_m": W.z[0] if W.planar else 0.5 * sum(W.z),
+            f"{key}": Z.ravel(),
+        }
+    )
     if key == "stiffness":
         df["stiffness_lambda"] = vals["stiffness_lambda"].ravel()
         df["stiffness_sqrt"] = vals["stiffness_sqrt"].ravel()
     stem_a = f"fig{num:02d}_{slug}_atlas"
     stem_c = f"fig{num + 1:02d}_{slug}_contour"
     paths = [write_csv(df, outdir / f"{stem_a}.csv"), write_csv(df, outdir / f"{stem_c}.csv")]
-    design = (f"{which} (Table 3): $r_a$ = {m.r_a:g}, $r_b$ = {m.r_b:g}, L = {m.L:g}, d = {m.d:g} m, "
-              f"$\\varphi$ = {np.rad2deg(m.phi):.0f}°")
+    design = (
+        f"{which} (Table 3): $r_a$ = {m.r_a:g}, $r_b$ = {m.r_b:g}, L = {m.L:g}, d = {m.d:g} m, "
+        f"$\\varphi$ = {np.rad2deg(m.phi):.0f}°"
+    )
     where = f"z = {0.5 * sum(W.z):g} m"
     rng_txt = f"ours [{np.nanmin(Z):.3g}, {np.nanmax(Z):.3g}], paper [{lo:g}, {hi:g}]"
     with use_style():
         fig, ax = new_figure((5.6, 4.6), projection="3d", rect=(0.0, 0.0, 0.80, 0.86))
         surf = ax.plot_surface(1e3 * X, 1e3 * Y, Z, cmap="viridis", linewidth=0, antialiased=True)
-        ax.set_xlabel("x (mm)"), ax.set_ylabel("y (mm)"), ax.set_zlabel(label.split(" (")[0].split(" =")[0])
+        (
+            ax.set_xlabel("x (mm)"),
+            ax.set_ylabel("y (mm)"),
+            ax.set_zlabel(label.split(" (")[0].split(" =")[0]),
+        )
         ax.view_init(elev=28, azim=-58)
         cax = fig.add_axes((0.87, 0.15, 0.025, 0.6))
         cb = fig.colorbar(surf, cax=cax)
@@ -297,7 +442,9 @@ def _atlas(config: dict, outdir: Path, number: int) -> list[Path]:
         cb.set_label(label + stiff, fontsize="small")
         ax.set_aspect("equal")
         ax.set_xlabel("x (mm)"), ax.set_ylabel("y (mm)")
-        ax.set_title(f"Fig. {num + 1}: {label} contour, {where}\n{design}\nrange {rng_txt}", fontsize=7)
+        ax.set_title(
+            f"Fig. {num + 1}: {label} contour, {where}\n{design}\nrange {rng_txt}", fontsize=7
+        )
     paths.append(save_figure(fig, outdir / f"{stem_c}.png"))
     return paths
 
@@ -305,10 +452,15 @@ def _atlas(config: dict, outdir: Path, number: int) -> list[Path]:
 def _make_atlas(number: int, stem: str):
     def make(config: dict, outdir: Path) -> list[Path]:
         return _atlas(config, outdir, number)
+
     make.__name__ = make.__qualname__ = f"fig{number:02d}"
     make.__doc__ = f"Figs {number}-{number + 1}: atlas (surface) and contour of one index over W (§3, eqs 28/33/36)."
-    outputs = [f"fig{number:02d}_{stem}_atlas.png", f"fig{number:02d}_{stem}_atlas.csv",
-               f"fig{number + 1:02d}_{stem}_contour.png", f"fig{number + 1:02d}_{stem}_contour.csv"]
+    outputs = [
+        f"fig{number:02d}_{stem}_atlas.png",
+        f"fig{number:02d}_{stem}_atlas.csv",
+        f"fig{number + 1:02d}_{stem}_contour.png",
+        f"fig{number + 1:02d}_{stem}_contour.csv",
+    ]
     return artefact(f"fig{number:02d}", outputs=outputs, config=INDEX_CONFIG, tolerance=EXACT)(make)
 
 
@@ -316,8 +468,12 @@ def _make_atlas(number: int, stem: str):
 ATLAS_ARTEFACTS = [_make_atlas(a[0], f"{a[1]}_{a[2]}") for a in ATLASES]
 
 
-@artefact("global_indices", outputs=["extra_global_indices.csv", "extra_global_indices.md"], config=INDEX_CONFIG,
-          tolerance=ROUNDING)
+@artefact(
+    "global_indices",
+    outputs=["extra_global_indices.csv", "extra_global_indices.md"],
+    config=INDEX_CONFIG,
+    tolerance=ROUNDING,
+)
 def global_table(config: dict, outdir: Path) -> list[Path]:
     """extra_global_indices: sigma1, sigma2 (both forms), sigma3 of the before/after designs over W,
     and each local index's range over the atlas grid (what Figs 15-26 show), beside the paper's."""
@@ -335,17 +491,32 @@ def global_table(config: dict, outdir: Path) -> list[Path]:
         row["paper_sigma1"], row["paper_sigma2"], row["paper_sigma3"] = paper[which]
         rows.append(row)
     df = pd.DataFrame(rows)
-    notes = (f"W: {W.describe()}; {c['quadrature']} quadrature, {c['nodes']} nodes per axis; ranges over a "
-             f"{c['atlas_grid']}x{c['atlas_grid']} grid with the edges. k = {c['k']:g} N/m. sigma2_lambda = mean "
-             "lambda_min(J^T k J) (what the paper's numbers fit), sigma2_sqrt = mean sqrt(lambda_min) (eq 33 as "
-             "printed). Masses of §2.4 for both designs (docs/zhao2017_3p4s.md#g20).")
-    return write_table(df, outdir / "extra_global_indices", title="Global indices (eqs 29, 34, 37) of Table 3's designs",
-                       notes=notes, floatfmt=".5g")
+    notes = (
+        f"W: {W.describe()}; {c['quadrature']} quadrature, {c['nodes']} nodes per axis; ranges over a "
+        f"{c['atlas_grid']}x{c['atlas_grid']} grid with the edges. k = {c['k']:g} N/m. sigma2_lambda = mean "
+        "lambda_min(J^T k J) (what the paper's numbers fit), sigma2_sqrt = mean sqrt(lambda_min) (eq 33 as "
+        "printed). Masses of §2.4 for both designs (docs/zhao2017_3p4s.md#g20)."
+    )
+    return write_table(
+        df,
+        outdir / "extra_global_indices",
+        title="Global indices (eqs 29, 34, 37) of Table 3's designs",
+        notes=notes,
+        floatfmt=".5g",
+    )
 
 
 # ---------------------------------------------------------------------------------------- convergence etc.
-@artefact("index_convergence", outputs=["extra_index_convergence.csv", "extra_index_convergence.md",
-                                      "extra_index_convergence.png"], config=INDEX_CONFIG, tolerance=ROUNDING)
+@artefact(
+    "index_convergence",
+    outputs=[
+        "extra_index_convergence.csv",
+        "extra_index_convergence.md",
+        "extra_index_convergence.png",
+    ],
+    config=INDEX_CONFIG,
+    tolerance=ROUNDING,
+)
 def index_convergence(config: dict, outdir: Path) -> list[Path]:
     """extra_index_convergence: global indices as the grid doubles, Gauss-Legendre vs midpoint."""
     from parakin.plot import new_figure, save_figure, use_style
@@ -353,27 +524,45 @@ def index_convergence(config: dict, outdir: Path) -> list[Path]:
     c = index_settings(config)
     W = workspace(config)
     ds = list(_designs().values())
-    rows = ix.convergence([m.delta for m in ds], [m.L for m in ds], [m.phi for m in ds], W,
-                          ns=tuple(c["convergence_nodes"]), k=float(c["k"]))
+    rows = ix.convergence(
+        [m.delta for m in ds],
+        [m.L for m in ds],
+        [m.phi for m in ds],
+        W,
+        ns=tuple(c["convergence_nodes"]),
+        k=float(c["k"]),
+    )
     df = pd.DataFrame(rows)
     df["design"] = df["design"].map({0: "before", 1: "after"})
     ref = df[(df["rule"] == "gauss") & (df["n"] == df["n"].max())].set_index("design")
     for col in ("sigma1", "sigma2_lambda", "sigma3"):
-        df[f"{col}_rel_to_finest"] = [abs(r[col] / ref.loc[r["design"], col] - 1) for _, r in df.iterrows()]
-    paths = write_table(df, outdir / "extra_index_convergence", title="Quadrature convergence of the global indices",
-                        notes=f"W: {W.describe()}. rel_to_finest: relative to Gauss-Legendre with {df['n'].max()} "
-                              "nodes per axis. The local indices have kinks where two singular values cross (on "
-                              "the symmetry lines through the centre), so convergence is algebraic, not spectral.",
-                        floatfmt=".6g")
+        df[f"{col}_rel_to_finest"] = [
+            abs(r[col] / ref.loc[r["design"], col] - 1) for _, r in df.iterrows()
+        ]
+    paths = write_table(
+        df,
+        outdir / "extra_index_convergence",
+        title="Quadrature convergence of the global indices",
+        notes=f"W: {W.describe()}. rel_to_finest: relative to Gauss-Legendre with {df['n'].max()} "
+        "nodes per axis. The local indices have kinks where two singular values cross (on "
+        "the symmetry lines through the centre), so convergence is algebraic, not spectral.",
+        floatfmt=".6g",
+    )
     with use_style():
         fig, ax = new_figure((6.0, 3.6))
         colours = {"sigma1": "#0072B2", "sigma2_lambda": "#D55E00", "sigma3": "#009E73"}
         for (rule, design), sub in df.groupby(["rule", "design"]):
             sub = sub[sub["n"] < sub["n"].max()] if rule == "gauss" else sub
             for col, colour in colours.items():
-                ax.loglog(sub["n"], np.maximum(sub[f"{col}_rel_to_finest"], 1e-12), marker="o" if rule == "gauss"
-                          else "s", ls="-" if design == "before" else "--", color=colour, ms=3,
-                          label=f"{col}, {design}, {rule}")
+                ax.loglog(
+                    sub["n"],
+                    np.maximum(sub[f"{col}_rel_to_finest"], 1e-12),
+                    marker="o" if rule == "gauss" else "s",
+                    ls="-" if design == "before" else "--",
+                    color=colour,
+                    ms=3,
+                    label=f"{col}, {design}, {rule}",
+                )
         ax.axhline(5e-4, color="k", lw=0.8, ls=":", label="3rd significant digit (5e-4)")
         ax.set_xlabel("nodes per axis n")
         ax.set_ylabel("|value / finest Gauss value − 1|")
@@ -393,8 +582,12 @@ W_VARIANTS = [
 ]
 
 
-@artefact("index_sensitivity", outputs=["extra_index_sensitivity.csv", "extra_index_sensitivity.md"],
-          config=INDEX_CONFIG, tolerance=ROUNDING)
+@artefact(
+    "index_sensitivity",
+    outputs=["extra_index_sensitivity.csv", "extra_index_sensitivity.md"],
+    config=INDEX_CONFIG,
+    tolerance=ROUNDING,
+)
 def index_sensitivity(config: dict, outdir: Path) -> list[Path]:
     """extra_index_sensitivity: how the global values and verdicts move under other readings of W
     and of the stiffness index (k, lambda vs sqrt)."""
@@ -417,21 +610,33 @@ def index_sensitivity(config: dict, outdir: Path) -> list[Path]:
                 row[f"{key}_gain"] = b / a if key != "sigma2" else a / b
                 row[f"{key}_before_err_pct"] = 100 * (b / paper[key][0] - 1)
                 row[f"{key}_after_err_pct"] = 100 * (a / paper[key][1] - 1)
-            row["before_s1_s3_within_5pct"] = bool(abs(row["sigma1_before_err_pct"]) <= 5
-                                                   and abs(row["sigma3_before_err_pct"]) <= 5)
-            row["after_all_within_5pct"] = bool(all(abs(row[f"{s}_after_err_pct"]) <= 5 for s in paper))
-            row["all_improve"] = bool(row["sigma1_gain"] > 1 and row["sigma2_gain"] > 1 and row["sigma3_gain"] > 1)
+            row["before_s1_s3_within_5pct"] = bool(
+                abs(row["sigma1_before_err_pct"]) <= 5 and abs(row["sigma3_before_err_pct"]) <= 5
+            )
+            row["after_all_within_5pct"] = bool(
+                all(abs(row[f"{s}_after_err_pct"]) <= 5 for s in paper)
+            )
+            row["all_improve"] = bool(
+                row["sigma1_gain"] > 1 and row["sigma2_gain"] > 1 and row["sigma3_gain"] > 1
+            )
             rows.append(row)
     df = pd.DataFrame(rows)
-    return write_table(df, outdir / "extra_index_sensitivity",
-                       title="Sensitivity of the global indices to the workspace W and the stiffness reading",
-                       notes=f"{c['quadrature']} quadrature, {n} nodes per axis. err_pct: ours vs the printed value. "
-                             "gain: before/after for sigma1, sigma3; after/before for sigma2 (paper 1.96, 2.57, 2.21).",
-                       floatfmt=".4g")
+    return write_table(
+        df,
+        outdir / "extra_index_sensitivity",
+        title="Sensitivity of the global indices to the workspace W and the stiffness reading",
+        notes=f"{c['quadrature']} quadrature, {n} nodes per axis. err_pct: ours vs the printed value. "
+        "gain: before/after for sigma1, sigma3; after/before for sigma2 (paper 1.96, 2.57, 2.21).",
+        floatfmt=".4g",
+    )
 
 
-@artefact("index_benchmark", outputs=["extra_index_benchmark.csv", "extra_index_benchmark.md"],
-          config=INDEX_CONFIG, tolerance=TIMING)
+@artefact(
+    "index_benchmark",
+    outputs=["extra_index_benchmark.csv", "extra_index_benchmark.md"],
+    config=INDEX_CONFIG,
+    tolerance=TIMING,
+)
 def index_benchmark(config: dict, outdir: Path) -> list[Path]:
     """extra_index_benchmark: all three indices batched over a grid vs a per-pose Python loop."""
     c = index_settings(config)
@@ -448,13 +653,27 @@ def index_benchmark(config: dict, outdir: Path) -> list[Path]:
     loop = ix.local_indices_loop(m, x[:nloop])
     t_loop = (time.perf_counter() - t) / nloop * len(x)
     batch = np.stack([ind[k][0, :nloop] for k in ix.INDEX_NAMES], axis=-1)
-    df = pd.DataFrame([{"poses": len(x), "batched_s": t_batch, "loop_s_extrapolated": t_loop,
-                        "loop_poses_timed": nloop, "ratio": t_loop / t_batch,
-                        "max_rel_diff": float(np.max(np.abs(batch / loop - 1)))}])
-    return write_table(df, outdir / "extra_index_benchmark", title="Indices: batched vs per-pose loop",
-                       notes="Batched: parakin.mechanisms.p3p4s_indices.local_indices (closed-form M, one SVD call). Loop: one pose at "
-                             "a time through P3P4S.velocity_jacobian and M from parakin.mechanisms.p3p4s_dynamics.force_terms; its "
-                             "time is measured on loop_poses_timed poses and scaled to all poses.", floatfmt=".4g")
+    df = pd.DataFrame(
+        [
+            {
+                "poses": len(x),
+                "batched_s": t_batch,
+                "loop_s_extrapolated": t_loop,
+                "loop_poses_timed": nloop,
+                "ratio": t_loop / t_batch,
+                "max_rel_diff": float(np.max(np.abs(batch / loop - 1))),
+            }
+        ]
+    )
+    return write_table(
+        df,
+        outdir / "extra_index_benchmark",
+        title="Indices: batched vs per-pose loop",
+        notes="Batched: parakin.mechanisms.p3p4s_indices.local_indices (closed-form M, one SVD call). Loop: one pose at "
+        "a time through P3P4S.velocity_jacobian and M from parakin.mechanisms.p3p4s_dynamics.force_terms; its "
+        "time is measured on loop_poses_timed poses and scaled to all poses.",
+        floatfmt=".4g",
+    )
 
 
 # ---------------------------------------------------------------------------------------- optimisation
@@ -463,30 +682,48 @@ def _objective_fn(config: dict):
     W = workspace(config)
 
     def f(X):
-        return ix.design_objectives(X, W, int(o["ga_nodes"]), rule=c["quadrature"], k=float(c["k"]),
-                                    stiffness=c["stiffness"], max_speed=float(o["max_speed"]))
+        return ix.design_objectives(
+            X,
+            W,
+            int(o["ga_nodes"]),
+            rule=c["quadrature"],
+            k=float(c["k"]),
+            stiffness=c["stiffness"],
+            max_speed=float(o["max_speed"]),
+        )
+
     return f
 
 
 def _key(config: dict):
     import json
-    return json.dumps({"i": index_settings(config), "o": opt_settings(config), "seed": config.get("seed", 0)},
-                      sort_keys=True)
+
+    return json.dumps(
+        {"i": index_settings(config), "o": opt_settings(config), "seed": config.get("seed", 0)},
+        sort_keys=True,
+    )
 
 
 @lru_cache(maxsize=4)
 def _optimise(key: str) -> dict:
     import json
+
     d = json.loads(key)
     config = {KEY: {"indices": d["i"], "optimization": d["o"]}, "seed": d["seed"]}
     o = d["o"]
     lo, hi = bounds(config)
     # progress: the objective is evaluated once per generation (and once at the start) of each GA run
-    ticker = Progress("GA", (6 + len(o["seeds"])) * (int(o["generations"]) + 1), "generations, all runs")
+    ticker = Progress(
+        "GA", (6 + len(o["seeds"])) * (int(o["generations"]) + 1), "generations, all runs"
+    )
     obj = _objective_fn(config)
     count = counting(obj, ticker)
-    opts = GAOptions(population=o["population"], generations=o["generations"], elite=o["elite"],
-                     crossover_fraction=float(o["crossover_fraction"]))
+    opts = GAOptions(
+        population=o["population"],
+        generations=o["generations"],
+        elite=o["elite"],
+        crossover_fraction=float(o["crossover_fraction"]),
+    )
     maximise = np.array([False, True, False])
     # single-objective runs for the normalisation of eq (38): min and max of each index
     extremes = {}
@@ -505,11 +742,24 @@ def _optimise(key: str) -> dict:
     for seed in o["seeds"]:
         g = np.random.default_rng(seed_for(config, f"{KEY}.ga.combined.{seed}"))
         runs[seed] = ga(lambda X: normalised_sum(count(X), vmin, vmax, maximise), lo, hi, g, opts)
-    return {"extremes": extremes, "vmin": vmin, "vmax": vmax, "runs": runs, "combined": combined, "obj": obj}
+    return {
+        "extremes": extremes,
+        "vmin": vmin,
+        "vmax": vmax,
+        "runs": runs,
+        "combined": combined,
+        "obj": obj,
+    }
 
 
-@artefact("fig14", outputs=["fig14_ga_convergence.png", "fig14_ga_convergence.csv"], config=INDEX_CONFIG, tolerance=GA,
-          threads=1, resources={"runtime": 60, "mem_mb": 2000})
+@artefact(
+    "fig14",
+    outputs=["fig14_ga_convergence.png", "fig14_ga_convergence.csv"],
+    config=INDEX_CONFIG,
+    tolerance=GA,
+    threads=1,
+    resources={"runtime": 60, "mem_mb": 2000},
+)
 def fig14(config: dict, outdir: Path) -> list[Path]:
     """Fig. 14: best combined objective f (eq 40) per generation, one curve per seed."""
     from parakin.plot import new_figure, save_figure, use_style
@@ -524,49 +774,97 @@ def fig14(config: dict, outdir: Path) -> list[Path]:
     with use_style():
         fig, ax = new_figure((5.6, 3.4))
         for j, (seed, r) in enumerate(res["runs"].items()):
-            ax.plot(data["generation"], r.best, color=f"C{j}", label=f"best, seed {seed} (f = {r.fun:.4f})")
+            ax.plot(
+                data["generation"],
+                r.best,
+                color=f"C{j}",
+                label=f"best, seed {seed} (f = {r.fun:.4f})",
+            )
         f_min = printed_value(load_reference(KEY), "fig14", "f_min")
         ax.axhline(float(f_min), color="k", ls=":", lw=0.9, label=f"paper f$_{{min}}$ = {f_min}")
         ax.set_xlabel("generation")
         ax.set_ylabel("combined objective f (eq. 40)")
         ax.set_xlim(0, data["generation"][-1])
         o = opt_settings(config)
-        ax.set_title(f"Fig. 14: GA convergence (pop {o['population']}, arithmetic crossover {o['crossover_fraction']:g}, "
-                     f"{o['elite']} elites,\nroulette, adaptive mutation), normalised weighted sum of σ1, σ2 (flipped), σ3",
-                     fontsize=8)
+        ax.set_title(
+            f"Fig. 14: GA convergence (pop {o['population']}, arithmetic crossover {o['crossover_fraction']:g}, "
+            f"{o['elite']} elites,\nroulette, adaptive mutation), normalised weighted sum of σ1, σ2 (flipped), σ3",
+            fontsize=8,
+        )
         ax.legend(fontsize="small")
     paths.append(save_figure(fig, outdir / "fig14_ga_convergence.png"))
     return paths
 
 
-@artefact("ga_paper_box", outputs=["extra_ga_paper_box.csv", "extra_ga_paper_box.md"], config=INDEX_CONFIG,
-          tolerance=GA_CORNER, threads=1, resources={"runtime": 60, "mem_mb": 2000})
+@artefact(
+    "ga_paper_box",
+    outputs=["extra_ga_paper_box.csv", "extra_ga_paper_box.md"],
+    config=INDEX_CONFIG,
+    tolerance=GA_CORNER,
+    threads=1,
+    resources={"runtime": 60, "mem_mb": 2000},
+)
 def ga_paper_box(config: dict, outdir: Path) -> list[Path]:
     """extra_ga_paper_box: the same GA on the smallest box that holds both of the paper's designs
     (Table 3 before and after; L and d fixed). Where does the optimum land inside it?"""
     before, after = _vec(P3P4S.zhao2017()), _vec(P3P4S.zhao2017_optimised())
     lo, hi = np.minimum(before, after), np.maximum(before, after)
-    box = {"r_a": [float(lo[0]), float(hi[0])], "r_b": [float(lo[1]), float(hi[1])], "L": [float(lo[2]), float(hi[2])],
-           "d": [float(lo[3]), float(hi[3])], "phi_deg": [round(float(np.rad2deg(lo[4])), 9), round(float(np.rad2deg(hi[4])), 9)]}
-    boxed = {**config, KEY: {**config[KEY], "optimization": {**config[KEY]["optimization"], "bounds": box}}}
+    box = {
+        "r_a": [float(lo[0]), float(hi[0])],
+        "r_b": [float(lo[1]), float(hi[1])],
+        "L": [float(lo[2]), float(hi[2])],
+        "d": [float(lo[3]), float(hi[3])],
+        "phi_deg": [round(float(np.rad2deg(lo[4])), 9), round(float(np.rad2deg(hi[4])), 9)],
+    }
+    boxed = {
+        **config,
+        KEY: {**config[KEY], "optimization": {**config[KEY]["optimization"], "bounds": box}},
+    }
     res = _optimise(_key(boxed))
     rows = []
     for seed, r in res["runs"].items():
         F = res["obj"](r.x[None])[0]
-        rows.append({"seed": seed, "r_a_m": r.x[0], "r_b_m": r.x[1], "L_m": r.x[2], "d_m": r.x[3],
-                     "phi_deg": np.rad2deg(r.x[4]), "delta_m": float(ix.design_arrays(*r.x)[0]),
-                     "sigma1": F[0], "sigma2": F[1], "sigma3": F[2], "f": r.fun,
-                     "dist_to_paper_after": float(np.max(np.abs((r.x - after) / np.where(hi > lo, hi - lo, 1.0))))})
-    notes = (f"Box: r_a {box['r_a']}, r_b {box['r_b']}, L {box['L']}, d {box['d']} m, phi {box['phi_deg']} deg. "
-             "dist_to_paper_after: largest distance to the paper's after design, as a fraction of each box side "
-             "(0 = the same design). If the GA lands on the after design, the paper's optimum is consistent with a "
-             "corner of such a box: its 'optimisation' may mostly reflect its (unstated) bounds.")
-    return write_table(pd.DataFrame(rows), outdir / "extra_ga_paper_box",
-                       title="GA inside the box spanned by the paper's two designs", notes=notes, floatfmt=".5g")
+        rows.append(
+            {
+                "seed": seed,
+                "r_a_m": r.x[0],
+                "r_b_m": r.x[1],
+                "L_m": r.x[2],
+                "d_m": r.x[3],
+                "phi_deg": np.rad2deg(r.x[4]),
+                "delta_m": float(ix.design_arrays(*r.x)[0]),
+                "sigma1": F[0],
+                "sigma2": F[1],
+                "sigma3": F[2],
+                "f": r.fun,
+                "dist_to_paper_after": float(
+                    np.max(np.abs((r.x - after) / np.where(hi > lo, hi - lo, 1.0)))
+                ),
+            }
+        )
+    notes = (
+        f"Box: r_a {box['r_a']}, r_b {box['r_b']}, L {box['L']}, d {box['d']} m, phi {box['phi_deg']} deg. "
+        "dist_to_paper_after: largest distance to the paper's after design, as a fraction of each box side "
+        "(0 = the same design). If the GA lands on the after design, the paper's optimum is consistent with a "
+        "corner of such a box: its 'optimisation' may mostly reflect its (unstated) bounds."
+    )
+    return write_table(
+        pd.DataFrame(rows),
+        outdir / "extra_ga_paper_box",
+        title="GA inside the box spanned by the paper's two designs",
+        notes=notes,
+        floatfmt=".5g",
+    )
 
 
-@artefact("table3", outputs=["table3.csv", "table3.md"], config=INDEX_CONFIG, tolerance=GA,
-          threads=1, resources={"runtime": 60, "mem_mb": 2000})
+@artefact(
+    "table3",
+    outputs=["table3.csv", "table3.md"],
+    config=INDEX_CONFIG,
+    tolerance=GA,
+    threads=1,
+    resources={"runtime": 60, "mem_mb": 2000},
+)
 def table3(config: dict, outdir: Path) -> list[Path]:
     """Table 3: design before/after (the paper's), and ours from the GA (one row per seed), with
     Delta, the global indices and f."""
@@ -574,30 +872,58 @@ def table3(config: dict, outdir: Path) -> list[Path]:
     res = _optimise(_key(config))
     obj, combined = res["obj"], res["combined"]
     rows = []
-    items = [("paper before", _vec(P3P4S.zhao2017())), ("paper after", _vec(P3P4S.zhao2017_optimised()))]
+    items = [
+        ("paper before", _vec(P3P4S.zhao2017())),
+        ("paper after", _vec(P3P4S.zhao2017_optimised())),
+    ]
     items += [(f"ours seed {s}", r.x) for s, r in res["runs"].items()]
     items += [(f"single-objective {n} {s}", x) for (n, s), (_, x) in res["extremes"].items()]
     for label, x in items:
         F = obj(x[None])[0]
         delta = float(ix.design_arrays(*x)[0])
-        rows.append({"design": label, "r_a_m": x[0], "r_b_m": x[1], "L_m": x[2], "d_m": x[3],
-                     "phi_deg": np.rad2deg(x[4]), "delta_m": delta, "sigma1": F[0], "sigma2": F[1], "sigma3": F[2],
-                     "f": float(combined(x[None])[0]) if np.all(np.isfinite(F)) else np.nan})
+        rows.append(
+            {
+                "design": label,
+                "r_a_m": x[0],
+                "r_b_m": x[1],
+                "L_m": x[2],
+                "d_m": x[3],
+                "phi_deg": np.rad2deg(x[4]),
+                "delta_m": delta,
+                "sigma1": F[0],
+                "sigma2": F[1],
+                "sigma3": F[2],
+                "f": float(combined(x[None])[0]) if np.all(np.isfinite(F)) else np.nan,
+            }
+        )
     df = pd.DataFrame(rows)
     b = o["bounds"]
-    notes = (f"Bounds (assumed, §3.4 gives none): r_a {b['r_a']}, r_b {b['r_b']}, L {b['L']}, d {b['d']} m, "
-             f"phi {b['phi_deg']} deg; feasible: every node of W reachable with cond(J) <= {o['max_speed']:g}. "
-             f"Indices by {o['ga_nodes']} Gauss nodes per axis (as in the GA). Normalisation (eq 38) from the "
-             f"single-objective GA runs: min {np.round(res['vmin'], 5).tolist()}, max "
-             f"{np.round(res['vmax'], 5).tolist()} (sigma1, sigma2, sigma3); stiffness term flipped (docs/zhao2017_3p4s.md#g18). "
-             "The indices depend on (r_a, r_b, d) only through delta = r_b - sqrt(r_a^2 - d^2/4): any design with "
-             "the same (delta, L, phi) is equally optimal, so compare delta, L, phi across seeds.")
-    return write_table(df, outdir / "table3", title="Table 3: design before and after optimisation", notes=notes,
-                       floatfmt=".5g")
+    notes = (
+        f"Bounds (assumed, §3.4 gives none): r_a {b['r_a']}, r_b {b['r_b']}, L {b['L']}, d {b['d']} m, "
+        f"phi {b['phi_deg']} deg; feasible: every node of W reachable with cond(J) <= {o['max_speed']:g}. "
+        f"Indices by {o['ga_nodes']} Gauss nodes per axis (as in the GA). Normalisation (eq 38) from the "
+        f"single-objective GA runs: min {np.round(res['vmin'], 5).tolist()}, max "
+        f"{np.round(res['vmax'], 5).tolist()} (sigma1, sigma2, sigma3); stiffness term flipped (docs/zhao2017_3p4s.md#g18). "
+        "The indices depend on (r_a, r_b, d) only through delta = r_b - sqrt(r_a^2 - d^2/4): any design with "
+        "the same (delta, L, phi) is equally optimal, so compare delta, L, phi across seeds."
+    )
+    return write_table(
+        df,
+        outdir / "table3",
+        title="Table 3: design before and after optimisation",
+        notes=notes,
+        floatfmt=".5g",
+    )
 
 
-@artefact("pareto", outputs=["extra_pareto.png", "extra_pareto.csv", "extra_pareto_marks.csv"], config=INDEX_CONFIG,
-          tolerance=GA, threads=1, resources={"runtime": 90, "mem_mb": 2000})
+@artefact(
+    "pareto",
+    outputs=["extra_pareto.png", "extra_pareto.csv", "extra_pareto_marks.csv"],
+    config=INDEX_CONFIG,
+    tolerance=GA,
+    threads=1,
+    resources={"runtime": 90, "mem_mb": 2000},
+)
 def pareto(config: dict, outdir: Path) -> list[Path]:
     """extra_pareto: NSGA-II front of (sigma1, -sigma2, sigma3) over (r_a, r_b, L, d, phi) with the
     paper's designs and our weighted-sum optimum marked."""
@@ -613,28 +939,65 @@ def pareto(config: dict, outdir: Path) -> list[Path]:
         return np.stack([v[:, 0], -v[:, 1], v[:, 2]], axis=-1)
 
     ticker = Progress("NSGA-II", int(o["nsga2_generations"]), "generations")
-    front = nsga2(counting(F, ticker), lo, hi, 3, population=int(o["nsga2_population"]), generations=int(o["nsga2_generations"]),
-                  seed=seed_for(config, f"{KEY}.nsga2") % 2**31)
+    front = nsga2(
+        counting(F, ticker),
+        lo,
+        hi,
+        3,
+        population=int(o["nsga2_population"]),
+        generations=int(o["nsga2_generations"]),
+        seed=seed_for(config, f"{KEY}.nsga2") % 2**31,
+    )
     delta = ix.design_arrays(*front.X.T)[0]
-    df = pd.DataFrame({"r_a_m": front.X[:, 0], "r_b_m": front.X[:, 1], "L_m": front.X[:, 2], "d_m": front.X[:, 3],
-                       "phi_deg": np.rad2deg(front.X[:, 4]), "delta_m": delta, "sigma1": front.F[:, 0],
-                       "sigma2": -front.F[:, 1], "sigma3": front.F[:, 2]})
-    marks = {"paper before": _vec(P3P4S.zhao2017()), "paper after": _vec(P3P4S.zhao2017_optimised())}
+    df = pd.DataFrame(
+        {
+            "r_a_m": front.X[:, 0],
+            "r_b_m": front.X[:, 1],
+            "L_m": front.X[:, 2],
+            "d_m": front.X[:, 3],
+            "phi_deg": np.rad2deg(front.X[:, 4]),
+            "delta_m": delta,
+            "sigma1": front.F[:, 0],
+            "sigma2": -front.F[:, 1],
+            "sigma3": front.F[:, 2],
+        }
+    )
+    marks = {
+        "paper before": _vec(P3P4S.zhao2017()),
+        "paper after": _vec(P3P4S.zhao2017_optimised()),
+    }
     best_seed = min(res["runs"], key=lambda s: res["runs"][s].fun)
     marks[f"ours (weighted sum, seed {best_seed})"] = res["runs"][best_seed].x
-    mk = pd.DataFrame([{"design": k, **dict(zip(("sigma1", "sigma2", "sigma3"), obj(v[None])[0]))}
-                       for k, v in marks.items()])
-    paths = [write_csv(df, outdir / "extra_pareto.csv"), write_csv(mk, outdir / "extra_pareto_marks.csv")]
+    mk = pd.DataFrame(
+        [
+            {"design": k, **dict(zip(("sigma1", "sigma2", "sigma3"), obj(v[None])[0]))}
+            for k, v in marks.items()
+        ]
+    )
+    paths = [
+        write_csv(df, outdir / "extra_pareto.csv"),
+        write_csv(mk, outdir / "extra_pareto_marks.csv"),
+    ]
     with use_style():
         fig, _ = new_figure((8.4, 4.0))
         fig.clear()
         ax, axz = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.0, 1.25]})
         markers = dict(zip(mk["design"], ("s", "D", "*")))
         # left: every design (the paper's two lie far from the front)
-        ax.scatter(df["sigma1"], df["sigma3"], c=df["sigma2"], s=8, cmap="viridis", label="NSGA-II front")
+        ax.scatter(
+            df["sigma1"], df["sigma3"], c=df["sigma2"], s=8, cmap="viridis", label="NSGA-II front"
+        )
         for _, r in mk.iterrows():
-            ax.scatter(r["sigma1"], r["sigma3"], marker=markers[r["design"]], s=60, facecolor="none",
-                       edgecolor="#D55E00", lw=1.3, label=f"{r['design']}: σ2 = {r['sigma2']:.3g}")
+            ax.scatter(
+                r["sigma1"],
+                r["sigma3"],
+                marker=markers[r["design"]],
+                s=60,
+                facecolor="none",
+                edgecolor="#D55E00",
+                lw=1.3,
+                label=f"{r['design']}: σ2 = {r['sigma2']:.3g}",
+            )
         ax.set_xlabel("global dynamic index σ1 (kg)")
         ax.set_ylabel("global speed index σ3 = mean cond(J)")
         ax.set_title("all designs", fontsize="small")
@@ -646,8 +1009,15 @@ def pareto(config: dict, outdir: Path) -> list[Path]:
         sc = axz.scatter(df["sigma1"], df["sigma3"], c=df["sigma2"], s=14, cmap="viridis")
         for _, r in mk.iterrows():
             if x0 - mx <= r["sigma1"] <= x1 + mx and y0 - my <= r["sigma3"] <= y1 + my:
-                axz.scatter(r["sigma1"], r["sigma3"], marker=markers[r["design"]], s=80, facecolor="none",
-                            edgecolor="#D55E00", lw=1.3)
+                axz.scatter(
+                    r["sigma1"],
+                    r["sigma3"],
+                    marker=markers[r["design"]],
+                    s=80,
+                    facecolor="none",
+                    edgecolor="#D55E00",
+                    lw=1.3,
+                )
         axz.set_xlim(x0 - mx, x1 + mx)
         axz.set_ylim(y0 - my, y1 + my)
         axz.ticklabel_format(useOffset=False)
@@ -655,8 +1025,11 @@ def pareto(config: dict, outdir: Path) -> list[Path]:
         axz.set_title("the front, zoomed (colour: σ2)", fontsize="small")
         cb = fig.colorbar(sc, ax=axz)
         cb.set_label("global stiffness σ2 (λ$_{min}$, k = 1 N/m)")
-        fig.suptitle(f"Beyond the paper: NSGA-II Pareto front of (σ1, σ2, σ3), {len(df)} designs "
-                     f"(pop {o['nsga2_population']}, {o['nsga2_generations']} generations)", fontsize="small")
+        fig.suptitle(
+            f"Beyond the paper: NSGA-II Pareto front of (σ1, σ2, σ3), {len(df)} designs "
+            f"(pop {o['nsga2_population']}, {o['nsga2_generations']} generations)",
+            fontsize="small",
+        )
     paths.append(save_figure(fig, outdir / "extra_pareto.png"))
     return paths
 
@@ -668,73 +1041,166 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     gpath = figdir / "extra_global_indices.csv"
     if gpath.exists():
         g = pd.read_csv(gpath).set_index("design")
-        why_after = ("after design not reproduced: with the §2.4 masses our (sigma1, sigma3) pairs are tied; no "
-                     "workspace gives the paper's after pair (extra_index_sensitivity, docs/zhao2017_3p4s.md#s4.6); "
-                     "what does is not known")
+        why_after = (
+            "after design not reproduced: with the §2.4 masses our (sigma1, sigma3) pairs are tied; no "
+            "workspace gives the paper's after pair (extra_index_sensitivity, docs/zhao2017_3p4s.md#s4.6); "
+            "what does is not known"
+        )
         assumed_w = "the workspace W (not defined in the paper; docs/zhao2017_3p4s.md#g15)"
-        for which, fig_s1, fig_s2, fig_s3 in (("before", "fig15", "fig19", "fig23"), ("after", "fig17", "fig21", "fig25")):
+        for which, fig_s1, fig_s2, fig_s3 in (
+            ("before", "fig15", "fig19", "fig23"),
+            ("after", "fig17", "fig21", "fig25"),
+        ):
             r = g.loc[which]
-            for art, q, col, unit in ((fig_s1, f"sigma1.{which}", "sigma1", "kg"),
-                                      (fig_s2, f"sigma2.{which}", "sigma2_lambda", "N/m"),
-                                      (fig_s3, f"sigma3.{which}", "sigma3", "1")):
+            for art, q, col, unit in (
+                (fig_s1, f"sigma1.{which}", "sigma1", "kg"),
+                (fig_s2, f"sigma2.{which}", "sigma2_lambda", "N/m"),
+                (fig_s3, f"sigma3.{which}", "sigma3", "1"),
+            ):
                 pv = printed_value(ref, art, q)
-                reason = ("over the 7 readings of W in extra_index_sensitivity the error spans a range wider than "
-                          "the tolerance, so this agreement rests on the chosen W")
+                reason = (
+                    "over the 7 readings of W in extra_index_sensitivity the error spans a range wider than "
+                    "the tolerance, so this agreement rests on the chosen W"
+                )
                 if which == "after":
                     reason = why_after
                 elif col == "sigma2_lambda":
-                    reason = ("mean lambda_min(J^T J), k = 1; the printed 0.1373 sits at the top of its own range "
-                              "[0.04, 0.16] and equals f_min to 3 digits (a slip is suspected, not shown)")
-                out.append(Claim(KEY, art, q, pv, float(r[col]), unit, "lambda_min" if "sigma2" in col else "",
-                                 tol=TOL_REL * float(pv), reason=reason, basis=assumed_w))
+                    reason = (
+                        "mean lambda_min(J^T J), k = 1; the printed 0.1373 sits at the top of its own range "
+                        "[0.04, 0.16] and equals f_min to 3 digits (a slip is suspected, not shown)"
+                    )
+                out.append(
+                    Claim(
+                        KEY,
+                        art,
+                        q,
+                        pv,
+                        float(r[col]),
+                        unit,
+                        "lambda_min" if "sigma2" in col else "",
+                        tol=TOL_REL * float(pv),
+                        reason=reason,
+                        basis=assumed_w,
+                    )
+                )
             pv = printed_value(ref, fig_s2, f"sigma2.{which}")
-            out.append(Claim(KEY, fig_s2, f"sigma2.{which}", pv, float(r["sigma2_sqrt"]), "sqrt(N/m)",
-                             "sqrt(lambda_min), eq 33 as printed", tol=TOL_REL * float(pv), basis=assumed_w,
-                             reason="eq 33's square root does not fit the printed ranges (docs/zhao2017_3p4s.md#g17)",
-                             evidence=f"{KEY}/extra_global_indices.md"))
-            for art, prefix, col in ((fig_s1, "sigma.range", "dynamic"), (fig_s2, "sigma_star.range", "stiffness_lambda"),
-                                     (fig_s3, "sigma_hat.range", "speed")):
+            out.append(
+                Claim(
+                    KEY,
+                    fig_s2,
+                    f"sigma2.{which}",
+                    pv,
+                    float(r["sigma2_sqrt"]),
+                    "sqrt(N/m)",
+                    "sqrt(lambda_min), eq 33 as printed",
+                    tol=TOL_REL * float(pv),
+                    basis=assumed_w,
+                    reason="eq 33's square root does not fit the printed ranges (docs/zhao2017_3p4s.md#g17)",
+                    evidence=f"{KEY}/extra_global_indices.md",
+                )
+            )
+            for art, prefix, col in (
+                (fig_s1, "sigma.range", "dynamic"),
+                (fig_s2, "sigma_star.range", "stiffness_lambda"),
+                (fig_s3, "sigma_hat.range", "speed"),
+            ):
                 for end in ("min", "max"):
                     pv = printed_value(ref, art, f"{prefix}.{which}.{end}")
-                    out.append(Claim(KEY, art, f"{prefix}.{which}.{end}", pv, float(r[f"{col}_{end}"]), "1",
-                                     "colour-bar range over the W plane", basis=assumed_w,
-                                     reason="colour-bar limits read off a figure; W not defined (docs/zhao2017_3p4s.md#g15)"
-                                     + ("; " + why_after if which == "after" else "")))
-        for q, col, inv in (("gain.dynamic", "sigma1", False), ("gain.stiffness", "sigma2_lambda", True),
-                            ("gain.speed", "sigma3", False)):
+                    out.append(
+                        Claim(
+                            KEY,
+                            art,
+                            f"{prefix}.{which}.{end}",
+                            pv,
+                            float(r[f"{col}_{end}"]),
+                            "1",
+                            "colour-bar range over the W plane",
+                            basis=assumed_w,
+                            reason="colour-bar limits read off a figure; W not defined (docs/zhao2017_3p4s.md#g15)"
+                            + ("; " + why_after if which == "after" else ""),
+                        )
+                    )
+        for q, col, inv in (
+            ("gain.dynamic", "sigma1", False),
+            ("gain.stiffness", "sigma2_lambda", True),
+            ("gain.speed", "sigma3", False),
+        ):
             b, a = float(g.loc["before", col]), float(g.loc["after", col])
             gain = a / b if inv else b / a
             for art in ("text_s3.4", "abstract", "conclusion"):
-                out.append(Claim(KEY, art, q, printed_value(ref, art, q), gain, "1",
-                                 "paper's before/after designs, our indices", basis=assumed_w,
-                                 reason="after design not reproduced; the gain under other readings of W is in "
-                                        "extra_index_sensitivity"))
+                out.append(
+                    Claim(
+                        KEY,
+                        art,
+                        q,
+                        printed_value(ref, art, q),
+                        gain,
+                        "1",
+                        "paper's before/after designs, our indices",
+                        basis=assumed_w,
+                        reason="after design not reproduced; the gain under other readings of W is in "
+                        "extra_index_sensitivity",
+                    )
+                )
     t3 = figdir / "table3.csv"
     if t3.exists():
         t = pd.read_csv(t3)
         ours = t[t["design"].str.startswith("ours")]
         best = ours.loc[ours["f"].idxmin()]
-        out.append(Claim(KEY, "fig14", "f_min", printed_value(ref, "fig14", "f_min"), float(best["f"]), "1",
-                         f"best of {len(ours)} seeds", basis="the design bounds (docs/zhao2017_3p4s.md#g19)",
-                         reason="depends on the (unstated) bounds and the normalisation extremes; ours from the "
-                                "assumed bounds (table3.md); which of them moves f_min is not shown"))
-        for var, col, scale in (("r_a", "r_a_m", 1), ("r_b", "r_b_m", 1), ("l", "L_m", 1), ("d", "d_m", 1),
-                                ("phi", "phi_deg", 1)):
-            out.append(Claim(KEY, "table3", f"after.{var}", printed_value(ref, "table3", f"after.{var}"),
-                             float(best[col]) * scale, "deg" if var == "phi" else "m", "GA, best seed",
-                             basis="the design bounds (docs/zhao2017_3p4s.md#g19)", evidence=f"{KEY}/extra_ga_paper_box.md",
-                             reason="bounds not given (docs/zhao2017_3p4s.md#g19); (r_a, r_b, d) enter only through delta, so only "
-                                    "delta, L, phi are identifiable; inside the box spanned by the paper's two designs "
-                                    "the same GA lands on the paper's after design"))
+        out.append(
+            Claim(
+                KEY,
+                "fig14",
+                "f_min",
+                printed_value(ref, "fig14", "f_min"),
+                float(best["f"]),
+                "1",
+                f"best of {len(ours)} seeds",
+                basis="the design bounds (docs/zhao2017_3p4s.md#g19)",
+                reason="depends on the (unstated) bounds and the normalisation extremes; ours from the "
+                "assumed bounds (table3.md); which of them moves f_min is not shown",
+            )
+        )
+        for var, col, scale in (
+            ("r_a", "r_a_m", 1),
+            ("r_b", "r_b_m", 1),
+            ("l", "L_m", 1),
+            ("d", "d_m", 1),
+            ("phi", "phi_deg", 1),
+        ):
+            out.append(
+                Claim(
+                    KEY,
+                    "table3",
+                    f"after.{var}",
+                    printed_value(ref, "table3", f"after.{var}"),
+                    float(best[col]) * scale,
+                    "deg" if var == "phi" else "m",
+                    "GA, best seed",
+                    basis="the design bounds (docs/zhao2017_3p4s.md#g19)",
+                    evidence=f"{KEY}/extra_ga_paper_box.md",
+                    reason="bounds not given (docs/zhao2017_3p4s.md#g19); (r_a, r_b, d) enter only through delta, so only "
+                    "delta, L, phi are identifiable; inside the box spanned by the paper's two designs "
+                    "the same GA lands on the paper's after design",
+                )
+            )
     conv = figdir / "fig14_ga_convergence.csv"
     if conv.exists():
         gens = ga_convergence_generations(pd.read_csv(conv))
-        out.append(Claim(KEY, "fig14", "ga.convergence_generation", printed_value(ref, "fig14", "ga.convergence_generation"),
-                         float(np.median(gens)), "1",
-                         f"median over {len(gens)} seeds ({', '.join(str(g) for g in gens)}): first generation from which "
-                         f"the best f stays within {100 * CONVERGED_REL:g} % of its final value",
-                         basis="the design bounds (docs/zhao2017_3p4s.md#g19)",
-                         reason="the generation depends on the search box, which the paper does not give"))
+        out.append(
+            Claim(
+                KEY,
+                "fig14",
+                "ga.convergence_generation",
+                printed_value(ref, "fig14", "ga.convergence_generation"),
+                float(np.median(gens)),
+                "1",
+                f"median over {len(gens)} seeds ({', '.join(str(g) for g in gens)}): first generation from which "
+                f"the best f stays within {100 * CONVERGED_REL:g} % of its final value",
+                basis="the design bounds (docs/zhao2017_3p4s.md#g19)",
+                reason="the generation depends on the search box, which the paper does not give",
+            )
+        )
     return out
 
 
@@ -751,7 +1217,9 @@ def ga_convergence_generations(df: pd.DataFrame) -> list[int]:
         f = df[col].to_numpy(float)
         ok = np.abs(f - f[-1]) <= CONVERGED_REL * abs(f[-1])
         bad = np.flatnonzero(~ok)
-        gens.append(int(df["generation"].iloc[bad[-1] + 1]) if bad.size else int(df["generation"].iloc[0]))
+        gens.append(
+            int(df["generation"].iloc[bad[-1] + 1]) if bad.size else int(df["generation"].iloc[0])
+        )
     return gens
 
 
@@ -795,15 +1263,24 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
         ns = sorted(gs["n"].unique())
         if len(ns) >= 3:
             n2 = ns[-2]
-            worst = gs[gs["n"] == n2][["sigma1_rel_to_finest", "sigma2_lambda_rel_to_finest",
-                                       "sigma3_rel_to_finest"]].to_numpy().max()
-            parts.append(f"Quadrature: Gauss-Legendre with {n2} nodes per axis is within {worst:.1e} (relative) of "
-                         f"{ns[-1]} nodes (`extra_index_convergence.md`).")
+            worst = (
+                gs[gs["n"] == n2][
+                    ["sigma1_rel_to_finest", "sigma2_lambda_rel_to_finest", "sigma3_rel_to_finest"]
+                ]
+                .to_numpy()
+                .max()
+            )
+            parts.append(
+                f"Quadrature: Gauss-Legendre with {n2} nodes per axis is within {worst:.1e} (relative) of "
+                f"{ns[-1]} nodes (`extra_index_convergence.md`)."
+            )
     bm = figdir / "extra_index_benchmark.csv"
     if bm.exists():
         r = pd.read_csv(bm).iloc[0]
-        parts.append(f"Benchmark: all indices on {int(r['poses'])} poses batched in {r['batched_s']:.3f} s vs "
-                     f"{r['loop_s_extrapolated']:.2f} s per-pose loop (x{r['ratio']:.0f}).")
+        parts.append(
+            f"Benchmark: all indices on {int(r['poses'])} poses batched in {r['batched_s']:.3f} s vs "
+            f"{r['loop_s_extrapolated']:.2f} s per-pose loop (x{r['ratio']:.0f})."
+        )
     t3 = figdir / "table3.csv"
     if t3.exists():
         t = pd.read_csv(t3)
@@ -819,9 +1296,11 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     pp = figdir / "extra_pareto.csv"
     if pp.exists():
         p = pd.read_csv(pp)
-        parts.append(f"NSGA-II front: {len(p)} non-dominated designs, sigma1 {p['sigma1'].min():.4g}-"
-                     f"{p['sigma1'].max():.4g}, sigma2 {p['sigma2'].min():.4g}-{p['sigma2'].max():.4g}, sigma3 "
-                     f"{p['sigma3'].min():.4g}-{p['sigma3'].max():.4g} (`extra_pareto.png`).")
+        parts.append(
+            f"NSGA-II front: {len(p)} non-dominated designs, sigma1 {p['sigma1'].min():.4g}-"
+            f"{p['sigma1'].max():.4g}, sigma2 {p['sigma2'].min():.4g}-{p['sigma2'].max():.4g}, sigma3 "
+            f"{p['sigma3'].min():.4g}-{p['sigma3'].max():.4g} (`extra_pareto.png`)."
+        )
     box = figdir / "extra_ga_paper_box.csv"
     if box.exists():
         b = pd.read_csv(box)
@@ -834,5 +1313,3 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
             "(`extra_ga_paper_box.md`)."
         )
     return "\n\n".join(parts)
-
-
