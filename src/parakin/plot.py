@@ -52,6 +52,7 @@ __all__ = [
     "draw_mechanism",
     "new_figure",
     "save_figure",
+    "skeleton_from_table",
     "skeleton_table",
     "tex_label",
     "use_style",
@@ -805,3 +806,43 @@ def skeleton_table(skeleton_or_mech: Any, pose: ArrayLike | None = None, *,
             )
     df = pd.DataFrame(rows, columns=["element", "kind", "name", "index", "x", "y", "z"])
     return df.astype({"index": "int64", "x": "float64", "y": "float64", "z": "float64"})
+
+
+def skeleton_from_table(table: pd.DataFrame) -> Skeleton:
+    """The :class:`~parakin.mechanisms.base.Skeleton` a :func:`skeleton_table` lists (e.g. read
+    back from the CSV saved beside a mechanism figure), so the figure can be redrawn from it alone.
+
+    Points, segments and polygons come back in their order; a frame's axes are the unit vectors
+    from its origin to its three arrow tips.
+    """
+    points: dict[str, np.ndarray] = {}
+    segments: dict[str, list] = {}
+    polygons: dict[str, list] = {}
+    frames: dict[str, dict[str, np.ndarray]] = {}
+    for r in table.itertuples(index=False):
+        p = np.array([r.x, r.y, r.z], dtype=float)
+        name = str(r.name)
+        if r.element == "point":
+            points[name] = p
+        elif r.element == "segment":
+            segments.setdefault(name, [str(r.kind), {}])[1][int(r.index)] = p
+        elif r.element == "polygon":
+            polygons.setdefault(name, [str(r.kind), {}])[1][int(r.index)] = p
+        elif r.element == "frame":
+            frames.setdefault(name, {})[str(r.kind)] = p
+        else:
+            raise ValueError(f"skeleton table: unknown element {r.element!r}")
+
+    def ordered(vertices: dict[int, np.ndarray]) -> np.ndarray:
+        return np.array([vertices[i] for i in sorted(vertices)])
+
+    def axes(f: dict[str, np.ndarray]) -> np.ndarray:
+        d = np.stack([f[k] - f["origin"] for k in "xyz"], axis=-1)
+        return d / np.linalg.norm(d, axis=0)
+
+    return Skeleton(
+        points=points,
+        segments=[(kind, ordered(v)) for kind, v in segments.values()],
+        polygons=[(kind, ordered(v)) for kind, v in polygons.values()],
+        frames={n: (f["origin"], axes(f)) for n, f in frames.items()},
+    )

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from typing import Any, ClassVar
 
 import numpy as np
@@ -29,8 +30,11 @@ from parakin.errors import ShapeError, SingularityError, UnreachableError
 from parakin.kernels import Kernel
 
 Array = NDArray[np.float64]
+#: a torch residual ``f(pose (..., n), joints (..., m)) -> (..., m)`` on tensors
+#: (:meth:`Mechanism.torch_residual`; ``Any``: torch is optional)
+TorchResidual = Callable[[Any, Any], Any]
 
-__all__ = ["Mechanism", "Skeleton", "as_batch", "describe_first"]
+__all__ = ["Mechanism", "Skeleton", "TorchResidual", "as_batch", "describe_first"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -219,6 +223,14 @@ class Mechanism(ABC):
         A kernel must compute exactly what ``residual``, ``jacobian_pose``, ``ik``, ``in_domain``
         and ``on_assembly`` compute, so subclasses that override one of them return ``None``
         unless they provide their own."""
+        return None
+
+    def torch_residual(self) -> TorchResidual | None:
+        """A torch port of :meth:`residual`, ``f(pose (..., n), joints (..., m)) -> (..., m)`` on
+        torch tensors (for :mod:`parakin.solvers.torch_newton`), or ``None`` (the default): no
+        port. Ports live beside their mechanism (``<mechanism>_torch.py``, imported lazily here:
+        they need torch) and, like :meth:`kernel`, are refused to subclasses that may change the
+        kinematics."""
         return None
 
     def replace(self, **changes: Any) -> Mechanism:

@@ -29,7 +29,14 @@ from numpy.typing import ArrayLike
 
 from parakin.errors import SingularityError, UnreachableError
 from parakin.kernels import Kernel
-from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
+from parakin.mechanisms.base import (
+    Array,
+    Mechanism,
+    Skeleton,
+    TorchResidual,
+    as_batch,
+    describe_first,
+)
 
 __all__ = ["P3P4S"]
 
@@ -294,6 +301,14 @@ class P3P4S(Mechanism):
         if type(self) is not P3P4S:
             return None
         return self._kernel
+
+    def torch_residual(self) -> TorchResidual | None:
+        """Torch port of :meth:`residual` (:mod:`parakin.mechanisms.p3p4s_torch`); None for a subclass."""
+        if type(self) is not P3P4S:
+            return None
+        from parakin.mechanisms.p3p4s_torch import torch_residual
+
+        return torch_residual(self.e, self.m, self.delta, self.L)
 
     @cached_property
     def _kernel(self) -> Kernel:

@@ -38,7 +38,14 @@ from numpy.typing import ArrayLike
 
 from parakin.errors import UnreachableError
 from parakin.kernels import Kernel
-from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
+from parakin.mechanisms.base import (
+    Array,
+    Mechanism,
+    Skeleton,
+    TorchResidual,
+    as_batch,
+    describe_first,
+)
 
 __all__ = [
     "Stewart12",
@@ -697,6 +704,21 @@ class ActiveLegs(Mechanism):
 
     def in_domain(self, pose: ArrayLike) -> np.ndarray:
         return self.mech.in_domain(pose)
+
+    def torch_residual(self) -> TorchResidual | None:
+        """Torch port of :meth:`residual` (:mod:`parakin.mechanisms.stewart12_torch`, the
+        ``"euler_parameters"`` convention; NotImplementedError for the others); None for a subclass."""
+        if type(self) is not ActiveLegs:
+            return None
+        from parakin.mechanisms.stewart12_torch import active_legs_residual
+
+        legs = [k - 1 for k in self.active]
+        joint_of_leg = np.asarray(self.mech.leg_joint)[legs]
+        return active_legs_residual(
+            self.mech.platform_points_local[joint_of_leg],
+            self.mech.base_points[legs],
+            self.mech.convention,
+        )
 
     def _inside(self, pose: ArrayLike) -> tuple[Array, Array]:
         """Pose with out-of-domain rows (|lambda| >= 1 for Euler parameters) replaced by home, and

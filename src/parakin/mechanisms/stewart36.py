@@ -32,7 +32,14 @@ from numpy.typing import ArrayLike
 from parakin.errors import UnreachableError
 from parakin.geometry import euler_zyx, euler_zyx_from_matrix
 from parakin.kernels import Kernel
-from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
+from parakin.mechanisms.base import (
+    Array,
+    Mechanism,
+    Skeleton,
+    TorchResidual,
+    as_batch,
+    describe_first,
+)
 
 __all__ = ["Stewart36", "TABLE3_ROW1"]
 
@@ -393,6 +400,14 @@ class Stewart36(Mechanism):
         if type(self) is not Stewart36:
             return None
         return self._kernel
+
+    def torch_residual(self) -> TorchResidual | None:
+        """Torch port of :meth:`residual` (:mod:`parakin.mechanisms.stewart36_torch`); None for a subclass."""
+        if type(self) is not Stewart36:
+            return None
+        from parakin.mechanisms.stewart36_torch import torch_residual
+
+        return torch_residual(self.top_points[LEG_TOP], self.base_points)
 
     @cached_property
     def _kernel(self) -> Kernel:

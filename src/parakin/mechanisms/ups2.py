@@ -37,7 +37,14 @@ from numpy.typing import ArrayLike
 from parakin.errors import UnreachableError
 from parakin.geometry import rot_x, rot_y
 from parakin.kernels import Kernel
-from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
+from parakin.mechanisms.base import (
+    Array,
+    Mechanism,
+    Skeleton,
+    TorchResidual,
+    as_batch,
+    describe_first,
+)
 
 __all__ = ["UPS2"]
 
@@ -414,6 +421,16 @@ class UPS2(Mechanism):
         if type(self) is not UPS2:
             return None
         return self._kernel
+
+    def torch_residual(self) -> TorchResidual | None:
+        """Torch port of :meth:`residual` (:mod:`parakin.mechanisms.ups2_torch`); None for a subclass."""
+        if type(self) is not UPS2:
+            return None
+        from parakin.mechanisms.ups2_torch import torch_residual
+
+        return torch_residual(
+            self.home_lengths, self.a, self.c, self.h, self.k, self.link_ratio, self.branch
+        )
 
     @cached_property
     def _kernel(self) -> Kernel:

@@ -5,12 +5,14 @@
 iteration on a torch device. It takes and returns numpy (an :class:`FKResult` with the fields,
 status codes and counters of the numpy solvers) so a benchmark can put it beside ``solve_fk``.
 
-The residual is a torch port of ``mech.residual`` (:func:`torch_residual`), read from the
-mechanism's own parameters; the Jacobian comes from ``torch.func`` (exact to rounding: by default
-one vjp of the batched residual vmapped over the output directions, or ``vmap(jacrev)`` /
-``vmap(jacfwd)`` per row), the step from ``torch.linalg.solve_ex``. Ported mechanisms: :class:`P3P4S`, :class:`UPS2`
-(either ``branch``), :class:`Stewart36`, and :class:`ActiveLegs` of a :class:`Stewart12` in the
-default ``"euler_parameters"`` convention. Anything else raises NotImplementedError.
+The residual is the mechanism's own torch port of ``mech.residual``
+(:meth:`~parakin.mechanisms.base.Mechanism.torch_residual`, kept beside the mechanism in
+``parakin/mechanisms/<mechanism>_torch.py``; this module imports no concrete mechanism); the
+Jacobian comes from ``torch.func`` (exact to rounding: by default one vjp of the batched residual
+vmapped over the output directions, or ``vmap(jacrev)`` / ``vmap(jacfwd)`` per row), the step from
+``torch.linalg.solve_ex``. Ported today: P3P4S, UPS2 (either ``branch``), Stewart36, and ActiveLegs
+of a Stewart12 in the default ``"euler_parameters"`` convention. A mechanism without a port raises
+NotImplementedError.
 
 Device behaviour: one device-to-host sync per iteration, two integers (how many rows take an LU
 step and how many a pinv step: the stop test and the sizes of the gather); the rows still running
@@ -43,10 +45,6 @@ from numpy.typing import ArrayLike
 
 from parakin.errors import ShapeError
 from parakin.mechanisms.base import Mechanism
-from parakin.mechanisms.p3p4s import P3P4S
-from parakin.mechanisms.stewart12 import ActiveLegs, Stewart12
-from parakin.mechanisms.stewart36 import LEG_TOP, Stewart36
-from parakin.mechanisms.ups2 import UPS2
 from parakin.solvers.result import FKResult, Status, summarize
 
 try:  # optional dependency
@@ -57,7 +55,7 @@ except ImportError:  # pragma: no cover - exercised only without torch
 if TYPE_CHECKING:  # pragma: no cover
     from torch import Tensor
 
-__all__ = ["default_device", "gpu_available", "newton_torch", "torch_residual", "PORTED"]
+__all__ = ["default_device", "gpu_available", "newton_torch", "torch_residual"]
 
 ResidualFn = Callable[["Tensor", "Tensor"], "Tensor"]
 
@@ -80,164 +78,24 @@ def default_device() -> str:
 
 
 # ============================================================================ residual ports
-class _Constants:
-    """Numpy constants of a mechanism, converted once per (device, dtype) on first use."""
-
-    def __init__(self, **arrays: Any) -> None:
-        self._np = {k: np.asarray(v) for k, v in arrays.items()}
-        self._cache: dict[tuple[Any, Any], dict[str, Tensor]] = {}
-
-    def on(self, like: Tensor) -> dict[str, Tensor]:
-        key = (like.device, like.dtype)
-        out = self._cache.get(key)
-        if out is None:
-            out = {
-                k: torch.as_tensor(
-                    v, device=like.device, dtype=torch.long if v.dtype.kind in "iu" else like.dtype
-                )
-                for k, v in self._np.items()
-            }
-            self._cache[key] = out
-        return out
-
-
-def _p3p4s(mech: P3P4S) -> ResidualFn:
-    """``(|w_i - l_i m_i|^2 - L^2) / 2L`` with ``w_i = p - delta e_i`` (see :meth:`P3P4S.residual`)."""
-    const = _Constants(e=mech.e, m=mech.m)
-    delta, length = float(mech.delta), float(mech.L)
-
-    def residual(pose: Tensor, joints: Tensor) -> Tensor:
-        c = const.on(pose)
-        rod = pose[..., None, :] - delta * c["e"] - joints[..., :, None] * c["m"]
-        return ((rod * rod).sum(-1) - length**2) / (2 * length)
-
-    return residual
-
-
-def _ups2(mech: UPS2) -> ResidualFn:
-    """Strokes of the closed-form leg lengths minus the inputs (see :meth:`UPS2.lengths_closed_form`).
-
-    ``l1^2 = (r c)^2 + h^2 - 2 r h Y`` with ``r = link_ratio`` (= 4c^2/9 + 3a^2/4 - (2/sqrt3) a Y),
-    ``l2,3^2 = Q -/+ a u sin(beta)``, ``u = rho + k sin(gamma)``, ``rho = branch sqrt(c^2 - Y^2)``.
-    """
-    const = _Constants(home=mech.home_lengths)
-    a, c, h, k = float(mech.a), float(mech.c), float(mech.h), float(mech.k)
-    ratio, branch = float(mech.link_ratio), float(mech.branch)
-
-    def residual(pose: Tensor, joints: Tensor) -> Tensor:
-        beta, gamma, y = pose[..., 0], pose[..., 1], pose[..., 2]
-        rho = branch * torch.sqrt(torch.clamp(c * c - y * y, min=0.0))
-        u = rho + k * torch.sin(gamma)
-        q = (
-            u * u
-            + (k * k + a * a / 4)
-            + (k * torch.cos(gamma) + y - h) ** 2
-            - a * k * torch.cos(beta)
-        )
-        s = a * u * torch.sin(beta)
-        l1 = (ratio * c) ** 2 + h * h - 2 * ratio * h * y
-        sq = torch.stack([l1, q - s, q + s], dim=-1)
-        return torch.sqrt(torch.clamp(sq, min=0.0)) - const.on(pose)["home"] - joints
-
-    return residual
-
-
-def _euler_zyx(a: Tensor, b: Tensor, c: Tensor) -> Tensor:
-    """``Rz(a) Ry(b) Rx(c)`` (..., 3, 3), entry by entry as :func:`parakin.geometry.euler_zyx`."""
-    ca, sa, cb, sb, cc, sc = (
-        torch.cos(a),
-        torch.sin(a),
-        torch.cos(b),
-        torch.sin(b),
-        torch.cos(c),
-        torch.sin(c),
-    )
-    rows = [
-        [ca * cb, ca * sb * sc - sa * cc, ca * sb * cc + sa * sc],
-        [sa * cb, sa * sb * sc + ca * cc, sa * sb * cc - ca * sc],
-        [-sb, cb * sc, cb * cc],
-    ]
-    return torch.stack([torch.stack(r, dim=-1) for r in rows], dim=-2)
-
-
-def _stewart36(mech: Stewart36) -> ResidualFn:
-    """``|T A_p(i) + O_A - B_i|^2 - L_i^2`` (see :meth:`Stewart36.residual`)."""
-    const = _Constants(top=mech.top_points[LEG_TOP], base=mech.base_points)
-
-    def residual(pose: Tensor, joints: Tensor) -> Tensor:
-        c = const.on(pose)
-        rot = _euler_zyx(pose[..., 0], pose[..., 1], pose[..., 2])
-        v = pose[..., None, 3:] + torch.einsum("...ij,kj->...ki", rot, c["top"]) - c["base"]
-        return (v * v).sum(-1) - joints * joints
-
-    return residual
-
-
-def _euler_parameters(lam: Tensor) -> Tensor:
-    """:func:`parakin.mechanisms.stewart12.rotation_matrix` for ``"euler_parameters"``:
-    ``R = (2 l0^2 - 1) I + 2 (lam lam^T + l0 [lam]x)``, ``l0 = sqrt(1 - |lam|^2)``."""
-    l0sq = 1.0 - (lam * lam).sum(-1)
-    l0 = torch.sqrt(l0sq)
-    x, y, z = lam[..., 0], lam[..., 1], lam[..., 2]
-    d = 2 * l0sq - 1
-    rows = [
-        [d + 2 * x * x, 2 * (x * y - l0 * z), 2 * (x * z + l0 * y)],
-        [2 * (y * x + l0 * z), d + 2 * y * y, 2 * (y * z - l0 * x)],
-        [2 * (z * x - l0 * y), 2 * (z * y + l0 * x), d + 2 * z * z],
-    ]
-    return torch.stack([torch.stack(r, dim=-1) for r in rows], dim=-2)
-
-
-def _active_legs(mech: ActiveLegs) -> ResidualFn:
-    """``l_k(pose) - l_k`` over the active legs, NaN where ``|lambda| >= 1`` (see
-    :meth:`ActiveLegs.residual`); ``l_k = |M + R p_j(k) - b_k|`` (:meth:`Stewart12.ik`)."""
-    base: Stewart12 = mech.mech
-    if base.convention != "euler_parameters":
-        raise NotImplementedError(
-            f"torch residual of ActiveLegs is ported for the 'euler_parameters' convention only, "
-            f"not {base.convention!r}"
-        )
-    legs = [k - 1 for k in mech.active]
-    joint_of_leg = np.asarray(base.leg_joint)[legs]
-    const = _Constants(p=base.platform_points_local[joint_of_leg], b=base.base_points[legs])
-
-    def residual(pose: Tensor, joints: Tensor) -> Tensor:
-        c = const.on(pose)
-        bad = (pose[..., 3:] * pose[..., 3:]).sum(-1) >= 1.0
-        x = torch.where(bad[..., None], torch.zeros_like(pose), pose)
-        rot = _euler_parameters(x[..., 3:])
-        v = x[..., None, :3] + torch.einsum("...ij,kj->...ki", rot, c["p"]) - c["b"]
-        r = torch.sqrt((v * v).sum(-1)) - joints
-        return torch.where(bad[..., None], torch.full_like(r, float("nan")), r)
-
-    return residual
-
-
-#: mechanism class -> builder of its torch residual (exact type match: a subclass may change
-#: the kinematics, so it is refused rather than silently solved with its parent's equations)
-PORTED: dict[type, Callable[[Any], ResidualFn]] = {
-    P3P4S: _p3p4s,
-    UPS2: _ups2,
-    Stewart36: _stewart36,
-    ActiveLegs: _active_legs,
-}
-
-
 def torch_residual(mech: Mechanism) -> ResidualFn:
     """A torch port of ``mech.residual``: ``f(pose (..., n), joints (..., m)) -> (..., m)``.
 
-    Works in the dtype and on the device of ``pose`` (float64 matches numpy to rounding), is
-    batched over any leading axes and composes with ``torch.func`` (vmap, jacfwd, jacrev).
-    Raises NotImplementedError for a mechanism type without a port (see :data:`PORTED`).
+    The port is the mechanism's own (:meth:`Mechanism.torch_residual`, written beside the
+    mechanism in ``parakin/mechanisms/<mechanism>_torch.py``). It works in the dtype and on the
+    device of ``pose`` (float64 matches numpy to rounding), is batched over any leading axes and
+    composes with ``torch.func`` (vmap, jacfwd, jacrev). Raises NotImplementedError where the
+    mechanism has no port (the hook returns ``None``, as it does for any subclass of a ported
+    type: a subclass may change the kinematics).
     """
     _need_torch()
-    build = PORTED.get(type(mech))
-    if build is None:
-        known = ", ".join(t.__name__ for t in PORTED)
+    fun = mech.torch_residual()
+    if fun is None:
         raise NotImplementedError(
-            f"no torch residual for mechanism type {type(mech).__name__}; ported: {known}"
+            f"no torch residual for mechanism type {type(mech).__name__} "
+            "(its Mechanism.torch_residual() returns None)"
         )
-    return build(mech)
+    return fun
 
 
 # ============================================================================ the solver
@@ -258,7 +116,7 @@ def newton_torch(
     in :func:`parakin.solvers.solve_fk`; the result has that batch shape. ``device`` defaults to
     :func:`default_device`, ``dtype`` to ``torch.float64``. A row converges when the inf-norm of its
     residual is ``<= tol``; ``maxiter`` bounds the iterations (Newton steps) per row. Needs a
-    square system (``m == n``) and a mechanism type in :data:`PORTED`.
+    square system (``m == n``) and a mechanism with a torch port (:func:`torch_residual`).
 
     ``jacobian`` picks how ``torch.func`` differentiates the residual (all exact to rounding):
     ``"vjp"`` (default) one reverse pass of the whole batch, vmapped over the ``m`` output

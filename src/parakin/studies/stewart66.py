@@ -121,7 +121,9 @@ def assemblies_draw(frame: pd.DataFrame, path: str | Path) -> Path:
         ax.set_zlim(lo[2], hi[2])
         ax.set_axis_off()
         ax.set_title(f"{int(row['solution'])}", fontsize=8)
-    fig.suptitle(f"Dietmaier's 6-6 platform: {n} real assemblies (certified, IK-checked)")
+    fig.suptitle(
+        f"Beyond the papers: Dietmaier's 6-6 platform, {n} real assemblies (certified, IK-checked)"
+    )
     path = Path(path)
     fig.savefig(path)
     return path
@@ -199,7 +201,9 @@ def real_counts_draw(frame: pd.DataFrame, path: str | Path) -> Path:
     ax.set_xlabel("real forward solutions (of 40 complex)")
     ax.set_ylabel("inputs")
     ax.set_xticks(bins[::2])
-    ax.set_title(f"6-6 Gough-Stewart: real solutions per input ({comp:.1f} % of inputs complete)")
+    ax.set_title(
+        f"Beyond the papers: 6-6 Gough-Stewart, real solutions per input\n({comp:.1f} % of inputs complete)"
+    )
     ax.legend(fontsize=8)
     path = Path(path)
     fig.savefig(path)
@@ -306,6 +310,9 @@ def timing_draw(frame: pd.DataFrame, path: str | Path) -> Path:
     ax.set_yticks(y, frame["method"], fontsize=8)
     ax.set_xscale("log")
     ax.set_xlabel("inputs per second (all solutions of each input)")
+    ax.set_title(
+        "Beyond the papers: 6-6 Gough-Stewart, all solutions per input (timings of one machine)"
+    )
     for yi, (_, r) in zip(y, frame.iterrows()):
         ax.text(
             r["inputs_per_s"],

@@ -20,7 +20,15 @@ import parakin.solvers.pso  # noqa: F401  (registers "pso")
 from parakin.claims import Claim, printed_value
 from parakin.config import seed_for
 from parakin.io import write_csv, write_table
-from parakin.papers.li2017_stewart36.common import INPUT_NOTE, KEY, artefact, cfg, fk_input, mech
+from parakin.papers.li2017_stewart36.common import (
+    INPUT_NOTE,
+    KEY,
+    artefact,
+    cfg,
+    drawn,
+    fk_input,
+    mech,
+)
 from parakin.plot import new_figure, save_figure, use_style
 from parakin.progress import Progress
 from parakin.registry import Tolerance
@@ -136,11 +144,35 @@ def table1(config: dict, outdir: Path) -> list[Path]:
     )
 
 
+def draw_fig02(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 2 drawn from ``fig02_chaotic_weights.csv`` alone (columns ``w_mu<mu>`` of the sequences,
+    ``mu`` and ``mu_printed`` the two values of mu)."""
+    mu, mu_printed = (float(frame[c].iloc[0]) for c in ("mu", "mu_printed"))
+    fig, ax = new_figure((6.4, 2.8))
+    ax.plot(
+        frame["t"], frame[f"w_mu{mu:g}"], ".", ms=2.0, color="C0", label=f"μ = {mu:g} (our reading)"
+    )
+    ax.plot(
+        frame["t"],
+        frame[f"w_mu{mu_printed:g}"],
+        "-",
+        lw=1.2,
+        color="C3",
+        label=f"μ = {mu_printed:g} (as printed)",
+    )
+    ax.set_xlabel("iteration t")
+    ax.set_ylabel("inertia weight ω(t) = Z_t")
+    ax.set_ylim(-0.02, 1.02)
+    ax.legend(loc="center right", fontsize="x-small")
+    return save_figure(fig, path)
+
+
 @artefact(
     "fig02",
     outputs=["fig02_chaotic_weights.png", "fig02_chaotic_weights.csv"],
     config=[KEY],
     tolerance=CHAOS,
+    draws=[("fig02_chaotic_weights.png", "fig02_chaotic_weights.csv", draw_fig02)],
 )
 def fig02(config: dict, outdir: Path) -> list[Path]:
     """Fig. 2: the weight sequence omega(t) = Z_t, t = 1..1000, for mu = 4 (and mu = 0.4 as printed)."""
@@ -149,18 +181,18 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
     t = np.arange(1, n + 1)
     z4 = logistic_weights(c["mu"], c["z0"], n)
     z04 = logistic_weights(c["mu_printed"], c["z0"], n)
-    fig, ax = new_figure((6.4, 2.8))
-    ax.plot(t, z4, ".", ms=2.0, color="C0", label=f"μ = {c['mu']:g} (our reading)")
-    ax.plot(t, z04, "-", lw=1.2, color="C3", label=f"μ = {c['mu_printed']:g} (as printed)")
-    ax.set_xlabel("iteration t")
-    ax.set_ylabel("inertia weight ω(t) = Z_t")
-    ax.set_ylim(-0.02, 1.02)
-    ax.legend(loc="center right", fontsize="x-small")
-    df = pd.DataFrame({"t": t, f"w_mu{c['mu']:g}": z4, f"w_mu{c['mu_printed']:g}": z04})
-    return [
-        save_figure(fig, outdir / "fig02_chaotic_weights.png"),
-        write_csv(df, outdir / "fig02_chaotic_weights.csv"),
-    ]
+    df = pd.DataFrame(
+        {
+            "t": t,
+            f"w_mu{c['mu']:g}": z4,
+            f"w_mu{c['mu_printed']:g}": z04,
+            "mu": float(c["mu"]),
+            "mu_printed": float(c["mu_printed"]),
+        }
+    )
+    return drawn(
+        df, outdir / "fig02_chaotic_weights.csv", outdir / "fig02_chaotic_weights.png", draw_fig02
+    )
 
 
 def schedule(config: dict, variant: str, mu: float | None = None):
@@ -210,6 +242,53 @@ def polish(config: dict, res) -> tuple[np.ndarray, np.ndarray]:
     return lm.x, m.objective(lm.x, q)
 
 
+#: the worst fitness of the paper's 50 runs (§3), dashed in Fig. 3
+PAPER_WORST = 1.380507e-30
+
+
+def draw_fig03(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 3 drawn from ``fig03_convergence.csv`` alone: its rows with an ``iteration`` give the
+    median and 10-90 % band per iteration, its rows with a ``run`` the LM-polished fitness of
+    each run (right panel)."""
+    conv = frame[frame["iteration"].notna()]
+    pol = frame[frame["run"].notna()]
+    fig, _ = new_figure((7.0, 4.0))
+    fig.clear()
+    with use_style():
+        ax, ax_lm = fig.subplots(1, 2, sharey=True, gridspec_kw={"width_ratios": [4.2, 1.0]})
+    for color, variant in zip(("C0", "C1", "C2"), VARIANTS):
+        d = conv[conv["variant"] == variant]
+        it = d["iteration"].to_numpy(float)
+        ax.fill_between(it, d["F_q10"], d["F_q90"], color=color, alpha=0.2, lw=0)
+        ax.semilogy(
+            it, d["F_median"], color=color, lw=1.3, label=f"{LABELS[variant]} PSO (median, 10–90 %)"
+        )
+        fpol = pol.loc[pol["variant"] == variant, "F_polished"].to_numpy(float)
+        xs = (
+            VARIANTS.index(variant) + np.linspace(-0.25, 0.25, len(fpol))
+            if len(fpol) > 1
+            else [VARIANTS.index(variant)]
+        )
+        ax_lm.plot(xs, np.maximum(fpol, 1e-33), "o", mfc="none", color=color, ms=3.5)
+    ax.set_xlabel("PSO iteration")
+    ax.set_ylabel("best fitness F (eq. 4)")
+    ax.set_ylim(bottom=1e-33)
+    for a_ in (ax, ax_lm):
+        a_.axhline(
+            PAPER_WORST, color="k", ls="--", lw=1.0, label="paper: worst of its 50 runs, 1.38e-30"
+        )
+    ax_lm.set_xticks(
+        range(len(VARIANTS)), ["chaotic", "standard", "μ = 0.4"], fontsize="x-small", rotation=40
+    )
+    ax_lm.set_xlim(-0.6, len(VARIANTS) - 0.4)
+    ax_lm.set_title("after LM polish\n(each run)", fontsize="small")
+    runs = int((pol["variant"] == VARIANTS[0]).sum())
+    ax.set_title(f"Fig. 3: PSO convergence on one input, {runs} runs per variant", fontsize="small")
+    handles, labels = ax.get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize="x-small", loc="outside lower center", ncols=2)
+    return save_figure(fig, path)
+
+
 @artefact(
     "fig03",
     outputs=[
@@ -222,25 +301,20 @@ def polish(config: dict, res) -> tuple[np.ndarray, np.ndarray]:
     tolerance=CHAOS,
     threads=1,
     resources={"runtime": 30, "mem_mb": 2000},
+    draws=[("fig03_convergence.png", "fig03_convergence.csv", draw_fig03)],
 )
 def fig03(config: dict, outdir: Path) -> list[Path]:
     """Fig. 3: best fitness F (eq. 4) per iteration, median and 10-90 % band over the runs, chaotic vs
     standard PSO; the fitness statistics beside the paper's (best 0, worst 1.38e-30, mean 2.05e-31),
     with PSO + LM polish as a third variant."""
     frames, stats = [], []
-    fig, ax = new_figure((7.0, 4.0))
-    fig.clear()
-    with use_style():
-        ax, ax_lm = fig.subplots(1, 2, sharey=True, gridspec_kw={"width_ratios": [4.2, 1.0]})
-    for color, variant in zip(("C0", "C1", "C2"), VARIANTS):
+    for variant in VARIANTS:
         t0 = time.perf_counter()
         res = run_pso(config, variant)
         wall = time.perf_counter() - t0
         h = np.maximum(res.history, 1e-300)
         it = np.arange(h.shape[1])
         lo, med, hi = np.percentile(h, [10, 50, 90], axis=0)
-        ax.fill_between(it, lo, hi, color=color, alpha=0.2, lw=0)
-        ax.semilogy(it, med, color=color, lw=1.3, label=f"{LABELS[variant]} PSO (median, 10–90 %)")
         frames.append(
             pd.DataFrame(
                 {"variant": variant, "iteration": it, "F_median": med, "F_q10": lo, "F_q90": hi}
@@ -249,12 +323,9 @@ def fig03(config: dict, outdir: Path) -> list[Path]:
         t1 = time.perf_counter()
         _, fpol = polish(config, res)
         wall_pol = time.perf_counter() - t1
-        xs = (
-            VARIANTS.index(variant) + np.linspace(-0.25, 0.25, len(fpol))
-            if len(fpol) > 1
-            else [VARIANTS.index(variant)]
+        frames.append(
+            pd.DataFrame({"variant": variant, "run": np.arange(len(fpol)), "F_polished": fpol})
         )
-        ax_lm.plot(xs, np.maximum(fpol, 1e-33), "o", mfc="none", color=color, ms=3.5)
         for name, f, w in (
             (f"{variant} PSO", res.fitness, wall),
             (f"{variant} PSO + LM", fpol, wall_pol),
@@ -271,30 +342,12 @@ def fig03(config: dict, outdir: Path) -> list[Path]:
                     "wall_time_s": w,
                 }
             )
-    ax.set_xlabel("PSO iteration")
-    ax.set_ylabel("best fitness F (eq. 4)")
-    ax.set_ylim(bottom=1e-33)
-    for a_ in (ax, ax_lm):
-        a_.axhline(
-            1.380507e-30, color="k", ls="--", lw=1.0, label="paper: worst of its 50 runs, 1.38e-30"
-        )
-    ax_lm.set_xticks(
-        range(len(VARIANTS)), ["chaotic", "standard", "μ = 0.4"], fontsize="x-small", rotation=40
-    )
-    ax_lm.set_xlim(-0.6, len(VARIANTS) - 0.4)
-    ax_lm.set_title("after LM polish\n(each run)", fontsize="small")
-    ax.set_title(
-        f"Fig. 3: PSO convergence on one input, {cfg(config)['pso']['runs']} runs per variant",
-        fontsize="small",
-    )
-    handles, labels = ax.get_legend_handles_labels()
-    fig.legend(handles, labels, fontsize="x-small", loc="outside lower center", ncols=2)
+    conv = pd.concat(frames, ignore_index=True).astype({"iteration": "Int64", "run": "Int64"})
     st = pd.DataFrame(stats)
     p = cfg(config)["pso"]
-    return [
-        save_figure(fig, outdir / "fig03_convergence.png"),
-        write_csv(pd.concat(frames), outdir / "fig03_convergence.csv"),
-    ] + write_table(
+    return drawn(
+        conv, outdir / "fig03_convergence.csv", outdir / "fig03_convergence.png", draw_fig03
+    ) + write_table(
         st,
         outdir / "fitness_stats",
         floatfmt=".3g",

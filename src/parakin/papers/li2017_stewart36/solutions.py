@@ -22,11 +22,19 @@ from parakin.papers.li2017_stewart36.common import (
     POSE_COLS,
     artefact,
     cfg,
+    drawn,
     fk_input,
     mech,
     table3,
 )
-from parakin.plot import draw_mechanism, new_figure, save_figure, skeleton_table, use_style
+from parakin.plot import (
+    draw_mechanism,
+    new_figure,
+    save_figure,
+    skeleton_from_table,
+    skeleton_table,
+    use_style,
+)
 from parakin.registry import ROUNDING
 from parakin.solvers import solve_fk
 
@@ -147,6 +155,38 @@ def solutions_artefact(config: dict, outdir: Path) -> list[Path]:
     )
 
 
+def draw_solution_counts(frame: pd.DataFrame, path: Path) -> Path:
+    """Histogram of real-solution counts per b, drawn from ``extra_solution_counts.csv`` alone
+    (columns ``b`` and ``real_0`` .. ``real_16``)."""
+    fig, ax = new_figure((6.4, 2.8))
+    width = 0.8 / len(frame)
+    ks = np.arange(0, 17, 2)
+    for j, (_, r) in enumerate(frame.iterrows()):
+        ax.bar(
+            ks + (j - (len(frame) - 1) / 2) * width * 2,
+            r[[f"real_{k}" for k in ks]].to_numpy(int),
+            width=2 * width,
+            label=f"b = {r['b']:g}",
+        )
+    ax.set_xlabel("number of real forward solutions")
+    ax.set_ylabel("inputs")
+    ax.set_xticks(list(range(0, 17, 2)) + [19])
+    ax.axvline(19, color="0.3", ls="--", lw=1.0)
+    ax.text(
+        18.8,
+        ax.get_ylim()[1] * 0.9,
+        "paper: 19",
+        ha="right",
+        va="top",
+        fontsize="x-small",
+        color="0.3",
+    )
+    ax.axvline(16.5, color="0.6", ls=":", lw=0.8)
+    ax.set_xlim(-1.5, 20)
+    ax.legend(fontsize="x-small")
+    return save_figure(fig, path)
+
+
 @artefact(
     "extra_solution_counts",
     outputs=[
@@ -157,6 +197,7 @@ def solutions_artefact(config: dict, outdir: Path) -> list[Path]:
     ],
     config=[KEY],
     tolerance=ROOTS,
+    draws=[("extra_solution_counts.png", "extra_solution_counts.csv", draw_solution_counts)],
 )
 def counts_artefact(config: dict, outdir: Path) -> list[Path]:
     """Histogram of the number of real FK solutions over random inputs (random pose near Table 3 row 1,
@@ -164,10 +205,7 @@ def counts_artefact(config: dict, outdir: Path) -> list[Path]:
     c = cfg(config)["counts"]
     n, s = int(c["samples"]), float(c["scale"])
     rows, frames = [], []
-    fig, ax = new_figure((6.4, 2.8))
-    bsw = list(cfg(config)["b_sweep"])
-    width = 0.8 / len(bsw)
-    for j, b in enumerate(bsw):
+    for b in cfg(config)["b_sweep"]:
         g = rng(config, f"{KEY}.counts.b{b:g}")
         m = mech(config, b)
         lo, hi = m.pose_bounds()
@@ -206,47 +244,72 @@ def counts_artefact(config: dict, outdir: Path) -> list[Path]:
                 "wall_time_ms_per_input": wall / n * 1e3,
             }
         )
-        ax.bar(
-            np.arange(0, 17, 2) + (j - (len(bsw) - 1) / 2) * width * 2,
-            hist[::2],
-            width=2 * width,
-            label=f"b = {b:g}",
-        )
-    ax.set_xlabel("number of real forward solutions")
-    ax.set_ylabel("inputs")
-    ax.set_xticks(list(range(0, 17, 2)) + [19])
-    ax.axvline(19, color="0.3", ls="--", lw=1.0)
-    ax.text(
-        18.8,
-        ax.get_ylim()[1] * 0.9,
-        "paper: 19",
-        ha="right",
-        va="top",
-        fontsize="x-small",
-        color="0.3",
-    )
-    ax.axvline(16.5, color="0.6", ls=":", lw=0.8)
-    ax.set_xlim(-1.5, 20)
-    ax.legend(fontsize="x-small")
     df = pd.DataFrame(rows)
-    return write_table(
+    tables = write_table(
         df,
         outdir / "extra_solution_counts",
         floatfmt=".3g",
         title="Real forward solutions over random inputs (certified all-solutions FK)",
         notes=f"{n} inputs per b: random pose near Table 3 row 1, IK, each leg scaled by U[{1 - s:g}, {1 + s:g}]; "
         "no_circles = a leg pair cannot reach its base edge.",
-    ) + [
-        save_figure(fig, outdir / "extra_solution_counts.png"),
+    )
+    png = draw_solution_counts(pd.read_csv(tables[0]), outdir / "extra_solution_counts.png")
+    return tables + [
+        png,
         write_csv(pd.concat(frames), outdir / "extra_solution_counts_richest.csv"),
     ]
 
 
+#: length of the frame arrows in Fig. 1 (in units of the top side a)
+FIG1_FRAME_LENGTH = 0.4
+
+
+def draw_fig01(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 1 drawn from its skeleton table (``fig01_structure.csv``, with the base side ``b``)."""
+    ax = draw_mechanism(
+        skeleton_from_table(frame),
+        frame_length=FIG1_FRAME_LENGTH,
+        title=f"3-6 platform, b = {float(frame['b'].iloc[0]):g}, Table 3 row 1",
+    )
+    return save_figure(ax.figure, path)
+
+
+def draw_solutions(frame: pd.DataFrame, path: Path) -> Path:
+    """Every above-base solution side by side, drawn from ``extra_solutions_skeletons.csv`` alone
+    (one skeleton table per ``solution``, with its pose in the paper's units for the title)."""
+    groups = list(frame.groupby("solution", sort=False))
+    k = len(groups)
+    fig, _ = new_figure((3.0 * k, 3.2))
+    fig.clear()
+    for i, (_, sk) in enumerate(groups):
+        a = fig.add_subplot(1, k, i + 1, projection="3d")
+        pose = sk.iloc[0]
+        draw_mechanism(
+            skeleton_from_table(sk),
+            ax=a,
+            labels=False,
+            frames=False,
+            legend=False,
+            title=f"({', '.join(f'{pose[c]:.1f}' for c in ('alpha', 'beta', 'gamma'))})°, "
+            f"Z = {pose['Z']:.3f}",
+        )
+    return save_figure(fig, path)
+
+
 @artefact(
     "fig01",
-    outputs=["fig01_structure.png", "fig01_structure.csv", "extra_solutions.png"],
+    outputs=[
+        "fig01_structure.png",
+        "fig01_structure.csv",
+        "extra_solutions.png",
+        "extra_solutions_skeletons.csv",
+    ],
     config=[KEY],
     tolerance=ROOTS,
+    draws=[
+        ("fig01_structure.png", "fig01_structure.csv", draw_fig01),
+        ("extra_solutions.png", "extra_solutions_skeletons.csv", draw_solutions),
+    ],
 )
 def fig01(config: dict, outdir: Path) -> list[Path]:
     """Fig. 1 redrawn from our model at Table 3 row 1, plus every above-base solution of the
@@ -255,30 +318,76 @@ def fig01(config: dict, outdir: Path) -> list[Path]:
     q = fk_input(config)
     sols = m.fk_all(q)
     up = sols[np.isfinite(sols[:, 0]) & (np.nan_to_num(sols[:, 5]) > 0)]
-    ax = draw_mechanism(
-        m.skeleton(m.home()), frame_length=0.4, title=f"3-6 platform, b = {m.b:g}, Table 3 row 1"
+    structure = skeleton_table(m.skeleton(m.home()), frame_length=FIG1_FRAME_LENGTH)
+    structure["b"] = m.b  # for the title
+    paths = drawn(
+        structure, outdir / "fig01_structure.csv", outdir / "fig01_structure.png", draw_fig01
     )
-    paths = [
-        save_figure(ax.figure, outdir / "fig01_structure.png"),
-        write_csv(
-            skeleton_table(m.skeleton(m.home()), frame_length=0.4), outdir / "fig01_structure.csv"
-        ),
-    ]
-    k = len(up)
-    fig, _ = new_figure((3.0 * k, 3.2))
-    fig.clear()
+    skeletons = []
     for i, s in enumerate(up):
-        a = fig.add_subplot(1, k, i + 1, projection="3d")
-        draw_mechanism(
-            m.skeleton(s),
-            ax=a,
-            labels=False,
-            frames=False,
-            legend=False,
-            title=f"({', '.join(f'{v:.1f}' for v in pose_to_paper(s)[:3])})°, Z = {s[5]:.3f}",
-        )
-    paths.append(save_figure(fig, outdir / "extra_solutions.png"))
-    return paths
+        p = pose_to_paper(s)
+        sk = skeleton_table(m.skeleton(s))
+        sk.insert(0, "solution", i + 1)
+        for col, v in (("alpha", p[0]), ("beta", p[1]), ("gamma", p[2]), ("Z", s[5])):
+            sk.insert(sk.columns.get_loc("element"), col, v)
+        skeletons.append(sk)
+    return paths + drawn(
+        pd.concat(skeletons, ignore_index=True),
+        outdir / "extra_solutions_skeletons.csv",
+        outdir / "extra_solutions.png",
+        draw_solutions,
+    )
+
+
+def draw_cm_velocity(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 5 (surrogate) drawn from ``fig05_cm_velocity.csv`` alone."""
+    fig, ax = new_figure((6.4, 3.0))
+    for c in ("VX", "VY", "VZ"):
+        ax.plot(frame["t_s"], frame[c], lw=1.0, label=c)
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("CM velocity (a/s; a = top side)")
+    ax.set_title(
+        "Fig. 5, SURROGATE: CM velocity of a trajectory built inside the paper's stated ranges\n"
+        "(the Adams drive mapping is not given; recovered by warm-started Newton FK)",
+        fontsize=8,
+    )
+    ax.legend(fontsize="x-small", loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    return save_figure(fig, path)
+
+
+def _draw_ranges(frame: pd.DataFrame, path: Path, cols: tuple[str, ...], unit: str, title: str):
+    """Three coordinates over time, each over the band of the range the paper states (the columns
+    ``<c>_stated_min``, ``<c>_stated_max`` of ``frame``)."""
+    fig, _ = new_figure((6.4, 4.6))
+    fig.clear()
+    with use_style():
+        axs = fig.subplots(3, 1, sharex=True)
+    for axi, c in zip(axs, cols):
+        axi.plot(frame["t_s"], frame[c], lw=1.0, label="recovered by FK")
+        lo, hi = float(frame[f"{c}_stated_min"].iloc[0]), float(frame[f"{c}_stated_max"].iloc[0])
+        axi.axhspan(lo, hi, color="0.85", zorder=0, label="range the\npaper states")
+        axi.set_ylim(lo - 0.2 * (hi - lo), hi + 0.2 * (hi - lo))
+        axi.set_ylabel(c + unit)
+    axs[0].legend(fontsize="x-small", loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    axs[0].set_title(
+        f"{title} of a trajectory built inside the paper's stated ranges\n(the Adams drive mapping "
+        "is not given; lengths in units of the top side a)",
+        fontsize=8,
+    )
+    axs[-1].set_xlabel("t (s)")
+    return save_figure(fig, path)
+
+
+def draw_cm_position(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 6 (surrogate) drawn from ``fig06_cm_position.csv`` alone."""
+    return _draw_ranges(frame, path, ("X", "Y", "Z"), " (a)", "Fig. 6, SURROGATE: CM position")
+
+
+def draw_euler_angles(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 9 (surrogate) drawn from ``fig09_euler_angles.csv`` alone."""
+    return _draw_ranges(
+        frame, path, ("alpha", "beta", "gamma"), " (°)", "Fig. 9, SURROGATE: Euler angles"
+    )
 
 
 @artefact(
@@ -296,6 +405,11 @@ def fig01(config: dict, outdir: Path) -> list[Path]:
     ],
     config=[KEY],
     tolerance=ROUNDING,
+    draws=[
+        ("fig05_cm_velocity.png", "fig05_cm_velocity.csv", draw_cm_velocity),
+        ("fig06_cm_position.png", "fig06_cm_position.csv", draw_cm_position),
+        ("fig09_euler_angles.png", "fig09_euler_angles.csv", draw_euler_angles),
+    ],
 )
 def adams_artefact(config: dict, outdir: Path) -> list[Path]:
     """Surrogate of the Adams study (Figs 5-11; drive mapping unknown, docs/li2017_stewart36.md#s5): a pose trajectory whose
@@ -335,48 +449,20 @@ def adams_artefact(config: dict, outdir: Path) -> list[Path]:
             **{f"L{i + 1}": legs[:, i] for i in range(6)},
         }
     )
-    paths = []
-    fig, ax = new_figure((6.4, 3.0))
-    for c in ("VX", "VY", "VZ"):
-        ax.plot(t, df[c], lw=1.0, label=c)
-    ax.set_xlabel("t (s)")
-    ax.set_ylabel("CM velocity (a/s; a = top side)")
-    ax.set_title(
-        "Fig. 5, SURROGATE: CM velocity of a trajectory built inside the paper's stated ranges\n"
-        "(the Adams drive mapping is not given; recovered by warm-started Newton FK)",
-        fontsize=8,
+    paths = drawn(
+        df[["t_s", "VX", "VY", "VZ"]],
+        outdir / "fig05_cm_velocity.csv",
+        outdir / "fig05_cm_velocity.png",
+        draw_cm_velocity,
     )
-    ax.legend(fontsize="x-small", loc="upper left", bbox_to_anchor=(1.0, 1.0))
-    paths.append(save_figure(fig, outdir / "fig05_cm_velocity.png"))
-    paths.append(write_csv(df[["t_s", "VX", "VY", "VZ"]], outdir / "fig05_cm_velocity.csv"))
-    for stem, cols, unit, title in (
-        ("fig06_cm_position", ("X", "Y", "Z"), " (a)", "Fig. 6, SURROGATE: CM position"),
-        (
-            "fig09_euler_angles",
-            ("alpha", "beta", "gamma"),
-            " (°)",
-            "Fig. 9, SURROGATE: Euler angles",
-        ),
+    for stem, cols, draw in (
+        ("fig06_cm_position", ("X", "Y", "Z"), draw_cm_position),
+        ("fig09_euler_angles", ("alpha", "beta", "gamma"), draw_euler_angles),
     ):
-        fig, _ = new_figure((6.4, 4.6))
-        fig.clear()
-        with use_style():
-            axs = fig.subplots(3, 1, sharex=True)
-        for axi, c in zip(axs, cols):
-            axi.plot(t, df[c], lw=1.0, label="recovered by FK")
-            lo, hi = rngs[c]
-            axi.axhspan(lo, hi, color="0.85", zorder=0, label="range the\npaper states")
-            axi.set_ylim(lo - 0.2 * (hi - lo), hi + 0.2 * (hi - lo))
-            axi.set_ylabel(c + unit)
-        axs[0].legend(fontsize="x-small", loc="upper left", bbox_to_anchor=(1.0, 1.0))
-        axs[0].set_title(
-            f"{title} of a trajectory built inside the paper's stated ranges\n(the Adams drive mapping "
-            "is not given; lengths in units of the top side a)",
-            fontsize=8,
-        )
-        axs[-1].set_xlabel("t (s)")
-        paths.append(save_figure(fig, outdir / f"{stem}.png"))
-        paths.append(write_csv(df[["t_s", *cols]], outdir / f"{stem}.csv"))
+        fig_df = df[["t_s", *cols]].copy()
+        for c in cols:  # the ranges the paper states, drawn as bands
+            fig_df[f"{c}_stated_min"], fig_df[f"{c}_stated_max"] = rngs[c]
+        paths += drawn(fig_df, outdir / f"{stem}.csv", outdir / f"{stem}.png", draw)
     paths.append(write_csv(df, outdir / "extra_adams_trajectory.csv"))
     summ = pd.DataFrame(
         [

@@ -11,14 +11,33 @@ import pandas as pd
 
 from parakin.claims import Claim, printed_value
 from parakin.config import rng
-from parakin.io import write_csv, write_table
-from parakin.papers.li2020_2ups.common import KEY, artefact, mech
+from parakin.io import write_table
+from parakin.papers.li2020_2ups.common import KEY, artefact, drawn, mech
 from parakin.papers.li2020_2ups.symbolic import derivation, loop_closure_model
-from parakin.plot import draw_mechanism, new_figure, save_figure, skeleton_table
+from parakin.plot import (
+    draw_mechanism,
+    new_figure,
+    save_figure,
+    skeleton_from_table,
+    skeleton_table,
+    use_style,
+)
 from parakin.registry import DESCRIPTIVE, EXACT, ROUNDING
 
 #: pose drawn in Fig. 1 (deg, deg, mm): tilted so that both rotations are visible
 FIG1_POSE = (15.0, 20.0, 30.0)
+#: length of the frame arrows in Fig. 1 (m)
+FIG1_FRAME_LENGTH = 0.06
+
+
+def draw_fig01(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 1 drawn from its skeleton table (``fig01_mechanism.csv``) alone."""
+    ax = draw_mechanism(
+        skeleton_from_table(frame),
+        frame_length=FIG1_FRAME_LENGTH,
+        title=f"2-UPS/(S+SPR)R at β = {FIG1_POSE[0]:g}°, γ = {FIG1_POSE[1]:g}°, Y = {FIG1_POSE[2]:g} mm",
+    )
+    return save_figure(ax.figure, path)
 
 
 @artefact(
@@ -26,19 +45,14 @@ FIG1_POSE = (15.0, 20.0, 30.0)
     outputs=["fig01_mechanism.png", "fig01_mechanism.csv"],
     config=[KEY],
     tolerance=DESCRIPTIVE,
+    draws=[("fig01_mechanism.png", "fig01_mechanism.csv", draw_fig01)],
 )
 def fig01(config: dict, outdir: Path) -> list[Path]:
     """Fig. 1 redrawn from our model at FIG1_POSE, with the plotted coordinates as CSV."""
     m = mech(config)
     pose = np.array([np.deg2rad(FIG1_POSE[0]), np.deg2rad(FIG1_POSE[1]), FIG1_POSE[2] * 1e-3])
-    sk = m.skeleton(pose)
-    ax = draw_mechanism(
-        sk,
-        frame_length=0.06,
-        title=f"2-UPS/(S+SPR)R at β = {FIG1_POSE[0]:g}°, γ = {FIG1_POSE[1]:g}°, Y = {FIG1_POSE[2]:g} mm",
-    )
-    png = save_figure(ax.figure, outdir / "fig01_mechanism.png")
-    return [png, write_csv(skeleton_table(sk, frame_length=0.06), outdir / "fig01_mechanism.csv")]
+    table = skeleton_table(m.skeleton(pose), frame_length=FIG1_FRAME_LENGTH)
+    return drawn(table, outdir / "fig01_mechanism.csv", outdir / "fig01_mechanism.png", draw_fig01)
 
 
 @artefact(
@@ -137,11 +151,39 @@ def _dof(config: dict) -> int:
     return int(min(dofs))
 
 
+def _grid(frame: pd.DataFrame, axes: tuple[str, ...], *values: str) -> list[np.ndarray]:
+    """Columns of a grid saved raveled in ``indexing="ij"`` order, reshaped to the grid (one axis
+    per name in ``axes``, as many points as it has distinct values): axes first, then ``values``."""
+    shape = tuple(frame[a].nunique() for a in axes)
+    return [frame[c].to_numpy().reshape(shape) for c in (*axes, *values)]
+
+
+def draw_parasitic(frame: pd.DataFrame, path: Path) -> Path:
+    """X and dZ over the (beta, Y) box, drawn from ``extra_parasitic.csv`` alone."""
+    bb, yy, x_mm, dz_mm = _grid(frame, ("beta_deg", "Y_mm"), "X_mm", "dZ_mm")
+    a, b, c = (float(frame[k].iloc[0]) for k in ("a_mm", "b_mm", "c_mm"))
+    fig, axes = new_figure((6.6, 2.8))
+    fig.clear()
+    fig.set_layout_engine(None)
+    axs = fig.subplots(1, 2)
+    fig.subplots_adjust(left=0.09, right=0.92, bottom=0.17, top=0.86, wspace=0.62)
+    for ax, val, lab in zip(axs, (x_mm, dz_mm), ("X (mm)", "ΔZ = c − Z (mm)")):
+        cs = ax.contourf(bb, yy, val, levels=15, cmap="viridis")
+        ax.contour(bb, yy, val, levels=cs.levels[::3], colors="k", linewidths=0.4)
+        fig.colorbar(cs, ax=ax, label=lab)
+        ax.set_xlabel("β (deg)")
+        ax.set_ylabel("Y (mm)")
+        ax.set_xticks([-30, -15, 0, 15, 30])
+    fig.suptitle(f"Parasitic translations of B1 (a, b, c = {a:g}, {b:g}, {c:g} mm)")
+    return save_figure(fig, path)
+
+
 @artefact(
     "parasitic",
     outputs=["extra_parasitic.png", "extra_parasitic.csv"],
     config=[KEY],
     tolerance=ROUNDING,
+    draws=[("extra_parasitic.png", "extra_parasitic.csv", draw_parasitic)],
 )
 def parasitic(config: dict, outdir: Path) -> list[Path]:
     """Extra: the parasitic translations X = rho sin(beta) and dZ = c - rho cos(beta) over the
@@ -160,27 +202,29 @@ def parasitic(config: dict, outdir: Path) -> list[Path]:
             "Y_mm": (yy * 1e3).ravel(),
             "X_mm": x_mm.ravel(),
             "dZ_mm": dz_mm.ravel(),
+            # the geometry, for the figure's title
+            "a_mm": m.a * 1e3,
+            "b_mm": m.b * 1e3,
+            "c_mm": m.c * 1e3,
         }
     )
-    fig, axes = new_figure((6.6, 2.8))
+    return drawn(df, outdir / "extra_parasitic.csv", outdir / "extra_parasitic.png", draw_parasitic)
+
+
+def draw_fk_solutions(frame: pd.DataFrame, path: Path) -> Path:
+    """Real FK solutions over (beta, gamma) at three Y, drawn from ``extra_fk_solutions.csv`` alone."""
+    bb, gg, yy, count = _grid(frame, ("beta_deg", "gamma_deg", "Y_mm"), "n_real")
+    fig, _ = new_figure((7.2, 2.6))
     fig.clear()
-    fig.set_layout_engine(None)
-    axs = fig.subplots(1, 2)
-    fig.subplots_adjust(left=0.09, right=0.92, bottom=0.17, top=0.86, wspace=0.62)
-    for ax, val, lab in zip(axs, (x_mm, dz_mm), ("X (mm)", "ΔZ = c − Z (mm)")):
-        cs = ax.contourf(np.rad2deg(bb), yy * 1e3, val, levels=15, cmap="viridis")
-        ax.contour(np.rad2deg(bb), yy * 1e3, val, levels=cs.levels[::3], colors="k", linewidths=0.4)
-        fig.colorbar(cs, ax=ax, label=lab)
+    axs = fig.subplots(1, 3, sharey=True)
+    levels = np.arange(-0.5, 9.5, 1.0)
+    for i, ax in enumerate(axs):
+        cs = ax.contourf(bb[..., i], gg[..., i], count[..., i], levels=levels, cmap="Blues")
+        ax.set_title(f"Y = {yy[0, 0, i]:g} mm", fontsize="small")
         ax.set_xlabel("β (deg)")
-        ax.set_ylabel("Y (mm)")
-        ax.set_xticks([-30, -15, 0, 15, 30])
-    fig.suptitle(
-        f"Parasitic translations of B1 (a, b, c = {m.a * 1e3:g}, {m.b * 1e3:g}, {m.c * 1e3:g} mm)"
-    )
-    return [
-        save_figure(fig, outdir / "extra_parasitic.png"),
-        write_csv(df, outdir / "extra_parasitic.csv"),
-    ]
+    axs[0].set_ylabel("γ (deg)")
+    fig.colorbar(cs, ax=axs, label="real FK solutions", ticks=range(0, 9))
+    return save_figure(fig, path)
 
 
 @artefact(
@@ -188,6 +232,7 @@ def parasitic(config: dict, outdir: Path) -> list[Path]:
     outputs=["extra_fk_solutions.png", "extra_fk_solutions.csv"],
     config=[KEY],
     tolerance=EXACT,
+    draws=[("extra_fk_solutions.png", "extra_fk_solutions.csv", draw_fk_solutions)],
 )
 def solution_count(config: dict, outdir: Path) -> list[Path]:
     """Extra: number of real FK solutions (rho > 0 branch, all of beta, gamma) of the strokes of each
@@ -214,26 +259,57 @@ def solution_count(config: dict, outdir: Path) -> list[Path]:
             "n_in_box": nbox.ravel(),
         }
     )
-    fig, _ = new_figure((7.2, 2.6))
-    fig.clear()
-    axs = fig.subplots(1, 3, sharey=True)
-    levels = np.arange(-0.5, 9.5, 1.0)
-    for i, ax in enumerate(axs):
-        cs = ax.contourf(
-            np.rad2deg(bb[..., i]),
-            np.rad2deg(gg[..., i]),
-            count[..., i],
-            levels=levels,
-            cmap="Blues",
+    return drawn(
+        df, outdir / "extra_fk_solutions.csv", outdir / "extra_fk_solutions.png", draw_fk_solutions
+    )
+
+
+def draw_singularity_workspace(frame: pd.DataFrame, path: Path) -> Path:
+    """det J over (beta, gamma) at three Y, hatched where eq. (19) fails, drawn from
+    ``extra_singularity_workspace.csv`` alone."""
+    bb, gg, yy, det, inside = _grid(
+        frame, ("beta_deg", "gamma_deg", "Y_mm"), "det_J_m2", "within_eq19"
+    )
+    inside = inside.astype(bool)
+    with use_style():
+        fig, _ = new_figure((7.2, 2.8))
+        fig.clear()
+        axs = fig.subplots(1, 3, sharey=True)
+        crosses = bool(det.min() < 0 < det.max())
+        levels = (
+            (np.linspace(-1, 1, 17) * np.abs(det).max())
+            if crosses
+            else np.linspace(det.min(), det.max(), 13)
         )
-        ax.set_title(f"Y = {ys[i] * 1e3:g} mm", fontsize="small")
-        ax.set_xlabel("β (deg)")
-    axs[0].set_ylabel("γ (deg)")
-    fig.colorbar(cs, ax=axs, label="real FK solutions", ticks=range(0, 9))
-    return [
-        save_figure(fig, outdir / "extra_fk_solutions.png"),
-        write_csv(df, outdir / "extra_fk_solutions.csv"),
-    ]
+        for i, ax in enumerate(axs):
+            cs = ax.contourf(
+                bb[..., i],
+                gg[..., i],
+                det[..., i],
+                levels=levels,
+                cmap="RdBu_r" if crosses else "viridis",
+            )
+            ax.contour(
+                bb[..., i], gg[..., i], det[..., i], levels=[0.0], colors="k", linewidths=1.2
+            )
+            ax.contourf(
+                bb[..., i],
+                gg[..., i],
+                (~inside[..., i]).astype(float),
+                levels=[0.5, 1.5],
+                colors="none",
+                hatches=["////"],
+            )
+            ax.set_title(f"Y = {yy[0, 0, i]:g} mm", fontsize="small")
+            ax.set_xlabel("β (deg)")
+        axs[0].set_ylabel("γ (deg)")
+        fig.colorbar(cs, ax=axs, label="det J (m²)", format="%.1e")
+        fig.suptitle(
+            "Velocity Jacobian over Table 1's search box; hatched: strokes beyond eq. (19)"
+            + ("; black: det J = 0" if crosses else "; det J never vanishes here"),
+            fontsize="small",
+        )
+    return save_figure(fig, path)
 
 
 @artefact(
@@ -241,13 +317,18 @@ def solution_count(config: dict, outdir: Path) -> list[Path]:
     outputs=["extra_singularity_workspace.png", "extra_singularity_workspace.csv"],
     config=[KEY],
     tolerance=EXACT,
+    draws=[
+        (
+            "extra_singularity_workspace.png",
+            "extra_singularity_workspace.csv",
+            draw_singularity_workspace,
+        )
+    ],
 )
 def singularity_workspace(config: dict, outdir: Path) -> list[Path]:
     """Extra: det of the velocity Jacobian J (qdot = J posedot) over (beta, gamma) at three Y of
     Table 1's box, with the region where eq (19)'s stroke limits hold; cond(J) beside it.
     det J = 0 is a singularity (the pose cannot be held by the actuators)."""
-    from parakin.plot import use_style
-
     m = mech(config)
     n = config[KEY]["grid"]
     lo, hi = m.pose_bounds()
@@ -270,53 +351,12 @@ def singularity_workspace(config: dict, outdir: Path) -> list[Path]:
             "within_eq19": inside.ravel(),
         }
     )
-    with use_style():
-        fig, _ = new_figure((7.2, 2.8))
-        fig.clear()
-        axs = fig.subplots(1, 3, sharey=True)
-        crosses = bool(det.min() < 0 < det.max())
-        levels = (
-            (np.linspace(-1, 1, 17) * np.abs(det).max())
-            if crosses
-            else np.linspace(det.min(), det.max(), 13)
-        )
-        for i, ax in enumerate(axs):
-            cs = ax.contourf(
-                np.rad2deg(bb[..., i]),
-                np.rad2deg(gg[..., i]),
-                det[..., i],
-                levels=levels,
-                cmap="RdBu_r" if crosses else "viridis",
-            )
-            ax.contour(
-                np.rad2deg(bb[..., i]),
-                np.rad2deg(gg[..., i]),
-                det[..., i],
-                levels=[0.0],
-                colors="k",
-                linewidths=1.2,
-            )
-            ax.contourf(
-                np.rad2deg(bb[..., i]),
-                np.rad2deg(gg[..., i]),
-                (~inside[..., i]).astype(float),
-                levels=[0.5, 1.5],
-                colors="none",
-                hatches=["////"],
-            )
-            ax.set_title(f"Y = {ys[i] * 1e3:g} mm", fontsize="small")
-            ax.set_xlabel("β (deg)")
-        axs[0].set_ylabel("γ (deg)")
-        fig.colorbar(cs, ax=axs, label="det J (m²)", format="%.1e")
-        fig.suptitle(
-            "Velocity Jacobian over Table 1's search box; hatched: strokes beyond eq. (19)"
-            + ("; black: det J = 0" if crosses else "; det J never vanishes here"),
-            fontsize="small",
-        )
-    return [
-        save_figure(fig, outdir / "extra_singularity_workspace.png"),
-        write_csv(df, outdir / "extra_singularity_workspace.csv"),
-    ]
+    return drawn(
+        df,
+        outdir / "extra_singularity_workspace.csv",
+        outdir / "extra_singularity_workspace.png",
+        draw_singularity_workspace,
+    )
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:

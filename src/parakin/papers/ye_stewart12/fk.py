@@ -12,8 +12,15 @@ import pandas as pd
 from parakin.claims import Claim
 from parakin.config import rng
 from parakin.io import write_csv, write_table
-from parakin.papers.ye_stewart12.common import KEY, artefact, mech, passive_sets, test_pose
-from parakin.plot import draw_mechanism, save_figure, skeleton_table
+from parakin.papers.ye_stewart12.common import (
+    KEY,
+    artefact,
+    drawn_from,
+    mech,
+    passive_sets,
+    test_pose,
+)
+from parakin.plot import draw_mechanism, save_figure, skeleton_from_table, skeleton_table
 from parakin.registry import DESCRIPTIVE, EXACT, TIMING
 
 EQS = ("f (21)", "g (22)", "v (23)", "u (24)", "w (25)", "h (26)")
@@ -111,22 +118,44 @@ def table3(config: dict, outdir: Path) -> list[Path]:
     )
 
 
-def _draw(
-    config: dict,
-    outdir: Path,
-    stem: str,
-    pose: np.ndarray,
-    passive: tuple[int, ...],
-    title: str,
-    labels: bool,
-) -> list[Path]:
-    m = mech(config)
-    sk = m.skeleton(pose, passive=passive)
-    ax = draw_mechanism(sk, frame_length=0.012, title=title, labels=labels)
-    return [
-        save_figure(ax.figure, outdir / f"{stem}.png"),
-        write_csv(skeleton_table(sk, frame_length=0.012), outdir / f"{stem}.csv"),
-    ]
+#: length (m) of the frame arrows in the mechanism drawings
+FRAME_LENGTH = 0.012
+FIG01_TITLE = "12-leg cube mechanism, §3.3 test pose (R = 0; passive legs thin black)"
+FIG06_TITLE = "Virtual prototype, R = 3 (passive legs thin black)"
+#: the pose of Fig. 6 (m, lambda): a larger tilt than the test pose, for visibility
+FIG06_POSE = np.array([2e-3, -1.5e-3, 1e-3, 0.12, -0.08, 0.15])
+
+
+def _skeleton_csv(
+    config: dict, outdir: Path, stem: str, pose: np.ndarray, passive: tuple[int, ...], **extra
+) -> Path:
+    """The drawing's points and segments (:func:`skeleton_table`), plus constant columns ``extra``."""
+    sk = mech(config).skeleton(pose, passive=passive)
+    return write_csv(
+        skeleton_table(sk, frame_length=FRAME_LENGTH).assign(**extra), outdir / f"{stem}.csv"
+    )
+
+
+def _draw_skeleton(frame: pd.DataFrame, path: Path, title: str, labels: bool) -> Path:
+    sk = skeleton_from_table(frame[["element", "kind", "name", "index", "x", "y", "z"]])
+    ax = draw_mechanism(sk, frame_length=FRAME_LENGTH, title=title, labels=labels)
+    return save_figure(ax.figure, path)
+
+
+def draw_fig01(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 1 from its CSV (the skeleton table): passive legs thin black, no labels."""
+    return _draw_skeleton(frame, path, FIG01_TITLE, labels=False)
+
+
+def draw_fig02(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 2 from its CSV (the skeleton table with the geometry ``n_mm``, ``L_mm``), labelled."""
+    title = f"Topology at home: n = {frame['n_mm'].iloc[0]:g} mm, L = {frame['L_mm'].iloc[0]:g} mm"
+    return _draw_skeleton(frame, path, title, labels=True)
+
+
+def draw_fig06(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 6 from its CSV (the skeleton table)."""
+    return _draw_skeleton(frame, path, FIG06_TITLE, labels=False)
 
 
 @artefact(
@@ -134,18 +163,14 @@ def _draw(
     outputs=["fig01_mechanism.png", "fig01_mechanism.csv"],
     config=[KEY],
     tolerance=DESCRIPTIVE,
+    draws=[("fig01_mechanism.png", "fig01_mechanism.csv", draw_fig01)],
 )
 def fig01(config: dict, outdir: Path) -> list[Path]:
     """Fig. 1: the mechanism at the §3.3 test pose, mode R=0 (passive legs dashed)."""
-    return _draw(
-        config,
-        outdir,
-        "fig01_mechanism",
-        test_pose(config),
-        passive_sets(config)[0],
-        "12-leg cube mechanism, §3.3 test pose (R = 0; passive legs thin black)",
-        labels=False,
+    csv = _skeleton_csv(
+        config, outdir, "fig01_mechanism", test_pose(config), passive_sets(config)[0]
     )
+    return drawn_from(csv, draw_fig01)
 
 
 @artefact(
@@ -153,19 +178,21 @@ def fig01(config: dict, outdir: Path) -> list[Path]:
     outputs=["fig02_topology.png", "fig02_topology.csv"],
     config=[KEY],
     tolerance=DESCRIPTIVE,
+    draws=[("fig02_topology.png", "fig02_topology.csv", draw_fig02)],
 )
 def fig02(config: dict, outdir: Path) -> list[Path]:
     """Fig. 2: topology at home — static cube 2(n+L), moving cube 2n, b_k and B_i labelled."""
     c = config[KEY]
-    return _draw(
+    csv = _skeleton_csv(
         config,
         outdir,
         "fig02_topology",
         mech(config).home(),
         (),
-        f"Topology at home: n = {c['n_mm']:g} mm, L = {c['L_mm']:g} mm",
-        labels=True,
+        n_mm=float(c["n_mm"]),
+        L_mm=float(c["L_mm"]),
     )
+    return drawn_from(csv, draw_fig02)
 
 
 @artefact(
@@ -173,19 +200,12 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
     outputs=["fig06_prototype.png", "fig06_prototype.csv"],
     config=[KEY],
     tolerance=DESCRIPTIVE,
+    draws=[("fig06_prototype.png", "fig06_prototype.csv", draw_fig06)],
 )
 def fig06(config: dict, outdir: Path) -> list[Path]:
     """Fig. 6 (the paper's Mathematica prototype): our model at a larger tilt for visibility."""
-    pose = np.array([2e-3, -1.5e-3, 1e-3, 0.12, -0.08, 0.15])
-    return _draw(
-        config,
-        outdir,
-        "fig06_prototype",
-        pose,
-        passive_sets(config)[3],
-        "Virtual prototype, R = 3 (passive legs thin black)",
-        labels=False,
-    )
+    csv = _skeleton_csv(config, outdir, "fig06_prototype", FIG06_POSE, passive_sets(config)[3])
+    return drawn_from(csv, draw_fig06)
 
 
 @artefact(

@@ -25,6 +25,8 @@ from parakin.papers.ye_stewart12.common import (
     METHODS_USED,
     MODE_NAMES,
     artefact,
+    caption_of,
+    drawn_from,
     mech,
     passive_caption,
     passive_sets,
@@ -112,8 +114,10 @@ def _scan_nominal(config: dict) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _fig_steps(df: pd.DataFrame, tol: float, outdir: Path, stem: str, caption: str) -> list[Path]:
-    sub = df[df["tol"] == tol]
+def _draw_steps(frame: pd.DataFrame, path: Path, tol: float) -> Path:
+    """Steps vs d (rows up to d_max), one panel per method, one line per mode; the suptitle is the
+    CSV's constant column ``passive_caption``."""
+    sub = frame
     fig, axes = new_figure((7.0, 3.0))
     fig.clf()
     axs = fig.subplots(1, 2, sharey=True)
@@ -130,9 +134,30 @@ def _fig_steps(df: pd.DataFrame, tol: float, outdir: Path, stem: str, caption: s
         ax.set_title(f"{name}, tol {tol:g} mm", fontsize=9)
     axs[0].set_ylabel("iteration steps")
     axs[1].legend(fontsize=7, ncol=2)
-    fig.suptitle(caption, fontsize=7)
+    fig.suptitle(str(sub["passive_caption"].iloc[0]), fontsize=7)
+    return save_figure(fig, path)
+
+
+#: stopping tolerances (mm) of Figs 10 and 11
+FIG10_TOL, FIG11_TOL = 1e-6, 1e-9
+
+
+def draw_fig10(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 10 from its CSV (tol 1e-6 mm)."""
+    return _draw_steps(frame, path, FIG10_TOL)
+
+
+def draw_fig11(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 11 from its CSV (tol 1e-9 mm)."""
+    return _draw_steps(frame, path, FIG11_TOL)
+
+
+def _fig_steps(config: dict, tol: float, outdir: Path, stem: str, draw) -> list[Path]:
+    df = _scan_nominal(config)
+    sub = df[df["tol"] == tol]
     out = sub[sub["deviation_pct"] <= sub["d_max_pct"]].drop(columns=["tol"])
-    return [save_figure(fig, outdir / f"{stem}.png"), write_csv(out, outdir / f"{stem}.csv")]
+    out = out.assign(passive_caption=passive_caption(config))
+    return drawn_from(write_csv(out, outdir / f"{stem}.csv"), draw)
 
 
 @artefact(
@@ -140,11 +165,11 @@ def _fig_steps(df: pd.DataFrame, tol: float, outdir: Path, stem: str, caption: s
     outputs=["fig10_steps_tol1e-6.png", "fig10_steps_tol1e-6.csv"],
     config=[KEY],
     tolerance=SCAN,
+    draws=[("fig10_steps_tol1e-6.png", "fig10_steps_tol1e-6.csv", draw_fig10)],
 )
 def fig10(config: dict, outdir: Path) -> list[Path]:
     """Fig. 10: steps vs d up to d_max, 6 modes x 2 methods, tol 1e-6 mm (nominal structure)."""
-    df = _scan_nominal(config)
-    return _fig_steps(df, 1e-6, outdir, "fig10_steps_tol1e-6", passive_caption(config))
+    return _fig_steps(config, FIG10_TOL, outdir, "fig10_steps_tol1e-6", draw_fig10)
 
 
 @artefact(
@@ -152,11 +177,11 @@ def fig10(config: dict, outdir: Path) -> list[Path]:
     outputs=["fig11_steps_tol1e-9.png", "fig11_steps_tol1e-9.csv"],
     config=[KEY],
     tolerance=SCAN,
+    draws=[("fig11_steps_tol1e-9.png", "fig11_steps_tol1e-9.csv", draw_fig11)],
 )
 def fig11(config: dict, outdir: Path) -> list[Path]:
     """Fig. 11: the same at tol 1e-9 mm."""
-    df = _scan_nominal(config)
-    return _fig_steps(df, 1e-9, outdir, "fig11_steps_tol1e-9", passive_caption(config))
+    return _fig_steps(config, FIG11_TOL, outdir, "fig11_steps_tol1e-9", draw_fig11)
 
 
 def _scan_structure(config: dict, n: float, L: float) -> list[dict]:
@@ -190,25 +215,11 @@ def scan_structures(config: dict) -> tuple[pd.DataFrame, float]:
     return pd.DataFrame([r for ch in chunks for r in ch]), time.perf_counter() - t0
 
 
-@artefact(
-    "fig12",
-    outputs=[
-        "fig12_dmax_structures.png",
-        "fig12_dmax_structures.csv",
-        "table6.csv",
-        "table6.md",
-        "extra_scan_speed.csv",
-        "extra_scan_speed.md",
-    ],
-    config=[KEY],
-    tolerance=SCAN,
-)
-def fig12(config: dict, outdir: Path) -> list[Path]:
-    """Fig. 12: d_max over the (n, L) grid per mode and method; Table 6 from the same scan; timing
-    of the batched scan against a per-case loop on a sample of cases."""
-    c = config[KEY]
-    df, wall = scan_structures(config)
-    ns, ls = structures(config)
+def draw_fig12(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 12 from its CSV: log10 d_max over the (n, L) grid, one panel per mode and method; the
+    grid is the CSV's n_mm and L_mm values, the suptitle its constant column ``passive_caption``."""
+    df = frame
+    ns, ls = np.unique(df["n_mm"].to_numpy()), np.unique(df["L_mm"].to_numpy())
     fig, _ = new_figure((9.0, 3.6))
     fig.clf()
     axs = fig.subplots(2, 6)
@@ -234,11 +245,39 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
                 axs[i, j].set_ylabel("n (mm)", fontsize=7)
     cb = fig.colorbar(im, ax=axs, shrink=0.8)
     cb.set_label("log10 d_max (%)", fontsize=7)
-    fig.suptitle("Fig. 12: maximum admissible deviation; " + passive_caption(config), fontsize=7)
-    paths = [
-        save_figure(fig, outdir / "fig12_dmax_structures.png"),
-        write_csv(df, outdir / "fig12_dmax_structures.csv"),
-    ]
+    fig.suptitle(
+        "Fig. 12: maximum admissible deviation; " + str(df["passive_caption"].iloc[0]), fontsize=7
+    )
+    return save_figure(fig, path)
+
+
+@artefact(
+    "fig12",
+    outputs=[
+        "fig12_dmax_structures.png",
+        "fig12_dmax_structures.csv",
+        "table6.csv",
+        "table6.md",
+        "extra_scan_speed.csv",
+        "extra_scan_speed.md",
+    ],
+    config=[KEY],
+    tolerance=SCAN,
+    draws=[("fig12_dmax_structures.png", "fig12_dmax_structures.csv", draw_fig12)],
+)
+def fig12(config: dict, outdir: Path) -> list[Path]:
+    """Fig. 12: d_max over the (n, L) grid per mode and method; Table 6 from the same scan; timing
+    of the batched scan against a per-case loop on a sample of cases."""
+    c = config[KEY]
+    df, wall = scan_structures(config)
+    ns, ls = structures(config)
+    paths = drawn_from(
+        write_csv(
+            df.assign(passive_caption=passive_caption(config)),
+            outdir / "fig12_dmax_structures.csv",
+        ),
+        draw_fig12,
+    )
     # Table 6
     rows = []
     for r in range(5, -1, -1):
@@ -384,7 +423,41 @@ def conditioning(config: dict, outdir: Path) -> list[Path]:
     )
 
 
-@artefact("basin", outputs=["extra_basin.png", "extra_basin.csv"], config=[KEY], tolerance=SCAN)
+def draw_basin(frame: pd.DataFrame, path: Path) -> Path:
+    """The basin figure from its CSV: convergence probability vs rms deviation per mode and method;
+    the suptitle from the CSV's constant columns ``trials`` and ``passive_caption``."""
+    import textwrap
+
+    df = frame
+    fig, _ = new_figure((7.0, 3.4))
+    fig.clf()
+    with use_style():
+        axs = fig.subplots(1, 2, sharey=True)
+    for ax, key, name in zip(axs, ("nr", "broyden"), ("N-R (Gauss-Newton)", "Broyden")):
+        for r in range(5, -1, -1):
+            s_ = df[(df["method"] == key) & (df["R"] == r)]
+            ax.plot(s_["deviation_rms_pct"], s_["p_converge"], "o-", ms=3, lw=1.2, label=f"R={r}")
+        ax.set_xscale("log")
+        ax.set_xlabel("rms per-leg deviation (%)")
+        ax.set_title(name, fontsize=9)
+    axs[0].set_ylabel("convergence probability")
+    axs[0].legend(fontsize=7, ncol=2)
+    fig.suptitle(
+        "Beyond the paper: N-R and Broyden from random per-leg initial deviations, "
+        f"{int(df['trials'].iloc[0])} trials per level\n"
+        + textwrap.fill(str(df["passive_caption"].iloc[0]), 110),
+        fontsize=7,
+    )
+    return save_figure(fig, path)
+
+
+@artefact(
+    "basin",
+    outputs=["extra_basin.png", "extra_basin.csv"],
+    config=[KEY],
+    tolerance=SCAN,
+    draws=[("extra_basin.png", "extra_basin.csv", draw_basin)],
+)
 def basin(config: dict, outdir: Path) -> list[Path]:
     """Extra: convergence probability vs the size of RANDOM per-leg deviations (instead of the paper's
     common scale factor): X0_k = (1 + d u_k) X*_k, u uniform on the unit sphere of R^(6-R) times
@@ -430,28 +503,68 @@ def basin(config: dict, outdir: Path) -> list[Path]:
                         "median_iterations": float(np.nanmedian(it)) if o.any() else np.nan,
                     }
                 )
-    df = pd.DataFrame(rows)
-    fig, _ = new_figure((7.0, 3.4))
-    fig.clf()
-    with use_style():
-        axs = fig.subplots(1, 2, sharey=True)
-    for ax, key, name in zip(axs, ("nr", "broyden"), ("N-R (Gauss-Newton)", "Broyden")):
-        for r in range(5, -1, -1):
-            s_ = df[(df["method"] == key) & (df["R"] == r)]
-            ax.plot(s_["deviation_rms_pct"], s_["p_converge"], "o-", ms=3, lw=1.2, label=f"R={r}")
-        ax.set_xscale("log")
-        ax.set_xlabel("rms per-leg deviation (%)")
-        ax.set_title(name, fontsize=9)
-    axs[0].set_ylabel("convergence probability")
-    axs[0].legend(fontsize=7, ncol=2)
-    import textwrap
+    df = pd.DataFrame(rows).assign(trials=trials, passive_caption=passive_caption(config))
+    return drawn_from(write_csv(df, outdir / "extra_basin.csv"), draw_basin)
 
-    fig.suptitle(
-        f"Beyond the paper: N-R and Broyden from random per-leg initial deviations, {trials} trials per level\n"
-        + textwrap.fill(passive_caption(config), 110),
+
+def draw_fig09(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 9 from its CSV: the active (A) / passive (P) grid of legs per mode; the passive sets
+    (and whether they are the nested ones) are read from the CSV's ``active`` column."""
+    from matplotlib.colors import ListedColormap
+
+    df = frame
+    modes = range(5, -1, -1)
+    grid = np.array(
+        [
+            [df[(df["R"] == r) & (df["leg"] == k)]["active"].iloc[0] for k in range(1, 13)]
+            for r in modes
+        ]
+    )
+    sets = {
+        r: tuple(int(k) for k in sorted(df[(df["R"] == r) & (df["active"] == 0)]["leg"]))
+        for r in modes
+    }
+    fig, ax = new_figure((7.0, 3.2))
+    ax.grid(False)
+    ax.imshow(grid, cmap=ListedColormap(["#f2f2f2", "#1f77b4"]), vmin=0, vmax=1, aspect="auto")
+    for i in range(grid.shape[0]):
+        for k in range(12):
+            ax.text(
+                k,
+                i,
+                "A" if grid[i, k] else "P",
+                ha="center",
+                va="center",
+                fontsize=7,
+                color="white" if grid[i, k] else "0.3",
+            )
+    for x in np.arange(1.5, 11, 2):
+        ax.axvline(x, color="k", lw=0.8)
+    ax.set_xticks(range(12))
+    dirs = df[df["R"] == 0].sort_values("leg")
+    ax.set_xticklabels(
+        [f"{k}\n{j}\n{d}" for k, j, d in zip(dirs["leg"], dirs["joint"], dirs["home_direction"])],
+        fontsize=6,
+    )
+    ax.set_yticks(range(6))
+    first = df.groupby("R").first()
+    ax.set_yticklabels(
+        [f"{first.loc[r, 'mode']}: R={r}, N={int(first.loc[r, 'active_legs'])}" for r in modes],
         fontsize=7,
     )
-    return [save_figure(fig, outdir / "extra_basin.png"), write_csv(df, outdir / "extra_basin.csv")]
+    ax.set_xlabel("leg k (joint, direction at home)", fontsize=7)
+    ax.set_title(
+        "Drive modes (Fig. 9 of the paper is lost): A = active (driven), P = passive. ASSUMED: "
+        + (
+            "the nested sets of docs/ye_stewart12.md#s5.5"
+            if all(sets[r] == tuple(sorted(NESTED_PASSIVE[r])) for r in modes)
+            else "configured sets"
+        )
+        + ";\n"
+        + caption_of(sets),
+        fontsize=6.5,
+    )
+    return save_figure(fig, path)
 
 
 @artefact(
@@ -459,6 +572,7 @@ def basin(config: dict, outdir: Path) -> list[Path]:
     outputs=["fig09_drive_modes.png", "fig09_drive_modes.csv"],
     config=[KEY],
     tolerance=DESCRIPTIVE,
+    draws=[("fig09_drive_modes.png", "fig09_drive_modes.csv", draw_fig09)],
 )
 def fig09(config: dict, outdir: Path) -> list[Path]:
     """Fig. 9 (lost): the drive modes -- which legs are active and which passive for R = 0..5, from
@@ -488,56 +602,7 @@ def fig09(config: dict, outdir: Path) -> list[Path]:
                 }
             )
     df = pd.DataFrame(rows)
-    fig, ax = new_figure((7.0, 3.2))
-    grid = np.array(
-        [
-            [df[(df["R"] == r) & (df["leg"] == k)]["active"].iloc[0] for k in range(1, 13)]
-            for r in range(5, -1, -1)
-        ]
-    )
-    from matplotlib.colors import ListedColormap
-
-    ax.grid(False)
-    ax.imshow(grid, cmap=ListedColormap(["#f2f2f2", "#1f77b4"]), vmin=0, vmax=1, aspect="auto")
-    for i in range(grid.shape[0]):
-        for k in range(12):
-            ax.text(
-                k,
-                i,
-                "A" if grid[i, k] else "P",
-                ha="center",
-                va="center",
-                fontsize=7,
-                color="white" if grid[i, k] else "0.3",
-            )
-    for x in np.arange(1.5, 11, 2):
-        ax.axvline(x, color="k", lw=0.8)
-    ax.set_xticks(range(12))
-    dirs = df[df["R"] == 0].sort_values("leg")
-    ax.set_xticklabels(
-        [f"{k}\n{j}\n{d}" for k, j, d in zip(dirs["leg"], dirs["joint"], dirs["home_direction"])],
-        fontsize=6,
-    )
-    ax.set_yticks(range(6))
-    ax.set_yticklabels(
-        [f"{MODE_NAMES[r]}: R={r}, N={12 - len(sets[r])}" for r in range(5, -1, -1)], fontsize=7
-    )
-    ax.set_xlabel("leg k (joint, direction at home)", fontsize=7)
-    ax.set_title(
-        "Drive modes (Fig. 9 of the paper is lost): A = active (driven), P = passive. ASSUMED: "
-        + (
-            "the nested sets of docs/ye_stewart12.md#s5.5"
-            if all(tuple(sets[r]) == NESTED_PASSIVE[r] for r in range(6))
-            else "configured sets"
-        )
-        + ";\n"
-        + passive_caption(config),
-        fontsize=6.5,
-    )
-    return [
-        save_figure(fig, outdir / "fig09_drive_modes.png"),
-        write_csv(df, outdir / "fig09_drive_modes.csv"),
-    ]
+    return drawn_from(write_csv(df, outdir / "fig09_drive_modes.csv"), draw_fig09)
 
 
 def _step_stats(figdir: Path) -> tuple[pd.DataFrame, float] | None:

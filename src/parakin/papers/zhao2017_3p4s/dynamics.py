@@ -11,6 +11,9 @@ balance (``extra_dynamics_slips``, ``extra_dynamics_printed``, ``extra_power_bal
 Motion (§1.4, §2.4): ``x = y = 0.001 sin(40 pi t)``, ``z = z0``. §2.4 gives ``z0 = 0.57 m``;
 §1.4 gives no height, and we use the same (docs/zhao2017_3p4s.md#g13). Time span, sampling and the finite-difference
 step are choices of ours: ``config["zhao2017_3p4s"]["dynamics"]``.
+
+Each figure is drawn by ``draw_<name>(frame, path)`` from the CSV its artefact writes, read back
+(the motion law, the FD step and g are constant columns of it), so the record can be redrawn.
 """
 
 from __future__ import annotations
@@ -23,10 +26,11 @@ import pandas as pd
 
 from parakin.claims import Claim, printed_value
 from parakin.errors import ConfigError
-from parakin.io import write_csv, write_table
+from parakin.io import write_table
 from parakin.mechanisms import P3P4S
 from parakin.mechanisms import p3p4s_dynamics as dyn
 from parakin.papers.zhao2017_3p4s.common import KEY, artefact
+from parakin.papers.zhao2017_3p4s.kinematics import write_and_draw
 from parakin.registry import ROUNDING
 
 #: tolerances stated in the figures and tested (relative to the peak of the analytic curve)
@@ -351,12 +355,48 @@ def _marker_every(t: np.ndarray, motion: dyn.SineMotion) -> int:
     return max(1, int(round(per_period / 25)))
 
 
+# ---------------------------------------------------------------------------------------- CSV -> PNG
+def _motion_columns(motion: dyn.SineMotion) -> dict[str, float]:
+    """The motion law as constant columns (what the titles print)."""
+    return {"amplitude_m": motion.amplitude, "omega_rad_s": motion.omega, "z0_m": motion.z0}
+
+
+def _frame_motion(frame: pd.DataFrame) -> dyn.SineMotion:
+    """The motion law of a figure's CSV (its :func:`_motion_columns`)."""
+    r = frame.iloc[0]
+    return dyn.SineMotion(float(r["amplitude_m"]), float(r["omega_rad_s"]), float(r["z0_m"]))
+
+
+def _drives(frame: pd.DataFrame, pattern: str) -> np.ndarray:
+    """The (n, 3) drive columns named by ``pattern`` (``{i}`` = 1, 2, 3)."""
+    return frame[[pattern.format(i=i) for i in (1, 2, 3)]].to_numpy()
+
+
+def _variant_columns(frame: pd.DataFrame, pattern: str) -> dict[str, np.ndarray]:
+    """label -> (n, 3) drive columns of every variant (``{slug}``, ``{i}`` in ``pattern``)."""
+    return {
+        label: _drives(frame, pattern.replace("{slug}", _slug(label)))
+        for label, _, _, _ in VARIANTS
+    }
+
+
 # ---------------------------------------------------------------------------------------- Figs 5-8
+_Z_ASSUMED = " (z assumed: §2.4's height)"
+
+
+def draw_fig05(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 5 from its CSV: drive velocities of eq (8)."""
+    title = "Fig. 5: drive velocities, eq. (8)\n" + _motion_label(_frame_motion(frame), _Z_ASSUMED)
+    t, qdot = frame["t_s"].to_numpy(), _drives(frame, "qdot{i}_m_s")
+    return _series_figure(t, qdot, r"drive velocity $\dot q_i$ (m/s)", title, path)
+
+
 @artefact(
     "fig05",
     outputs=["fig05_drive_velocities.png", "fig05_drive_velocities.csv"],
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
+    draws=[("fig05_drive_velocities.png", "fig05_drive_velocities.csv", draw_fig05)],
 )
 def fig05(config: dict, outdir: Path) -> list[Path]:
     """Fig. 5: drive velocities ``qdot_i(t)`` by eq (8)."""
@@ -369,22 +409,20 @@ def fig05(config: dict, outdir: Path) -> list[Path]:
             "y_m": tr["p"][:, 1],
             "z_m": tr["p"][:, 2],
             **{f"qdot{i + 1}_m_s": kin.qdot[:, i] for i in range(3)},
+            **_motion_columns(motion),
         }
     )
-    paths = [write_csv(data, outdir / "fig05_drive_velocities.csv")]
-    title = "Fig. 5: drive velocities, eq. (8)\n" + _motion_label(
-        motion, " (z assumed: §2.4's height)"
+    return write_and_draw(data, outdir, "fig05_drive_velocities", draw_fig05)
+
+
+def draw_fig06(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 6 from its CSV: drive accelerations of eq (13) with the corrected H."""
+    title = (
+        "Fig. 6: drive accelerations, eq. (13) with $H_i = P_i^TP_i/(l\\,n_i^Tm_i)$\n"
+        + _motion_label(_frame_motion(frame), _Z_ASSUMED)
     )
-    paths.append(
-        _series_figure(
-            t,
-            kin.qdot,
-            r"drive velocity $\dot q_i$ (m/s)",
-            title,
-            outdir / "fig05_drive_velocities.png",
-        )
-    )
-    return paths
+    t, qddot = frame["t_s"].to_numpy(), _drives(frame, "qddot{i}_m_s2")
+    return _series_figure(t, qddot, r"drive acceleration $\ddot q_i$ (m/s$^2$)", title, path)
 
 
 @artefact(
@@ -392,6 +430,7 @@ def fig05(config: dict, outdir: Path) -> list[Path]:
     outputs=["fig06_drive_accelerations.png", "fig06_drive_accelerations.csv"],
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
+    draws=[("fig06_drive_accelerations.png", "fig06_drive_accelerations.csv", draw_fig06)],
 )
 def fig06(config: dict, outdir: Path) -> list[Path]:
     """Fig. 6: drive accelerations ``qddot_i(t)`` by eq (13) with the corrected H."""
@@ -404,23 +443,30 @@ def fig06(config: dict, outdir: Path) -> list[Path]:
             "y_m": tr["p"][:, 1],
             "z_m": tr["p"][:, 2],
             **{f"qddot{i + 1}_m_s2": kin.qddot[:, i] for i in range(3)},
+            **_motion_columns(motion),
         }
     )
-    paths = [write_csv(data, outdir / "fig06_drive_accelerations.csv")]
+    return write_and_draw(data, outdir, "fig06_drive_accelerations", draw_fig06)
+
+
+def draw_fig07(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 7 from its CSV: eq (8) with IK finite differences and MuJoCo as markers, and their
+    differences with the tested tolerances."""
+    motion, t = _frame_motion(frame), frame["t_s"].to_numpy()
     title = (
-        "Fig. 6: drive accelerations, eq. (13) with $H_i = P_i^TP_i/(l\\,n_i^Tm_i)$\n"
-        + _motion_label(motion, " (z assumed: §2.4's height)")
+        "Fig. 7: drive velocities, eq. (8) vs independent checks (the paper: ADAMS)\n"
+        + _motion_label(motion)
+        + f"; FD step {frame['fd_step_s'].iloc[0]:g} s"
     )
-    paths.append(
-        _series_figure(
-            t,
-            kin.qddot,
-            r"drive acceleration $\ddot q_i$ (m/s$^2$)",
-            title,
-            outdir / "fig06_drive_accelerations.png",
-        )
-    )
-    return paths
+    checks = [
+        ("IK finite differences", _drives(frame, "qdot{i}_fd_m_s"), "#CC79A7"),
+        ("MuJoCo", _drives(frame, "qdot{i}_mujoco_m_s"), "#E69F00"),
+    ]
+    analytic = _drives(frame, "qdot{i}_eq8_m_s")
+    return _check_figure(
+        t, analytic, checks, _KIN_TOLERANCES, r"$\dot q_i$ (m/s)", title, path,
+        _marker_every(t, motion),
+    )  # fmt: skip
 
 
 @artefact(
@@ -428,12 +474,13 @@ def fig06(config: dict, outdir: Path) -> list[Path]:
     outputs=["fig07_velocity_check.png", "fig07_velocity_check.csv"],
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
+    draws=[("fig07_velocity_check.png", "fig07_velocity_check.csv", draw_fig07)],
 )
 def fig07(config: dict, outdir: Path) -> list[Path]:
     """Fig. 7 (the paper: ADAMS): eq (8) against IK finite differences and MuJoCo."""
     key = _key(config)
     tr = _trajectory(key)
-    t, kin, motion = tr["t"], tr["kin"], tr["motion"]
+    t, kin = tr["t"], tr["kin"]
     mj = _mujoco(key, "equivalent")
     data = pd.DataFrame({"t_s": t})
     for i in range(3):
@@ -443,27 +490,29 @@ def fig07(config: dict, outdir: Path) -> list[Path]:
     for i in range(3):
         data[f"diff{i + 1}_fd_m_s"] = tr["qdot_fd"][:, i] - kin.qdot[:, i]
         data[f"diff{i + 1}_mujoco_m_s"] = mj.qdot[:, i] - kin.qdot[:, i]
-    paths = [write_csv(data, outdir / "fig07_velocity_check.csv")]
+    data = data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
+    return write_and_draw(data, outdir, "fig07_velocity_check", draw_fig07)
+
+
+def draw_fig08(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 8 from its CSV: eq (13) with IK finite differences, MuJoCo and the printed H (no
+    1/l), and their differences with the tested tolerances."""
+    motion, t = _frame_motion(frame), frame["t_s"].to_numpy()
     title = (
-        "Fig. 7: drive velocities, eq. (8) vs independent checks (the paper: ADAMS)\n"
+        "Fig. 8: drive accelerations, eq. (13) vs independent checks (the paper: ADAMS)\n"
         + _motion_label(motion)
-        + f"; FD step {key[3]:g} s"
+        + f"; FD step {frame['fd_step_s'].iloc[0]:g} s"
     )
-    checks = [("IK finite differences", tr["qdot_fd"], "#CC79A7"), ("MuJoCo", mj.qdot, "#E69F00")]
-    tols = _KIN_TOLERANCES
-    paths.append(
-        _check_figure(
-            t,
-            kin.qdot,
-            checks,
-            tols,
-            r"$\dot q_i$ (m/s)",
-            title,
-            outdir / "fig07_velocity_check.png",
-            _marker_every(t, motion),
-        )
-    )
-    return paths
+    checks = [
+        ("IK finite differences", _drives(frame, "qddot{i}_fd_m_s2"), "#CC79A7"),
+        ("MuJoCo", _drives(frame, "qddot{i}_mujoco_m_s2"), "#E69F00"),
+        ("eq. (13) as printed (no 1/l)", _drives(frame, "qddot{i}_printed_h_m_s2"), "#56B4E9"),
+    ]
+    analytic = _drives(frame, "qddot{i}_eq13_m_s2")
+    return _check_figure(
+        t, analytic, checks, _KIN_TOLERANCES, r"$\ddot q_i$ (m/s$^2$)", title, path,
+        _marker_every(t, motion),
+    )  # fmt: skip
 
 
 @artefact(
@@ -471,13 +520,14 @@ def fig07(config: dict, outdir: Path) -> list[Path]:
     outputs=["fig08_acceleration_check.png", "fig08_acceleration_check.csv"],
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
+    draws=[("fig08_acceleration_check.png", "fig08_acceleration_check.csv", draw_fig08)],
 )
 def fig08(config: dict, outdir: Path) -> list[Path]:
     """Fig. 8 (the paper: ADAMS): eq (13) against IK finite differences and MuJoCo; the printed
     H (no 1/l) is shown against the same finite differences."""
     key = _key(config)
     tr = _trajectory(key)
-    t, kin, motion = tr["t"], tr["kin"], tr["motion"]
+    t, kin = tr["t"], tr["kin"]
     mj = _mujoco(key, "equivalent")
     data = pd.DataFrame({"t_s": t})
     for i in range(3):
@@ -489,39 +539,39 @@ def fig08(config: dict, outdir: Path) -> list[Path]:
         data[f"diff{i + 1}_fd_m_s2"] = tr["qddot_fd"][:, i] - kin.qddot[:, i]
         data[f"diff{i + 1}_mujoco_m_s2"] = mj.qddot[:, i] - kin.qddot[:, i]
         data[f"diff{i + 1}_printed_h_m_s2"] = tr["qddot_paper"][:, i] - kin.qddot[:, i]
-    paths = [write_csv(data, outdir / "fig08_acceleration_check.csv")]
-    title = (
-        "Fig. 8: drive accelerations, eq. (13) vs independent checks (the paper: ADAMS)\n"
-        + _motion_label(motion)
-        + f"; FD step {key[3]:g} s"
-    )
-    checks = [
-        ("IK finite differences", tr["qddot_fd"], "#CC79A7"),
-        ("MuJoCo", mj.qddot, "#E69F00"),
-        ("eq. (13) as printed (no 1/l)", tr["qddot_paper"], "#56B4E9"),
-    ]
-    tols = _KIN_TOLERANCES
-    paths.append(
-        _check_figure(
-            t,
-            kin.qddot,
-            checks,
-            tols,
-            r"$\ddot q_i$ (m/s$^2$)",
-            title,
-            outdir / "fig08_acceleration_check.png",
-            _marker_every(t, motion),
-        )
-    )
-    return paths
+    data = data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
+    return write_and_draw(data, outdir, "fig08_acceleration_check", draw_fig08)
 
 
 # ---------------------------------------------------------------------------------------- Figs 9-10
+def draw_fig09(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 9 from its CSV: motor forces with the static load at the centre (dashed)."""
+    motion, static = _frame_motion(frame), float(frame["static_centre_N"].iloc[0])
+
+    def extra(ax):
+        ax.axhline(
+            static,
+            color="0.4",
+            lw=0.8,
+            ls=(0, (4, 2)),
+            label=f"static load at (0, 0, {motion.z0:g}) m: {static:.2f} N",
+        )
+
+    title = (
+        "Fig. 9: motor forces along $+m_i$ (eqs 16-23 corrected, rods ×2, gravity at the centroids)\n"
+        + _motion_label(motion)
+        + f"; masses §2.4, $g$ = {frame['g_m_s2'].iloc[0]:g} m/s$^2$"
+    )
+    t, f = frame["t_s"].to_numpy(), _drives(frame, "f{i}_N")
+    return _series_figure(t, f, r"motor force $f_i$ (N)", title, path, extra)
+
+
 @artefact(
     "fig09",
     outputs=["fig09_driving_forces.png", "fig09_driving_forces.csv"],
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
+    draws=[("fig09_driving_forces.png", "fig09_driving_forces.csv", draw_fig09)],
 )
 def fig09(config: dict, outdir: Path) -> list[Path]:
     """Fig. 9: motor forces along +m_i by the corrected Newton-Euler / virtual-power model."""
@@ -538,30 +588,28 @@ def fig09(config: dict, outdir: Path) -> list[Path]:
             "z_m": tr["p"][:, 2],
             **{f"f{i + 1}_N": f[:, i] for i in range(3)},
             "static_centre_N": np.full(len(t), static[0]),
+            **_motion_columns(motion),
+            "g_m_s2": -params.g[2],
         }
     )
-    paths = [write_csv(data, outdir / "fig09_driving_forces.csv")]
+    return write_and_draw(data, outdir, "fig09_driving_forces", draw_fig09)
 
-    def extra(ax):
-        ax.axhline(
-            static[0],
-            color="0.4",
-            lw=0.8,
-            ls=(0, (4, 2)),
-            label=f"static load at (0, 0, {motion.z0:g}) m: {static[0]:.2f} N",
-        )
 
-    title = (
-        "Fig. 9: motor forces along $+m_i$ (eqs 16-23 corrected, rods ×2, gravity at the centroids)\n"
-        + _motion_label(motion)
-        + f"; masses §2.4, $g$ = {-params.g[2]:g} m/s$^2$"
-    )
-    paths.append(
-        _series_figure(
-            t, f, r"motor force $f_i$ (N)", title, outdir / "fig09_driving_forces.png", extra
-        )
-    )
-    return paths
+def draw_fig10(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 10 from its CSV: our forces with both MuJoCo models as markers, and the differences
+    of MuJoCo and of the printed equations with the 1 % goal."""
+    motion, t = _frame_motion(frame), frame["t_s"].to_numpy()
+    title = "Fig. 10: motor forces, ours vs MuJoCo (the paper: ADAMS)\n" + _motion_label(motion)
+    checks = [
+        ("MuJoCo, equivalent rods", _drives(frame, "f{i}_mujoco_equivalent_N"), "#E69F00"),
+        ("MuJoCo, 6 side rods", _drives(frame, "f{i}_mujoco_parallelogram_N"), "#009E73"),
+        ("eqs (13, 21, 23) as printed", _drives(frame, "f{i}_printed_N"), "#56B4E9"),
+    ]
+    tols = [(f"goal: {TOL_MUJOCO_FORCE:.0%} of peak", TOL_MUJOCO_FORCE, "0.3")]
+    return _check_figure(
+        t, _drives(frame, "f{i}_ours_N"), checks, tols, r"motor force $f_i$ (N)", title, path,
+        _marker_every(t, motion), reference="ours", n_markers=2, ymax=1e3,
+    )  # fmt: skip
 
 
 @artefact(
@@ -569,12 +617,13 @@ def fig09(config: dict, outdir: Path) -> list[Path]:
     outputs=["fig10_mujoco_forces.png", "fig10_mujoco_forces.csv"],
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
+    draws=[("fig10_mujoco_forces.png", "fig10_mujoco_forces.csv", draw_fig10)],
 )
 def fig10(config: dict, outdir: Path) -> list[Path]:
     """Fig. 10 (the paper: ADAMS): our forces against MuJoCo (equivalent-rod and 6-rod models)."""
     key = _key(config)
     tr = _trajectory(key)
-    t, motion = tr["t"], tr["motion"]
+    t = tr["t"]
     f = tr["forces"]["corrected (ours)"]
     printed = tr["forces"]["all three (as printed)"]
     eq, par = _mujoco(key, "equivalent"), _mujoco(key, "parallelogram")
@@ -590,81 +639,43 @@ def fig10(config: dict, outdir: Path) -> list[Path]:
         data[f"diff{i + 1}_printed_N"] = printed[:, i] - f[:, i]
     data["mujoco_loop_error_m"] = np.maximum(eq.loop_error, par.loop_error)
     data["mujoco_lstsq_residual"] = np.maximum(eq.lstsq_residual, par.lstsq_residual)
-    paths = [write_csv(data, outdir / "fig10_mujoco_forces.csv")]
-    title = "Fig. 10: motor forces, ours vs MuJoCo (the paper: ADAMS)\n" + _motion_label(motion)
-    checks = [
-        ("MuJoCo, equivalent rods", eq.force, "#E69F00"),
-        ("MuJoCo, 6 side rods", par.force, "#009E73"),
-        ("eqs (13, 21, 23) as printed", printed, "#56B4E9"),
-    ]
-    tols = [(f"goal: {TOL_MUJOCO_FORCE:.0%} of peak", TOL_MUJOCO_FORCE, "0.3")]
-    paths.append(
-        _check_figure(
-            t,
-            f,
-            checks,
-            tols,
-            r"motor force $f_i$ (N)",
-            title,
-            outdir / "fig10_mujoco_forces.png",
-            _marker_every(t, motion),
-            reference="ours",
-            n_markers=2,
-            ymax=1e3,
-        )
-    )
-    return paths
+    data = data.assign(**_motion_columns(tr["motion"]))
+    return write_and_draw(data, outdir, "fig10_mujoco_forces", draw_fig10)
 
 
 # ---------------------------------------------------------------------------------------- extras
-@artefact(
-    "power_balance",
-    outputs=["extra_power_balance.png", "extra_power_balance.csv"],
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
-def power_balance(config: dict, outdir: Path) -> list[Path]:
-    """extra_power_balance: ``sum f_i qdot_i`` vs ``dE/dt`` (E from positions and velocities of
-    every body, independent of the Newton-Euler code), for ours and each printed variant."""
+def draw_power_balance(frame: pd.DataFrame, path: Path) -> Path:
+    """extra_power_balance from its CSV: top, motor power and dE/dt of ours; bottom, every
+    variant's |residual| / max |dE/dt| with the tolerance."""
     from parakin.plot import save_figure, use_style
 
-    key = _key(config)
-    tr = _trajectory(key)
-    t, motion = tr["t"], tr["motion"]
-    ours = _balance(key, "corrected (ours)")
-    data = pd.DataFrame(
-        {"t_s": t, "power_W": ours.power, "dEdt_W": ours.dEdt, "residual_W": ours.residual}
-    )
-    for label, _, _, _ in VARIANTS[1:]:
-        data[f"residual_{_slug(label)}_W"] = _balance(key, label).residual
-    paths = [write_csv(data, outdir / "extra_power_balance.csv")]
-    scale = float(np.max(np.abs(ours.dEdt)))
+    t, power, dEdt = (frame[c].to_numpy() for c in ("t_s", "power_W", "dEdt_W"))
+    scale = float(np.max(np.abs(dEdt)))
     floor = 1e-9
     with use_style():
         fig, top, bottom = _two_panels()
-        top.plot(t, ours.power, color="#0072B2", label=r"$\sum_i f_i\,\dot q_i$ (motor power)")
-        top.plot(
-            t, ours.dEdt, ls="--", color="#D55E00", label=r"$dE/dt$ (6th-order difference of E)"
-        )
-        _headroom(top, np.concatenate([ours.power, ours.dEdt]), 0.25)
+        top.plot(t, power, color="#0072B2", label=r"$\sum_i f_i\,\dot q_i$ (motor power)")
+        top.plot(t, dEdt, ls="--", color="#D55E00", label=r"$dE/dt$ (6th-order difference of E)")
+        _headroom(top, np.concatenate([power, dEdt]), 0.25)
         top.set_ylabel("power (W)")
         top.set_title(
             "Power balance: motor power = rate of kinetic + potential energy of all 10 bodies\n"
-            + _motion_label(motion)
+            + _motion_label(_frame_motion(frame))
         )
         top.legend(
             loc="upper right", fontsize="small", framealpha=0.9, frameon=True, edgecolor="none"
         )
         colours = ("#0072B2", "#56B4E9", "#CC79A7", "#E69F00", "0.3")
         for (label, _, _, _), colour, ls in zip(VARIANTS, colours, ("-", "--", "-.", ":", "-")):
-            res = _balance(key, label).residual
+            ours = label.startswith("corrected")
+            res = frame["residual_W" if ours else f"residual_{_slug(label)}_W"].to_numpy()
             bottom.semilogy(
                 t,
                 np.maximum(np.abs(res) / scale, floor),
                 ls,
                 color=colour,
                 label=label,
-                lw=1.6 if label.startswith("corrected") else 1.0,
+                lw=1.6 if ours else 1.0,
             )
         bottom.axhline(
             TOL_ENERGY, color="k", lw=0.8, ls=(0, (4, 2)), label=f"tolerance {TOL_ENERGY:g}"
@@ -684,8 +695,29 @@ def power_balance(config: dict, outdir: Path) -> list[Path]:
             frameon=True,
             edgecolor="none",
         )
-    paths.append(save_figure(fig, outdir / "extra_power_balance.png"))
-    return paths
+    return save_figure(fig, path)
+
+
+@artefact(
+    "power_balance",
+    outputs=["extra_power_balance.png", "extra_power_balance.csv"],
+    config=["zhao2017_3p4s.dynamics"],
+    tolerance=ROUNDING,
+    draws=[("extra_power_balance.png", "extra_power_balance.csv", draw_power_balance)],
+)
+def power_balance(config: dict, outdir: Path) -> list[Path]:
+    """extra_power_balance: ``sum f_i qdot_i`` vs ``dE/dt`` (E from positions and velocities of
+    every body, independent of the Newton-Euler code), for ours and each printed variant."""
+    key = _key(config)
+    tr = _trajectory(key)
+    ours = _balance(key, "corrected (ours)")
+    data = pd.DataFrame(
+        {"t_s": tr["t"], "power_W": ours.power, "dEdt_W": ours.dEdt, "residual_W": ours.residual}
+    )
+    for label, _, _, _ in VARIANTS[1:]:
+        data[f"residual_{_slug(label)}_W"] = _balance(key, label).residual
+    data = data.assign(**_motion_columns(tr["motion"]))
+    return write_and_draw(data, outdir, "extra_power_balance", draw_power_balance)
 
 
 def _slug(label: str) -> str:
@@ -788,28 +820,16 @@ def dynamics_slips(config: dict, outdir: Path) -> list[Path]:
     )
 
 
-@artefact(
-    "dynamics_printed",
-    outputs=["extra_dynamics_printed.png", "extra_dynamics_printed.csv"],
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
-def dynamics_printed(config: dict, outdir: Path) -> list[Path]:
-    """extra_dynamics_printed: Fig. 9 as the printed equations give it, and each slip's share."""
+def draw_dynamics_printed(frame: pd.DataFrame, path: Path) -> Path:
+    """extra_dynamics_printed from its CSV: top, Fig. 9 corrected and as printed; bottom, each
+    slip's change of the forces."""
     from parakin.plot import save_figure, use_style
 
-    key = _key(config)
-    tr = _trajectory(key)
-    t, motion = tr["t"], tr["motion"]
-    ours = tr["forces"]["corrected (ours)"]
-    data = pd.DataFrame({"t_s": t})
-    for label, _, _, _ in VARIANTS:
-        for i in range(3):
-            data[f"f{i + 1}_{_slug(label)}_N"] = tr["forces"][label][:, i]
-    paths = [write_csv(data, outdir / "extra_dynamics_printed.csv")]
+    t = frame["t_s"].to_numpy()
+    forces = _variant_columns(frame, "f{i}_{slug}_N")
+    ours, printed = forces["corrected (ours)"], forces["all three (as printed)"]
     with use_style():
         fig, top, bottom = _two_panels()
-        printed = tr["forces"]["all three (as printed)"]
         for i in range(3):
             top.plot(t, ours[:, i], color=_LIMB_COLOURS[i], label=f"drive {i + 1}: corrected")
             top.plot(
@@ -822,7 +842,8 @@ def dynamics_printed(config: dict, outdir: Path) -> list[Path]:
         _headroom(top, np.concatenate([ours, printed]))
         top.set_ylabel(r"motor force $f_i$ (N)")
         top.set_title(
-            "Fig. 9 with the printed eqs (13, 21, 23) vs corrected\n" + _motion_label(motion)
+            "Fig. 9 with the printed eqs (13, 21, 23) vs corrected\n"
+            + _motion_label(_frame_motion(frame))
         )
         top.legend(
             loc="upper right",
@@ -839,7 +860,7 @@ def dynamics_printed(config: dict, outdir: Path) -> list[Path]:
         }
         diffs = []
         for label, colour in colours.items():
-            diff = tr["forces"][label] - ours
+            diff = forces[label] - ours
             diffs.append(diff)
             tag = f"{label} (max |Δf| {np.max(np.abs(diff)):.2f} N)"
             for i, ls in enumerate(("-", "--", ":")):
@@ -857,37 +878,39 @@ def dynamics_printed(config: dict, outdir: Path) -> list[Path]:
             frameon=True,
             edgecolor="none",
         )
-    paths.append(save_figure(fig, outdir / "extra_dynamics_printed.png"))
-    return paths
+    return save_figure(fig, path)
 
 
 @artefact(
-    "mujoco_tracking",
-    outputs=["extra_mujoco_tracking.png", "extra_mujoco_tracking.csv"],
+    "dynamics_printed",
+    outputs=["extra_dynamics_printed.png", "extra_dynamics_printed.csv"],
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
+    draws=[("extra_dynamics_printed.png", "extra_dynamics_printed.csv", draw_dynamics_printed)],
 )
-def mujoco_tracking(config: dict, outdir: Path) -> list[Path]:
-    """extra_mujoco_tracking: MuJoCo's forward dynamics driven open loop by each variant's forces;
-    how far the platform strays from the motion law (ours: both MuJoCo models)."""
+def dynamics_printed(config: dict, outdir: Path) -> list[Path]:
+    """extra_dynamics_printed: Fig. 9 as the printed equations give it, and each slip's share."""
+    tr = _trajectory(_key(config))
+    data = pd.DataFrame({"t_s": tr["t"]})
+    for label, _, _, _ in VARIANTS:
+        for i in range(3):
+            data[f"f{i + 1}_{_slug(label)}_N"] = tr["forces"][label][:, i]
+    data = data.assign(**_motion_columns(tr["motion"]))
+    return write_and_draw(data, outdir, "extra_dynamics_printed", draw_dynamics_printed)
+
+
+#: the open-loop MuJoCo runs of extra_mujoco_tracking: (variant, rod model), in drawing order
+_TRACKING_RUNS = [("corrected (ours)", "parallelogram")] + [
+    (label, "equivalent") for label, _, _, _ in VARIANTS
+]
+
+
+def draw_mujoco_tracking(frame: pd.DataFrame, path: Path) -> Path:
+    """extra_mujoco_tracking from its CSV: each run's platform deviation (log scale) with the
+    motion amplitude and the tolerance."""
     from parakin.plot import new_figure, save_figure, use_style
 
-    key = _key(config)
-    tr = _trajectory(key)
-    motion = tr["motion"]
-    runs = [("corrected (ours)", "parallelogram")] + [
-        (label, "equivalent") for label, _, _, _ in VARIANTS
-    ]
-    results = {(label, rods): _tracking(key, label, rods) for label, rods in runs}
-    t = results[runs[0]].t
-    data = pd.DataFrame({"t_s": t})
-    for (label, rods), res in results.items():
-        data[f"error_{_slug(label)}_{rods}_m"] = res.error
-    data["loop_error_ours_m"] = np.maximum(
-        results[("corrected (ours)", "equivalent")].loop_error,
-        results[("corrected (ours)", "parallelogram")].loop_error,
-    )
-    paths = [write_csv(data, outdir / "extra_mujoco_tracking.csv")]
+    t, motion = frame["t_s"].to_numpy(), _frame_motion(frame)
     floor = 1e-12
     colours = {
         "corrected (ours)": "#0072B2",
@@ -898,12 +921,13 @@ def mujoco_tracking(config: dict, outdir: Path) -> list[Path]:
     }
     with use_style():
         fig, ax = new_figure((7.0, 3.6))
-        for (label, rods), res in results.items():
+        for label, rods in _TRACKING_RUNS:
+            error = frame[f"error_{_slug(label)}_{rods}_m"].to_numpy()
             ours = label.startswith("corrected")
             ls = "--" if rods == "parallelogram" else ("-." if label.startswith("all") else "-")
             ax.semilogy(
                 t,
-                np.maximum(res.error, floor),
+                np.maximum(error, floor),
                 color=colours[label],
                 ls=ls,
                 lw=1.6 if ours else 1.1,
@@ -941,8 +965,30 @@ def mujoco_tracking(config: dict, outdir: Path) -> list[Path]:
             frameon=True,
             edgecolor="none",
         )
-    paths.append(save_figure(fig, outdir / "extra_mujoco_tracking.png"))
-    return paths
+    return save_figure(fig, path)
+
+
+@artefact(
+    "mujoco_tracking",
+    outputs=["extra_mujoco_tracking.png", "extra_mujoco_tracking.csv"],
+    config=["zhao2017_3p4s.dynamics"],
+    tolerance=ROUNDING,
+    draws=[("extra_mujoco_tracking.png", "extra_mujoco_tracking.csv", draw_mujoco_tracking)],
+)
+def mujoco_tracking(config: dict, outdir: Path) -> list[Path]:
+    """extra_mujoco_tracking: MuJoCo's forward dynamics driven open loop by each variant's forces;
+    how far the platform strays from the motion law (ours: both MuJoCo models)."""
+    key = _key(config)
+    results = {(label, rods): _tracking(key, label, rods) for label, rods in _TRACKING_RUNS}
+    data = pd.DataFrame({"t_s": results[_TRACKING_RUNS[0]].t})
+    for (label, rods), res in results.items():
+        data[f"error_{_slug(label)}_{rods}_m"] = res.error
+    data["loop_error_ours_m"] = np.maximum(
+        results[("corrected (ours)", "equivalent")].loop_error,
+        results[("corrected (ours)", "parallelogram")].loop_error,
+    )
+    data = data.assign(**_motion_columns(_trajectory(key)["motion"]))
+    return write_and_draw(data, outdir, "extra_mujoco_tracking", draw_mujoco_tracking)
 
 
 # ---------------------------------------------------------------------------------------- report

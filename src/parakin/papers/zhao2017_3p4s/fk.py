@@ -20,7 +20,7 @@ from parakin.config import rng, seed_for
 from parakin.io import atomic_write_text, atomic_writer, write_csv, write_table
 from parakin.mechanisms import P3P4S
 from parakin.papers.zhao2017_3p4s.common import KEY, artefact
-from parakin.papers.zhao2017_3p4s.kinematics import table1_inputs
+from parakin.papers.zhao2017_3p4s.kinematics import table1_inputs, write_and_draw
 from parakin.registry import EXACT, ITERATIVE, Tolerance
 from parakin.solvers import solve_fk
 from parakin.workspace import sample_reachable
@@ -116,6 +116,23 @@ def samples(config: dict, outdir: Path) -> list[Path]:
 
 
 # ---------------------------------------------------------------------------------- training
+def draw_training(frame: pd.DataFrame, path: Path) -> Path:
+    """extra_bp_training from its CSV (the LM log): RMS position error per epoch of the
+    training, validation and test sets."""
+    from parakin.plot import new_figure, save_figure, use_style
+
+    cols = [c for c in ("train_rms_m", "val_rms_m", "test_rms_m") if c in frame.columns]
+    with use_style():
+        fig, ax = new_figure("single")
+        for col, label in zip(cols, ("training", "validation", "test")):
+            ax.semilogy(frame["epoch"], frame[col], label=label)
+        ax.set_xlabel("Levenberg–Marquardt epoch")
+        ax.set_ylabel("RMS position error (m)")
+        ax.set_title("BP network 3-10-3 (Zhao 2017 §1.1)")
+        ax.legend()
+    return save_figure(fig, path)
+
+
 @artefact(
     "train",
     outputs=[
@@ -130,6 +147,7 @@ def samples(config: dict, outdir: Path) -> list[Path]:
     tolerance=TRAINING,
     threads=2,
     resources={"runtime": 30, "mem_mb": 2000},
+    draws=[("extra_bp_training.png", "extra_bp_training.csv", draw_training)],
 )
 def train(config: dict, outdir: Path) -> list[Path]:
     """The paper's BP network (3 strokes -> 10 tanh -> 3 coordinates) trained by
@@ -223,20 +241,8 @@ def _fmt_box(v) -> str:
 
 
 def _training_figure(log: pd.DataFrame, outdir: Path) -> list[Path]:
-    from parakin.plot import new_figure, save_figure, use_style
-
-    cols = [c for c in ("train_rms_m", "val_rms_m", "test_rms_m") if c in log.columns]
-    paths = [write_csv(log, outdir / "extra_bp_training.csv")]
-    with use_style():
-        fig, ax = new_figure("single")
-        for col, label in zip(cols, ("training", "validation", "test")):
-            ax.semilogy(log["epoch"], log[col], label=label)
-        ax.set_xlabel("Levenberg–Marquardt epoch")
-        ax.set_ylabel("RMS position error (m)")
-        ax.set_title("BP network 3-10-3 (Zhao 2017 §1.1)")
-        ax.legend()
-    paths.append(save_figure(fig, outdir / "extra_bp_training.png"))
-    return paths
+    """extra_bp_training.{csv,png}: the log written, read back and drawn from the CSV alone."""
+    return write_and_draw(log, outdir, "extra_bp_training", draw_training)
 
 
 # ---------------------------------------------------------------------------------- Table 2

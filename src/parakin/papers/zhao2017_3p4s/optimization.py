@@ -219,7 +219,13 @@ def _globals(m: P3P4S, W: ix.Workspace, n: int, rule: str, k: float) -> dict:
 
 
 # ---------------------------------------------------------------------------------------- Figs 11-12
-def _ellipsoid_data(m: P3P4S, pose: np.ndarray, n_lat: int = 13, n_lon: int = 25):
+#: the (latitude, longitude) grid of the sphere's wireframe; the CSVs hold it raveled row by row
+SPHERE_GRID = (13, 25)
+
+
+def _ellipsoid_data(
+    m: P3P4S, pose: np.ndarray, n_lat: int = SPHERE_GRID[0], n_lon: int = SPHERE_GRID[1]
+):
     J = m.velocity_jacobian(pose)
     u, v = np.meshgrid(
         np.linspace(0, np.pi, n_lat), np.linspace(0, 2 * np.pi, n_lon), indexing="ij"
@@ -228,6 +234,13 @@ def _ellipsoid_data(m: P3P4S, pose: np.ndarray, n_lat: int = 13, n_lon: int = 25
     vel = np.linalg.solve(J, qd.reshape(-1, 3).T).T.reshape(qd.shape)  # v = J^-1 qdot, eq (35)
     U, s, Vt = np.linalg.svd(J)
     return J, qd, vel, s, Vt
+
+
+def _grid_points(frame: pd.DataFrame, columns: list[str]) -> np.ndarray:
+    """The wireframe's points (n_lat, n_lon, 3) from the raveled columns of a Fig. 11/12 CSV."""
+    if len(frame) != SPHERE_GRID[0] * SPHERE_GRID[1]:
+        raise ValueError(f"{len(frame)} rows, expected a {SPHERE_GRID} grid")
+    return frame[columns].to_numpy(float).reshape(*SPHERE_GRID, 3)
 
 
 def _sphere_figure(pts, path, title, labels, axes=None, semi=None):
@@ -256,11 +269,23 @@ def _sphere_figure(pts, path, title, labels, axes=None, semi=None):
     return save_figure(fig, path)
 
 
+def draw_fig11(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 11 from its CSV: the drive-velocity sphere (``qdot*_m_s``) and the pose height."""
+    return _sphere_figure(
+        _grid_points(frame, ["qdot1_m_s", "qdot2_m_s", "qdot3_m_s"]),
+        path,
+        "Fig. 11: unit sphere of drive velocities, eq. (35)\n"
+        f"$\\dot q^T\\dot q = 1$, before design, home pose p = (0, 0, {frame['pose_z_m'].iloc[0]:g}) m",
+        (r"$\dot q_1$ (m/s)", r"$\dot q_2$ (m/s)", r"$\dot q_3$ (m/s)"),
+    )
+
+
 @artefact(
     "fig11",
     outputs=["fig11_velocity_sphere.png", "fig11_velocity_sphere.csv"],
     config=INDEX_CONFIG,
     tolerance=EXACT,
+    draws=[("fig11_velocity_sphere.png", "fig11_velocity_sphere.csv", draw_fig11)],
 )
 def fig11(config: dict, outdir: Path) -> list[Path]:
     """Fig. 11: the unit sphere of drive velocities ``qdot^T qdot = 1`` (eq 35) at the home pose."""
@@ -272,19 +297,28 @@ def fig11(config: dict, outdir: Path) -> list[Path]:
             "qdot1_m_s": qd[..., 0].ravel(),
             "qdot2_m_s": qd[..., 1].ravel(),
             "qdot3_m_s": qd[..., 2].ravel(),
+            "pose_z_m": float(pose[2]),
         }
     )
-    paths = [write_csv(df, outdir / "fig11_velocity_sphere.csv")]
-    paths.append(
-        _sphere_figure(
-            qd,
-            outdir / "fig11_velocity_sphere.png",
-            "Fig. 11: unit sphere of drive velocities, eq. (35)\n"
-            f"$\\dot q^T\\dot q = 1$, before design, home pose p = (0, 0, {pose[2]:g}) m",
-            (r"$\dot q_1$ (m/s)", r"$\dot q_2$ (m/s)", r"$\dot q_3$ (m/s)"),
-        )
+    csv = write_csv(df, outdir / "fig11_velocity_sphere.csv")
+    return [csv, draw_fig11(pd.read_csv(csv), outdir / "fig11_velocity_sphere.png")]
+
+
+def draw_fig12(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 12 from its CSV: the velocity ellipsoid (``v*_m_s``) and its semi-axes (the constant
+    columns ``sigma_J{i}`` and ``dir{i}_x/y/z``, i = 1..3 in descending ``sigma_J``)."""
+    row = frame.iloc[0]
+    s = np.array([row[f"sigma_J{i}"] for i in (1, 2, 3)], float)
+    Vt = np.array([[row[f"dir{i}_{c}"] for c in "xyz"] for i in (1, 2, 3)], float)
+    return _sphere_figure(
+        _grid_points(frame, ["vx_m_s", "vy_m_s", "vz_m_s"]),
+        path,
+        "Fig. 12: platform velocity ellipsoid $v = J^{-1}\\dot q$, $|\\dot q| = 1$\n"
+        f"semi-axes $1/\\sigma_i(J)$; cond(J) = {s[0] / s[-1]:.3f}",
+        (r"$v_x$ (m/s)", r"$v_y$ (m/s)", r"$v_z$ (m/s)"),
+        Vt,
+        1 / s,
     )
-    return paths
 
 
 @artefact(
@@ -296,6 +330,7 @@ def fig11(config: dict, outdir: Path) -> list[Path]:
     ],
     config=INDEX_CONFIG,
     tolerance=EXACT,
+    draws=[("fig12_velocity_ellipsoid.png", "fig12_velocity_ellipsoid.csv", draw_fig12)],
 )
 def fig12(config: dict, outdir: Path) -> list[Path]:
     """Fig. 12: the output velocity ellipsoid ``v = J^-1 qdot`` of the unit sphere (eq 35); its
@@ -311,7 +346,11 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
             "vz_m_s": vel[..., 2].ravel(),
         }
     )
-    paths = [write_csv(df, outdir / "fig12_velocity_ellipsoid.csv")]
+    for i in range(3):  # the semi-axes the figure draws, as constant columns
+        df[f"sigma_J{i + 1}"] = s[i]
+        for j, c in enumerate("xyz"):
+            df[f"dir{i + 1}_{c}"] = Vt[i, j]
+    csv = write_csv(df, outdir / "fig12_velocity_ellipsoid.csv")
     axes_df = pd.DataFrame(
         {
             "sigma_J": s,
@@ -321,19 +360,11 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
             "dir_z": Vt[:, 2],
         }
     )
-    paths.append(write_csv(axes_df, outdir / "fig12_velocity_ellipsoid_axes.csv"))
-    paths.append(
-        _sphere_figure(
-            vel,
-            outdir / "fig12_velocity_ellipsoid.png",
-            "Fig. 12: platform velocity ellipsoid $v = J^{-1}\\dot q$, $|\\dot q| = 1$\n"
-            f"semi-axes $1/\\sigma_i(J)$; cond(J) = {s[0] / s[-1]:.3f}",
-            (r"$v_x$ (m/s)", r"$v_y$ (m/s)", r"$v_z$ (m/s)"),
-            Vt,
-            1 / s,
-        )
-    )
-    return paths
+    return [
+        csv,
+        write_csv(axes_df, outdir / "fig12_velocity_ellipsoid_axes.csv"),
+        draw_fig12(pd.read_csv(csv), outdir / "fig12_velocity_ellipsoid.png"),
+    ]
 
 
 # ---------------------------------------------------------------------------------------- Figs 15-26
@@ -384,41 +415,68 @@ def _atlas_values(config: dict, which: str):
     )
 
 
-def _atlas(config: dict, outdir: Path, number: int) -> list[Path]:
-    from parakin.plot import new_figure, save_figure, use_style
+#: the index columns an atlas CSV can hold (the one it draws is the one present)
+ATLAS_KEYS = ("dynamic", "stiffness", "speed")
 
-    num, key, which, label, _, _ = next(a for a in ATLASES if a[0] == number)
+
+def _atlas_frame(config: dict, number: int) -> pd.DataFrame:
+    """One atlas/contour CSV: the index over the W grid, with the design (Table 3) and, for the
+    stiffness index, its form and k as constant columns (what the figures' titles state)."""
+    num, key, which, _, _, _ = next(a for a in ATLASES if a[0] == number)
     c = index_settings(config)
     X, Y, vals, W, m = _atlas_values(config, which)
-    Z = vals[key]
-    lo, hi = PAPER_RANGES[(key, which)]
-    form = (
-        r"$\lambda_{min}(J^TkJ)$"
-        if c["stiffness"] == "lambda"
-        else r"$\sqrt{\lambda_{min}(J^TkJ)}$"
-    )
-    stiff = f" = {form}, k = {c['k']:g} N/m" if key == "stiffness" else ""
-    slug = f"{key}_{which}"
     df = pd.DataFrame(
         {
             "x_m": X.ravel(),
             "y_m": Y.ravel(),
             "z_m": W.z[0] if W.planar else 0.5 * sum(W.z),
-            f"{key}": Z.ravel(),
+            f"{key}": vals[key].ravel(),
         }
     )
     if key == "stiffness":
         df["stiffness_lambda"] = vals["stiffness_lambda"].ravel()
         df["stiffness_sqrt"] = vals["stiffness_sqrt"].ravel()
-    stem_a = f"fig{num:02d}_{slug}_atlas"
-    stem_c = f"fig{num + 1:02d}_{slug}_contour"
-    paths = [write_csv(df, outdir / f"{stem_a}.csv"), write_csv(df, outdir / f"{stem_c}.csv")]
+        df["stiffness_form"] = c["stiffness"]
+        df["k_N_m"] = float(c["k"])
+    df["design"] = which
+    df["r_a_m"], df["r_b_m"], df["L_m"], df["d_m"] = m.r_a, m.r_b, m.L, m.d
+    df["phi_deg"] = float(np.rad2deg(m.phi))
+    return df
+
+
+def _atlas_parts(frame: pd.DataFrame):
+    """What both drawings of an atlas CSV need: grid, index, labels and the title's lines."""
+    key = next(k for k in ATLAS_KEYS if k in frame.columns)
+    row = frame.iloc[0]
+    which = row["design"]
+    num, _, _, label, _, _ = next(a for a in ATLASES if a[1:3] == (key, which))
+    n = int(round(np.sqrt(len(frame))))
+    if n * n != len(frame):
+        raise ValueError(f"an atlas CSV holds a square grid, not {len(frame)} rows")
+    X, Y, Z = (frame[col].to_numpy(float).reshape(n, n) for col in ("x_m", "y_m", key))
+    lo, hi = PAPER_RANGES[(key, which)]
+    stiff = ""
+    if key == "stiffness":
+        form = (
+            r"$\lambda_{min}(J^TkJ)$"
+            if row["stiffness_form"] == "lambda"
+            else r"$\sqrt{\lambda_{min}(J^TkJ)}$"
+        )
+        stiff = f" = {form}, k = {row['k_N_m']:g} N/m"
     design = (
-        f"{which} (Table 3): $r_a$ = {m.r_a:g}, $r_b$ = {m.r_b:g}, L = {m.L:g}, d = {m.d:g} m, "
-        f"$\\varphi$ = {np.rad2deg(m.phi):.0f}°"
+        f"{which} (Table 3): $r_a$ = {row['r_a_m']:g}, $r_b$ = {row['r_b_m']:g}, L = {row['L_m']:g}, "
+        f"d = {row['d_m']:g} m, $\\varphi$ = {row['phi_deg']:.0f}°"
     )
-    where = f"z = {0.5 * sum(W.z):g} m"
+    where = f"z = {row['z_m']:g} m"
     rng_txt = f"ours [{np.nanmin(Z):.3g}, {np.nanmax(Z):.3g}], paper [{lo:g}, {hi:g}]"
+    return num, X, Y, Z, label, stiff, f"{where}\n{design}\nrange {rng_txt}"
+
+
+def draw_atlas(frame: pd.DataFrame, path: Path) -> Path:
+    """Figs 15, 17, ..., 25 from their CSV: the index as a surface over W."""
+    from parakin.plot import new_figure, save_figure, use_style
+
+    num, X, Y, Z, label, stiff, lines = _atlas_parts(frame)
     with use_style():
         fig, ax = new_figure((5.6, 4.6), projection="3d", rect=(0.0, 0.0, 0.80, 0.86))
         surf = ax.plot_surface(1e3 * X, 1e3 * Y, Z, cmap="viridis", linewidth=0, antialiased=True)
@@ -431,8 +489,15 @@ def _atlas(config: dict, outdir: Path, number: int) -> list[Path]:
         cax = fig.add_axes((0.87, 0.15, 0.025, 0.6))
         cb = fig.colorbar(surf, cax=cax)
         cb.set_label(label + stiff, fontsize="small")
-        fig.suptitle(f"Fig. {num}: {label} atlas, {where}\n{design}\nrange {rng_txt}", fontsize=8)
-    paths.append(save_figure(fig, outdir / f"{stem_a}.png"))
+        fig.suptitle(f"Fig. {num}: {label} atlas, {lines}", fontsize=8)
+    return save_figure(fig, path)
+
+
+def draw_contour(frame: pd.DataFrame, path: Path) -> Path:
+    """Figs 16, 18, ..., 26 from their CSV: contours of the index over W."""
+    from parakin.plot import new_figure, save_figure, use_style
+
+    num, X, Y, Z, label, stiff, lines = _atlas_parts(frame)
     with use_style():
         fig, ax = new_figure((4.8, 4.2))
         cs = ax.contourf(1e3 * X, 1e3 * Y, Z, levels=14, cmap="viridis")
@@ -442,11 +507,22 @@ def _atlas(config: dict, outdir: Path, number: int) -> list[Path]:
         cb.set_label(label + stiff, fontsize="small")
         ax.set_aspect("equal")
         ax.set_xlabel("x (mm)"), ax.set_ylabel("y (mm)")
-        ax.set_title(
-            f"Fig. {num + 1}: {label} contour, {where}\n{design}\nrange {rng_txt}", fontsize=7
-        )
-    paths.append(save_figure(fig, outdir / f"{stem_c}.png"))
-    return paths
+        ax.set_title(f"Fig. {num + 1}: {label} contour, {lines}", fontsize=7)
+    return save_figure(fig, path)
+
+
+def _atlas(config: dict, outdir: Path, number: int) -> list[Path]:
+    _, key, which, _, _, _ = next(a for a in ATLASES if a[0] == number)
+    stem_a = f"fig{number:02d}_{key}_{which}_atlas"
+    stem_c = f"fig{number + 1:02d}_{key}_{which}_contour"
+    df = _atlas_frame(config, number)
+    csv_a, csv_c = write_csv(df, outdir / f"{stem_a}.csv"), write_csv(df, outdir / f"{stem_c}.csv")
+    return [
+        csv_a,
+        csv_c,
+        draw_atlas(pd.read_csv(csv_a), outdir / f"{stem_a}.png"),
+        draw_contour(pd.read_csv(csv_c), outdir / f"{stem_c}.png"),
+    ]
 
 
 def _make_atlas(number: int, stem: str):
@@ -455,13 +531,15 @@ def _make_atlas(number: int, stem: str):
 
     make.__name__ = make.__qualname__ = f"fig{number:02d}"
     make.__doc__ = f"Figs {number}-{number + 1}: atlas (surface) and contour of one index over W (§3, eqs 28/33/36)."
-    outputs = [
-        f"fig{number:02d}_{stem}_atlas.png",
-        f"fig{number:02d}_{stem}_atlas.csv",
-        f"fig{number + 1:02d}_{stem}_contour.png",
-        f"fig{number + 1:02d}_{stem}_contour.csv",
+    atlas, contour = f"fig{number:02d}_{stem}_atlas", f"fig{number + 1:02d}_{stem}_contour"
+    outputs = [f"{atlas}.png", f"{atlas}.csv", f"{contour}.png", f"{contour}.csv"]
+    draws = [
+        (f"{atlas}.png", f"{atlas}.csv", draw_atlas),
+        (f"{contour}.png", f"{contour}.csv", draw_contour),
     ]
-    return artefact(f"fig{number:02d}", outputs=outputs, config=INDEX_CONFIG, tolerance=EXACT)(make)
+    return artefact(
+        f"fig{number:02d}", outputs=outputs, config=INDEX_CONFIG, tolerance=EXACT, draws=draws
+    )(make)
 
 
 #: Figs 15-26, one artefact per (atlas, contour) pair
@@ -507,6 +585,33 @@ def global_table(config: dict, outdir: Path) -> list[Path]:
 
 
 # ---------------------------------------------------------------------------------------- convergence etc.
+def draw_index_convergence(frame: pd.DataFrame, path: Path) -> Path:
+    """extra_index_convergence from its CSV: distance to the finest Gauss value against n."""
+    from parakin.plot import new_figure, save_figure, use_style
+
+    with use_style():
+        fig, ax = new_figure((6.0, 3.6))
+        colours = {"sigma1": "#0072B2", "sigma2_lambda": "#D55E00", "sigma3": "#009E73"}
+        for (rule, design), sub in frame.groupby(["rule", "design"]):
+            sub = sub[sub["n"] < sub["n"].max()] if rule == "gauss" else sub
+            for col, colour in colours.items():
+                ax.loglog(
+                    sub["n"],
+                    np.maximum(sub[f"{col}_rel_to_finest"], 1e-12),
+                    marker="o" if rule == "gauss" else "s",
+                    ls="-" if design == "before" else "--",
+                    color=colour,
+                    ms=3,
+                    label=f"{col}, {design}, {rule}",
+                )
+        ax.axhline(5e-4, color="k", lw=0.8, ls=":", label="3rd significant digit (5e-4)")
+        ax.set_xlabel("nodes per axis n")
+        ax.set_ylabel("|value / finest Gauss value − 1|")
+        ax.set_title("Global indices vs grid doubling (Gauss–Legendre ○, midpoint □)")
+        ax.legend(fontsize=5.5, ncols=2, loc="lower left")
+    return save_figure(fig, path)
+
+
 @artefact(
     "index_convergence",
     outputs=[
@@ -516,11 +621,10 @@ def global_table(config: dict, outdir: Path) -> list[Path]:
     ],
     config=INDEX_CONFIG,
     tolerance=ROUNDING,
+    draws=[("extra_index_convergence.png", "extra_index_convergence.csv", draw_index_convergence)],
 )
 def index_convergence(config: dict, outdir: Path) -> list[Path]:
     """extra_index_convergence: global indices as the grid doubles, Gauss-Legendre vs midpoint."""
-    from parakin.plot import new_figure, save_figure, use_style
-
     c = index_settings(config)
     W = workspace(config)
     ds = list(_designs().values())
@@ -548,27 +652,9 @@ def index_convergence(config: dict, outdir: Path) -> list[Path]:
         "the symmetry lines through the centre), so convergence is algebraic, not spectral.",
         floatfmt=".6g",
     )
-    with use_style():
-        fig, ax = new_figure((6.0, 3.6))
-        colours = {"sigma1": "#0072B2", "sigma2_lambda": "#D55E00", "sigma3": "#009E73"}
-        for (rule, design), sub in df.groupby(["rule", "design"]):
-            sub = sub[sub["n"] < sub["n"].max()] if rule == "gauss" else sub
-            for col, colour in colours.items():
-                ax.loglog(
-                    sub["n"],
-                    np.maximum(sub[f"{col}_rel_to_finest"], 1e-12),
-                    marker="o" if rule == "gauss" else "s",
-                    ls="-" if design == "before" else "--",
-                    color=colour,
-                    ms=3,
-                    label=f"{col}, {design}, {rule}",
-                )
-        ax.axhline(5e-4, color="k", lw=0.8, ls=":", label="3rd significant digit (5e-4)")
-        ax.set_xlabel("nodes per axis n")
-        ax.set_ylabel("|value / finest Gauss value − 1|")
-        ax.set_title("Global indices vs grid doubling (Gauss–Legendre ○, midpoint □)")
-        ax.legend(fontsize=5.5, ncols=2, loc="lower left")
-    paths.append(save_figure(fig, outdir / "extra_index_convergence.png"))
+    paths.append(
+        draw_index_convergence(pd.read_csv(paths[0]), outdir / "extra_index_convergence.png")
+    )
     return paths
 
 
@@ -752,6 +838,38 @@ def _optimise(key: str) -> dict:
     }
 
 
+def draw_fig14(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 14 from its CSV: the ``best_f_seed<S>`` curves against ``generation``; the GA settings
+    of the title and the paper's f_min are constant columns."""
+    from parakin.plot import new_figure, save_figure, use_style
+
+    row = frame.iloc[0]
+    gen = frame["generation"].to_numpy()
+    with use_style():
+        fig, ax = new_figure((5.6, 3.4))
+        for j, col in enumerate(c for c in frame.columns if c.startswith("best_f_seed")):
+            best = frame[col].to_numpy(float)
+            ax.plot(
+                gen,
+                best,
+                color=f"C{j}",
+                label=f"best, seed {col.removeprefix('best_f_seed')} (f = {best[-1]:.4f})",
+            )
+        f_min = row["paper_f_min"]
+        ax.axhline(float(f_min), color="k", ls=":", lw=0.9, label=f"paper f$_{{min}}$ = {f_min:g}")
+        ax.set_xlabel("generation")
+        ax.set_ylabel("combined objective f (eq. 40)")
+        ax.set_xlim(0, gen[-1])
+        ax.set_title(
+            f"Fig. 14: GA convergence (pop {int(row['population'])}, arithmetic crossover "
+            f"{row['crossover_fraction']:g}, {int(row['elite'])} elites,\nroulette, adaptive "
+            "mutation), normalised weighted sum of σ1, σ2 (flipped), σ3",
+            fontsize=8,
+        )
+        ax.legend(fontsize="small")
+    return save_figure(fig, path)
+
+
 @artefact(
     "fig14",
     outputs=["fig14_ga_convergence.png", "fig14_ga_convergence.csv"],
@@ -759,41 +877,25 @@ def _optimise(key: str) -> dict:
     tolerance=GA,
     threads=1,
     resources={"runtime": 60, "mem_mb": 2000},
+    draws=[("fig14_ga_convergence.png", "fig14_ga_convergence.csv", draw_fig14)],
 )
 def fig14(config: dict, outdir: Path) -> list[Path]:
     """Fig. 14: best combined objective f (eq 40) per generation, one curve per seed."""
-    from parakin.plot import new_figure, save_figure, use_style
-
     res = _optimise(_key(config))
+    o = opt_settings(config)
     data = {"generation": np.arange(len(next(iter(res["runs"].values())).best))}
     for seed, r in res["runs"].items():
-        data[f"best_f_seed{seed}"] = r.best
+        data[f"best_f_seed{seed}"] = r.best  # its last value is r.fun
         data[f"mean_f_seed{seed}"] = r.mean
     df = pd.DataFrame(data)
-    paths = [write_csv(df, outdir / "fig14_ga_convergence.csv")]
-    with use_style():
-        fig, ax = new_figure((5.6, 3.4))
-        for j, (seed, r) in enumerate(res["runs"].items()):
-            ax.plot(
-                data["generation"],
-                r.best,
-                color=f"C{j}",
-                label=f"best, seed {seed} (f = {r.fun:.4f})",
-            )
-        f_min = printed_value(load_reference(KEY), "fig14", "f_min")
-        ax.axhline(float(f_min), color="k", ls=":", lw=0.9, label=f"paper f$_{{min}}$ = {f_min}")
-        ax.set_xlabel("generation")
-        ax.set_ylabel("combined objective f (eq. 40)")
-        ax.set_xlim(0, data["generation"][-1])
-        o = opt_settings(config)
-        ax.set_title(
-            f"Fig. 14: GA convergence (pop {o['population']}, arithmetic crossover {o['crossover_fraction']:g}, "
-            f"{o['elite']} elites,\nroulette, adaptive mutation), normalised weighted sum of σ1, σ2 (flipped), σ3",
-            fontsize=8,
-        )
-        ax.legend(fontsize="small")
-    paths.append(save_figure(fig, outdir / "fig14_ga_convergence.png"))
-    return paths
+    df["population"], df["crossover_fraction"], df["elite"] = (
+        o["population"],
+        float(o["crossover_fraction"]),
+        o["elite"],
+    )
+    df["paper_f_min"] = float(printed_value(load_reference(KEY), "fig14", "f_min"))
+    csv = write_csv(df, outdir / "fig14_ga_convergence.csv")
+    return [csv, draw_fig14(pd.read_csv(csv), outdir / "fig14_ga_convergence.png")]
 
 
 @artefact(
@@ -916,6 +1018,91 @@ def table3(config: dict, outdir: Path) -> list[Path]:
     )
 
 
+#: the designs marked on the Pareto plot: (column prefix in extra_pareto.csv, marker)
+PARETO_MARKS = (("paper_before", "s"), ("paper_after", "D"), ("ours", "*"))
+
+
+def _pareto_marks(frame: pd.DataFrame) -> pd.DataFrame:
+    """The marked designs of an extra_pareto CSV (its constant ``<mark>_sigma1..3`` columns)."""
+    row = frame.iloc[0]
+    names = {
+        "paper_before": "paper before",
+        "paper_after": "paper after",
+        "ours": f"ours (weighted sum, seed {int(row['ours_seed'])})",
+    }
+    return pd.DataFrame(
+        [
+            {
+                "design": names[prefix],
+                "marker": marker,
+                **{s: float(row[f"{prefix}_{s}"]) for s in ("sigma1", "sigma2", "sigma3")},
+            }
+            for prefix, marker in PARETO_MARKS
+        ]
+    )
+
+
+def draw_pareto(frame: pd.DataFrame, path: Path) -> Path:
+    """extra_pareto from its CSV: the front's (sigma1, sigma3) coloured by sigma2, the marked
+    designs and the NSGA-II settings (constant columns)."""
+    from parakin.plot import new_figure, save_figure, use_style
+
+    df, mk = frame, _pareto_marks(frame)
+    row = frame.iloc[0]
+    with use_style():
+        fig, _ = new_figure((8.4, 4.0))
+        fig.clear()
+        ax, axz = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.0, 1.25]})
+        # left: every design (the paper's two lie far from the front)
+        ax.scatter(
+            df["sigma1"], df["sigma3"], c=df["sigma2"], s=8, cmap="viridis", label="NSGA-II front"
+        )
+        for _, r in mk.iterrows():
+            ax.scatter(
+                r["sigma1"],
+                r["sigma3"],
+                marker=r["marker"],
+                s=60,
+                facecolor="none",
+                edgecolor="#D55E00",
+                lw=1.3,
+                label=f"{r['design']}: σ2 = {r['sigma2']:.3g}",
+            )
+        ax.set_xlabel("global dynamic index σ1 (kg)")
+        ax.set_ylabel("global speed index σ3 = mean cond(J)")
+        ax.set_title("all designs", fontsize="small")
+        ax.legend(fontsize="x-small", loc="upper left")
+        # right: the front itself, zoomed (box of the front, 8 % margin)
+        x0, x1 = df["sigma1"].min(), df["sigma1"].max()
+        y0, y1 = df["sigma3"].min(), df["sigma3"].max()
+        mx, my = 0.08 * max(x1 - x0, 1e-9 * abs(x1)), 0.08 * max(y1 - y0, 1e-9 * abs(y1))
+        sc = axz.scatter(df["sigma1"], df["sigma3"], c=df["sigma2"], s=14, cmap="viridis")
+        for _, r in mk.iterrows():
+            if x0 - mx <= r["sigma1"] <= x1 + mx and y0 - my <= r["sigma3"] <= y1 + my:
+                axz.scatter(
+                    r["sigma1"],
+                    r["sigma3"],
+                    marker=r["marker"],
+                    s=80,
+                    facecolor="none",
+                    edgecolor="#D55E00",
+                    lw=1.3,
+                )
+        axz.set_xlim(x0 - mx, x1 + mx)
+        axz.set_ylim(y0 - my, y1 + my)
+        axz.ticklabel_format(useOffset=False)
+        axz.set_xlabel("global dynamic index σ1 (kg)")
+        axz.set_title("the front, zoomed (colour: σ2)", fontsize="small")
+        cb = fig.colorbar(sc, ax=axz)
+        cb.set_label("global stiffness σ2 (λ$_{min}$, k = 1 N/m)")
+        fig.suptitle(
+            f"Beyond the paper: NSGA-II Pareto front of (σ1, σ2, σ3), {len(df)} designs "
+            f"(pop {int(row['nsga2_population'])}, {int(row['nsga2_generations'])} generations)",
+            fontsize="small",
+        )
+    return save_figure(fig, path)
+
+
 @artefact(
     "pareto",
     outputs=["extra_pareto.png", "extra_pareto.csv", "extra_pareto_marks.csv"],
@@ -923,12 +1110,11 @@ def table3(config: dict, outdir: Path) -> list[Path]:
     tolerance=GA,
     threads=1,
     resources={"runtime": 90, "mem_mb": 2000},
+    draws=[("extra_pareto.png", "extra_pareto.csv", draw_pareto)],
 )
 def pareto(config: dict, outdir: Path) -> list[Path]:
     """extra_pareto: NSGA-II front of (sigma1, -sigma2, sigma3) over (r_a, r_b, L, d, phi) with the
     paper's designs and our weighted-sum optimum marked."""
-    from parakin.plot import new_figure, save_figure, use_style
-
     o = opt_settings(config)
     res = _optimise(_key(config))
     obj = res["obj"]
@@ -962,76 +1148,31 @@ def pareto(config: dict, outdir: Path) -> list[Path]:
             "sigma3": front.F[:, 2],
         }
     )
+    best_seed = min(res["runs"], key=lambda s: res["runs"][s].fun)
     marks = {
         "paper before": _vec(P3P4S.zhao2017()),
         "paper after": _vec(P3P4S.zhao2017_optimised()),
+        f"ours (weighted sum, seed {best_seed})": res["runs"][best_seed].x,
     }
-    best_seed = min(res["runs"], key=lambda s: res["runs"][s].fun)
-    marks[f"ours (weighted sum, seed {best_seed})"] = res["runs"][best_seed].x
     mk = pd.DataFrame(
         [
             {"design": k, **dict(zip(("sigma1", "sigma2", "sigma3"), obj(v[None])[0]))}
             for k, v in marks.items()
         ]
     )
-    paths = [
-        write_csv(df, outdir / "extra_pareto.csv"),
+    # what the figure draws beside the front, as constant columns: the marked designs, the settings
+    for (prefix, _), (_, r) in zip(PARETO_MARKS, mk.iterrows()):
+        for col in ("sigma1", "sigma2", "sigma3"):
+            df[f"{prefix}_{col}"] = float(r[col])
+    df["ours_seed"] = best_seed
+    df["nsga2_population"] = int(o["nsga2_population"])
+    df["nsga2_generations"] = int(o["nsga2_generations"])
+    csv = write_csv(df, outdir / "extra_pareto.csv")
+    return [
+        csv,
         write_csv(mk, outdir / "extra_pareto_marks.csv"),
+        draw_pareto(pd.read_csv(csv), outdir / "extra_pareto.png"),
     ]
-    with use_style():
-        fig, _ = new_figure((8.4, 4.0))
-        fig.clear()
-        ax, axz = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.0, 1.25]})
-        markers = dict(zip(mk["design"], ("s", "D", "*")))
-        # left: every design (the paper's two lie far from the front)
-        ax.scatter(
-            df["sigma1"], df["sigma3"], c=df["sigma2"], s=8, cmap="viridis", label="NSGA-II front"
-        )
-        for _, r in mk.iterrows():
-            ax.scatter(
-                r["sigma1"],
-                r["sigma3"],
-                marker=markers[r["design"]],
-                s=60,
-                facecolor="none",
-                edgecolor="#D55E00",
-                lw=1.3,
-                label=f"{r['design']}: σ2 = {r['sigma2']:.3g}",
-            )
-        ax.set_xlabel("global dynamic index σ1 (kg)")
-        ax.set_ylabel("global speed index σ3 = mean cond(J)")
-        ax.set_title("all designs", fontsize="small")
-        ax.legend(fontsize="x-small", loc="upper left")
-        # right: the front itself, zoomed (box of the front, 8 % margin)
-        x0, x1 = df["sigma1"].min(), df["sigma1"].max()
-        y0, y1 = df["sigma3"].min(), df["sigma3"].max()
-        mx, my = 0.08 * max(x1 - x0, 1e-9 * abs(x1)), 0.08 * max(y1 - y0, 1e-9 * abs(y1))
-        sc = axz.scatter(df["sigma1"], df["sigma3"], c=df["sigma2"], s=14, cmap="viridis")
-        for _, r in mk.iterrows():
-            if x0 - mx <= r["sigma1"] <= x1 + mx and y0 - my <= r["sigma3"] <= y1 + my:
-                axz.scatter(
-                    r["sigma1"],
-                    r["sigma3"],
-                    marker=markers[r["design"]],
-                    s=80,
-                    facecolor="none",
-                    edgecolor="#D55E00",
-                    lw=1.3,
-                )
-        axz.set_xlim(x0 - mx, x1 + mx)
-        axz.set_ylim(y0 - my, y1 + my)
-        axz.ticklabel_format(useOffset=False)
-        axz.set_xlabel("global dynamic index σ1 (kg)")
-        axz.set_title("the front, zoomed (colour: σ2)", fontsize="small")
-        cb = fig.colorbar(sc, ax=axz)
-        cb.set_label("global stiffness σ2 (λ$_{min}$, k = 1 N/m)")
-        fig.suptitle(
-            f"Beyond the paper: NSGA-II Pareto front of (σ1, σ2, σ3), {len(df)} designs "
-            f"(pop {o['nsga2_population']}, {o['nsga2_generations']} generations)",
-            fontsize="small",
-        )
-    paths.append(save_figure(fig, outdir / "extra_pareto.png"))
-    return paths
 
 
 # ---------------------------------------------------------------------------------------- report
