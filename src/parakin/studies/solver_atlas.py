@@ -37,7 +37,7 @@ ATLAS = Tolerance(
     0.0,
     0.0,
     "solver statistics over seeded problems: success and wrong-assembly rates within 5 "
-    "points, median iterations within one, conditioning to rounding; timings, extremes "
+    "points, median iterations to convergence within one, conditioning to rounding; timings, extremes "
     "and round-off errors not compared",
     columns={
         "n": (0.0, 0.0),
