@@ -688,7 +688,11 @@ def _config(args) -> dict:
     from parakin.config import DEFAULT_CONFIG, load_config, validate_sections
 
     if args.config_json:  # one pipeline rule's sections (registry.prune_config)
-        return validate_sections(json.loads(args.config_json))
+        config = json.loads(args.config_json)
+        if not isinstance(config, dict):
+            raise ValueError(f"--config-json must be a JSON object, got {type(config).__name__}")
+        # the pipeline validated the whole config once (workflow/rules/common.smk)
+        return config if getattr(args, "validated", False) else validate_sections(config)
     return load_config(args.config or [DEFAULT_CONFIG])
 
 
@@ -961,6 +965,12 @@ def build_parser() -> argparse.ArgumentParser:
         )
         p.add_argument(
             "--config-json", default=None, help="the whole config as JSON (what Snakemake passes)"
+        )
+        p.add_argument(
+            "--validated",
+            action="store_true",
+            help="the --config-json sections were validated by the pipeline (workflow/rules/common.smk "
+            "validates the whole config once); skip validating them again",
         )
 
     p = sub.add_parser(

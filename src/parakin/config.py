@@ -10,7 +10,6 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-import jsonschema
 import yaml
 
 from parakin.errors import ConfigError
@@ -58,7 +57,7 @@ def _short(text: str, limit: int = 80) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
-def _describe(error: jsonschema.ValidationError) -> str:
+def _describe(error) -> str:
     key = ".".join(str(p) for p in error.absolute_path) or "(top level)"
     where = f"config key '{key}'"
     message = _short(error.message, 160)
@@ -85,7 +84,7 @@ def _describe(error: jsonschema.ValidationError) -> str:
     return f"{where} = {value}: {message}" + (f" (allowed: {allowed})" if allowed else "")
 
 
-def _one_per_key(errors: list[jsonschema.ValidationError]) -> list[jsonschema.ValidationError]:
+def _one_per_key(errors: list) -> list:
     """The first error of each config key (jsonschema may report several for one bad value)."""
     seen, out = set(), []
     for e in errors:
@@ -178,6 +177,8 @@ def validate(config: dict, schema_path: Path = SCHEMA_PATH, *, partial: bool = F
     schema = yaml.safe_load(Path(schema_path).read_text())
     if partial:
         schema = _relax_required(schema, config)
+    import jsonschema  # here: its import costs ~1 s (format checkers), paid only when validating
+
     validator = jsonschema.Draft202012Validator(schema)
     errors = sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.absolute_path)))
     problems = [_describe(e) for e in _one_per_key(errors)] + _nonfinite(config)

@@ -33,4 +33,4 @@ for _item in ARTEFACTS.values():
         shell:
             "OMP_NUM_THREADS={threads} OPENBLAS_NUM_THREADS={threads} MKL_NUM_THREADS={threads} "
             "parakin reproduce {params.study} {params.name} --module {params.module} "
-            "--outdir {params.outdir:q} --config-json {params.cfg} 2>&1 | tee {log:q}"
+            "--outdir {params.outdir:q} --config-json {params.cfg} --validated 2>&1 | tee {log:q}"
