@@ -124,3 +124,23 @@ def write_table(
         parts.append("\n" + notes.strip() + "\n")
     md_path = atomic_write_text(stem.with_suffix(".md"), "\n".join(p for p in parts if p))
     return [csv_path, md_path]
+
+
+def draw_from_csv(
+    csv: Path, draw: Callable[[pd.DataFrame, Path], Path], png: Path | None = None
+) -> list[Path]:
+    """Draw ``png`` (default: beside ``csv``, same stem) with ``draw(frame, path)`` from the CSV as
+    written and read back, never from numbers in memory, so the committed figure is what its
+    committed CSV draws (an artefact declares the pair with ``draws=[...]``). Returns ``[png, csv]``."""
+    csv = Path(csv)
+    return [draw(pd.read_csv(csv), Path(png) if png is not None else csv.with_suffix(".png")), csv]
+
+
+def write_and_draw(
+    frame: pd.DataFrame,
+    csv: Path,
+    draw: Callable[[pd.DataFrame, Path], Path],
+    png: Path | None = None,
+) -> list[Path]:
+    """Write ``frame`` to ``csv`` (atomically), then :func:`draw_from_csv`. Returns ``[png, csv]``."""
+    return draw_from_csv(write_csv(frame, csv), draw, png)

@@ -19,13 +19,12 @@ import pandas as pd
 import parakin.solvers.pso  # noqa: F401  (registers "pso")
 from parakin.claims import Claim, printed_value
 from parakin.config import seed_for
-from parakin.io import write_csv, write_table
+from parakin.io import write_and_draw, write_csv, write_table
 from parakin.papers.li2017_stewart36.common import (
     INPUT_NOTE,
     KEY,
     artefact,
     cfg,
-    drawn,
     fk_input,
     mech,
 )
@@ -190,9 +189,7 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
             "mu_printed": float(c["mu_printed"]),
         }
     )
-    return drawn(
-        df, outdir / "fig02_chaotic_weights.csv", outdir / "fig02_chaotic_weights.png", draw_fig02
-    )
+    return write_and_draw(df, outdir / "fig02_chaotic_weights.csv", draw_fig02)
 
 
 def schedule(config: dict, variant: str, mu: float | None = None):
@@ -345,9 +342,7 @@ def fig03(config: dict, outdir: Path) -> list[Path]:
     conv = pd.concat(frames, ignore_index=True).astype({"iteration": "Int64", "run": "Int64"})
     st = pd.DataFrame(stats)
     p = cfg(config)["pso"]
-    return drawn(
-        conv, outdir / "fig03_convergence.csv", outdir / "fig03_convergence.png", draw_fig03
-    ) + write_table(
+    return write_and_draw(conv, outdir / "fig03_convergence.csv", draw_fig03) + write_table(
         st,
         outdir / "fitness_stats",
         floatfmt=".3g",

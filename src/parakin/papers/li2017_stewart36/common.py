@@ -7,16 +7,13 @@ ASSUMED), so Table 3 row 1 is an exact solution by construction.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from functools import partial
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from parakin import registry
 from parakin.claims import load_reference
-from parakin.io import write_csv
 from parakin.mechanisms.stewart36 import Stewart36, pose_from_paper
 
 KEY = "li2017_stewart36"
@@ -28,15 +25,6 @@ TITLE = "Li, Quan & Wu 2017 — 3-6 Stewart platform, chaotic-inertia-weight PSO
 POSE_COLS = ("alpha", "beta", "gamma", "X", "Y", "Z")
 #: note printed beside every use of the reconstructed input
 INPUT_NOTE = "FK input reconstructed as L = IK(Table 3 row 1, b) (Table 2 lost; docs/li2017_stewart36.md#g1, ASSUMED)"
-
-
-def drawn(
-    frame: pd.DataFrame, csv: Path, png: Path, draw: Callable[[pd.DataFrame, Path], Path]
-) -> list[Path]:
-    """Write ``frame`` to ``csv``, then draw ``png`` with ``draw(frame, path)`` from the CSV as read
-    back (so the committed figure can be redrawn from the committed CSV); returns [png, csv]."""
-    csv = write_csv(frame, csv)
-    return [draw(pd.read_csv(csv), png), csv]
 
 
 def cfg(config: dict) -> dict:

@@ -14,7 +14,7 @@ import pandas as pd
 
 from parakin.claims import Claim, load_reference, printed_value
 from parakin.config import rng
-from parakin.io import write_csv, write_table
+from parakin.io import write_and_draw, write_csv, write_table
 from parakin.mechanisms.stewart36 import pose_from_paper, pose_to_paper
 from parakin.papers.li2017_stewart36.common import (
     INPUT_NOTE,
@@ -22,7 +22,6 @@ from parakin.papers.li2017_stewart36.common import (
     POSE_COLS,
     artefact,
     cfg,
-    drawn,
     fk_input,
     mech,
     table3,
@@ -320,9 +319,7 @@ def fig01(config: dict, outdir: Path) -> list[Path]:
     up = sols[np.isfinite(sols[:, 0]) & (np.nan_to_num(sols[:, 5]) > 0)]
     structure = skeleton_table(m.skeleton(m.home()), frame_length=FIG1_FRAME_LENGTH)
     structure["b"] = m.b  # for the title
-    paths = drawn(
-        structure, outdir / "fig01_structure.csv", outdir / "fig01_structure.png", draw_fig01
-    )
+    paths = write_and_draw(structure, outdir / "fig01_structure.csv", draw_fig01)
     skeletons = []
     for i, s in enumerate(up):
         p = pose_to_paper(s)
@@ -331,11 +328,11 @@ def fig01(config: dict, outdir: Path) -> list[Path]:
         for col, v in (("alpha", p[0]), ("beta", p[1]), ("gamma", p[2]), ("Z", s[5])):
             sk.insert(sk.columns.get_loc("element"), col, v)
         skeletons.append(sk)
-    return paths + drawn(
+    return paths + write_and_draw(
         pd.concat(skeletons, ignore_index=True),
         outdir / "extra_solutions_skeletons.csv",
-        outdir / "extra_solutions.png",
         draw_solutions,
+        png=outdir / "extra_solutions.png",
     )
 
 
@@ -449,11 +446,8 @@ def adams_artefact(config: dict, outdir: Path) -> list[Path]:
             **{f"L{i + 1}": legs[:, i] for i in range(6)},
         }
     )
-    paths = drawn(
-        df[["t_s", "VX", "VY", "VZ"]],
-        outdir / "fig05_cm_velocity.csv",
-        outdir / "fig05_cm_velocity.png",
-        draw_cm_velocity,
+    paths = write_and_draw(
+        df[["t_s", "VX", "VY", "VZ"]], outdir / "fig05_cm_velocity.csv", draw_cm_velocity
     )
     for stem, cols, draw in (
         ("fig06_cm_position", ("X", "Y", "Z"), draw_cm_position),
@@ -462,7 +456,7 @@ def adams_artefact(config: dict, outdir: Path) -> list[Path]:
         fig_df = df[["t_s", *cols]].copy()
         for c in cols:  # the ranges the paper states, drawn as bands
             fig_df[f"{c}_stated_min"], fig_df[f"{c}_stated_max"] = rngs[c]
-        paths += drawn(fig_df, outdir / f"{stem}.csv", outdir / f"{stem}.png", draw)
+        paths += write_and_draw(fig_df, outdir / f"{stem}.csv", draw)
     paths.append(write_csv(df, outdir / "extra_adams_trajectory.csv"))
     summ = pd.DataFrame(
         [

@@ -2,16 +2,13 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from functools import partial
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from parakin import registry
 from parakin.claims import load_reference
-from parakin.io import write_csv
 from parakin.mechanisms.ups2 import UPS2
 
 KEY = "li2020_2ups"
@@ -21,15 +18,6 @@ KEY = "li2020_2ups"
 artefact = partial(registry.artefact, KEY)
 TITLE = "Li et al. 2020 — 2-UPS/(S+SPR)R parallel mechanism (Packaging Engineering 41(7))"
 CASES = (1, 2, 3, 4, 5)
-
-
-def drawn(
-    frame: pd.DataFrame, csv: Path, png: Path, draw: Callable[[pd.DataFrame, Path], Path]
-) -> list[Path]:
-    """Write ``frame`` to ``csv``, then draw ``png`` with ``draw(frame, path)`` from the CSV as read
-    back (so the committed figure can be redrawn from the committed CSV); returns [png, csv]."""
-    csv = write_csv(frame, csv)
-    return [draw(pd.read_csv(csv), png), csv]
 
 
 def mech(config: dict) -> UPS2:

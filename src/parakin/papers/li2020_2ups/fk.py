@@ -17,12 +17,11 @@ import pandas as pd
 import parakin.solvers.pso  # noqa: F401  (registers "pso")
 from parakin.claims import Claim, load_reference, printed_value
 from parakin.config import seed_for
-from parakin.io import write_table
+from parakin.io import write_and_draw, write_table
 from parakin.papers.li2020_2ups.common import (
     CASES,
     KEY,
     artefact,
-    drawn,
     mech,
     table2_inputs,
     table2_outputs,
@@ -351,7 +350,7 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
             )
     df = pd.concat(frames)
     df["threshold_mm"] = config[KEY]["pso"]["ftol_mm"]  # eq. (20)'s threshold, dashed in the figure
-    return drawn(df, outdir / "fig02_fitness.csv", outdir / "fig02_fitness.png", draw_fig02)
+    return write_and_draw(df, outdir / "fig02_fitness.csv", draw_fig02)
 
 
 @artefact(

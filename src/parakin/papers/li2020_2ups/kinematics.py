@@ -11,8 +11,8 @@ import pandas as pd
 
 from parakin.claims import Claim, printed_value
 from parakin.config import rng
-from parakin.io import write_table
-from parakin.papers.li2020_2ups.common import KEY, artefact, drawn, mech
+from parakin.io import write_and_draw, write_table
+from parakin.papers.li2020_2ups.common import KEY, artefact, mech
 from parakin.papers.li2020_2ups.symbolic import derivation, loop_closure_model
 from parakin.plot import (
     draw_mechanism,
@@ -52,7 +52,7 @@ def fig01(config: dict, outdir: Path) -> list[Path]:
     m = mech(config)
     pose = np.array([np.deg2rad(FIG1_POSE[0]), np.deg2rad(FIG1_POSE[1]), FIG1_POSE[2] * 1e-3])
     table = skeleton_table(m.skeleton(pose), frame_length=FIG1_FRAME_LENGTH)
-    return drawn(table, outdir / "fig01_mechanism.csv", outdir / "fig01_mechanism.png", draw_fig01)
+    return write_and_draw(table, outdir / "fig01_mechanism.csv", draw_fig01)
 
 
 @artefact(
@@ -208,7 +208,7 @@ def parasitic(config: dict, outdir: Path) -> list[Path]:
             "c_mm": m.c * 1e3,
         }
     )
-    return drawn(df, outdir / "extra_parasitic.csv", outdir / "extra_parasitic.png", draw_parasitic)
+    return write_and_draw(df, outdir / "extra_parasitic.csv", draw_parasitic)
 
 
 def draw_fk_solutions(frame: pd.DataFrame, path: Path) -> Path:
@@ -259,9 +259,7 @@ def solution_count(config: dict, outdir: Path) -> list[Path]:
             "n_in_box": nbox.ravel(),
         }
     )
-    return drawn(
-        df, outdir / "extra_fk_solutions.csv", outdir / "extra_fk_solutions.png", draw_fk_solutions
-    )
+    return write_and_draw(df, outdir / "extra_fk_solutions.csv", draw_fk_solutions)
 
 
 def draw_singularity_workspace(frame: pd.DataFrame, path: Path) -> Path:
@@ -351,11 +349,8 @@ def singularity_workspace(config: dict, outdir: Path) -> list[Path]:
             "within_eq19": inside.ravel(),
         }
     )
-    return drawn(
-        df,
-        outdir / "extra_singularity_workspace.csv",
-        outdir / "extra_singularity_workspace.png",
-        draw_singularity_workspace,
+    return write_and_draw(
+        df, outdir / "extra_singularity_workspace.csv", draw_singularity_workspace
     )
 
 

@@ -3,12 +3,9 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from functools import partial
-from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from parakin import registry
 from parakin.mechanisms.stewart12 import NESTED_PASSIVE, DriveMode, Stewart12
@@ -63,13 +60,6 @@ def caption_of(sets: dict[int, tuple[int, ...]]) -> str:
     return "passive legs " + ", ".join(
         f"R={r}: {{{','.join(map(str, sets[r]))}}}" for r in range(5, -1, -1)
     )
-
-
-def drawn_from(csv: Path, draw: Callable[[pd.DataFrame, Path], Path]) -> list[Path]:
-    """Draw the figure beside ``csv`` (same stem, ``.png``) from the CSV as written and read back
-    (never from the numbers in memory), so the committed figure is what its committed CSV draws.
-    Returns ``[png, csv]``."""
-    return [draw(pd.read_csv(csv), csv.with_suffix(".png")), csv]
 
 
 def run_mode(

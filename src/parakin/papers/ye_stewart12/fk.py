@@ -11,11 +11,10 @@ import pandas as pd
 
 from parakin.claims import Claim
 from parakin.config import rng
-from parakin.io import write_csv, write_table
+from parakin.io import draw_from_csv, write_csv, write_table
 from parakin.papers.ye_stewart12.common import (
     KEY,
     artefact,
-    drawn_from,
     mech,
     passive_sets,
     test_pose,
@@ -170,7 +169,7 @@ def fig01(config: dict, outdir: Path) -> list[Path]:
     csv = _skeleton_csv(
         config, outdir, "fig01_mechanism", test_pose(config), passive_sets(config)[0]
     )
-    return drawn_from(csv, draw_fig01)
+    return draw_from_csv(csv, draw_fig01)
 
 
 @artefact(
@@ -192,7 +191,7 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
         n_mm=float(c["n_mm"]),
         L_mm=float(c["L_mm"]),
     )
-    return drawn_from(csv, draw_fig02)
+    return draw_from_csv(csv, draw_fig02)
 
 
 @artefact(
@@ -205,7 +204,7 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
 def fig06(config: dict, outdir: Path) -> list[Path]:
     """Fig. 6 (the paper's Mathematica prototype): our model at a larger tilt for visibility."""
     csv = _skeleton_csv(config, outdir, "fig06_prototype", FIG06_POSE, passive_sets(config)[3])
-    return drawn_from(csv, draw_fig06)
+    return draw_from_csv(csv, draw_fig06)
 
 
 @artefact(

@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from parakin.claims import Claim, printed_value
-from parakin.io import write_csv, write_table
+from parakin.io import draw_from_csv, write_csv, write_table
 from parakin.mechanisms.stewart12 import NESTED_PASSIVE, ActiveLegs, DriveMode
 from parakin.papers.ye_stewart12.common import (
     KEY,
@@ -26,7 +26,6 @@ from parakin.papers.ye_stewart12.common import (
     MODE_NAMES,
     artefact,
     caption_of,
-    drawn_from,
     mech,
     passive_caption,
     passive_sets,
@@ -157,7 +156,7 @@ def _fig_steps(config: dict, tol: float, outdir: Path, stem: str, draw) -> list[
     sub = df[df["tol"] == tol]
     out = sub[sub["deviation_pct"] <= sub["d_max_pct"]].drop(columns=["tol"])
     out = out.assign(passive_caption=passive_caption(config))
-    return drawn_from(write_csv(out, outdir / f"{stem}.csv"), draw)
+    return draw_from_csv(write_csv(out, outdir / f"{stem}.csv"), draw)
 
 
 @artefact(
@@ -271,7 +270,7 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
     c = config[KEY]
     df, wall = scan_structures(config)
     ns, ls = structures(config)
-    paths = drawn_from(
+    paths = draw_from_csv(
         write_csv(
             df.assign(passive_caption=passive_caption(config)),
             outdir / "fig12_dmax_structures.csv",
@@ -504,7 +503,7 @@ def basin(config: dict, outdir: Path) -> list[Path]:
                     }
                 )
     df = pd.DataFrame(rows).assign(trials=trials, passive_caption=passive_caption(config))
-    return drawn_from(write_csv(df, outdir / "extra_basin.csv"), draw_basin)
+    return draw_from_csv(write_csv(df, outdir / "extra_basin.csv"), draw_basin)
 
 
 def draw_fig09(frame: pd.DataFrame, path: Path) -> Path:
@@ -602,7 +601,7 @@ def fig09(config: dict, outdir: Path) -> list[Path]:
                 }
             )
     df = pd.DataFrame(rows)
-    return drawn_from(write_csv(df, outdir / "fig09_drive_modes.csv"), draw_fig09)
+    return draw_from_csv(write_csv(df, outdir / "fig09_drive_modes.csv"), draw_fig09)
 
 
 def _step_stats(figdir: Path) -> tuple[pd.DataFrame, float] | None:

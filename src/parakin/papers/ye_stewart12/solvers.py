@@ -16,12 +16,11 @@ import numpy as np
 import pandas as pd
 
 from parakin.claims import Claim, printed_value
-from parakin.io import write_csv, write_table
+from parakin.io import draw_from_csv, write_csv, write_table
 from parakin.papers.ye_stewart12.common import (
     KEY,
     METHODS_USED,
     artefact,
-    drawn_from,
     mech,
     passive_sets,
     run_mode,
@@ -195,7 +194,7 @@ def fig08(config: dict, outdir: Path) -> list[Path]:
         df[f"{key}_composite_mm"] = np.concatenate([v, np.full(n - len(v), np.nan)])
     df["exact_mm"] = exact
     df["deviation_pct"] = d * 100
-    return drawn_from(write_csv(df, outdir / "fig08_convergence.csv"), draw_fig08)
+    return draw_from_csv(write_csv(df, outdir / "fig08_convergence.csv"), draw_fig08)
 
 
 MATCH_MM = 0.01  #: "basically matches" in Fig. 8's text: |composite - exact| < 0.01 mm from then on (ASSUMED)

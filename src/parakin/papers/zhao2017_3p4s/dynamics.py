@@ -26,11 +26,10 @@ import pandas as pd
 
 from parakin.claims import Claim, printed_value
 from parakin.errors import ConfigError
-from parakin.io import write_table
+from parakin.io import write_and_draw, write_table
 from parakin.mechanisms import P3P4S
 from parakin.mechanisms import p3p4s_dynamics as dyn
 from parakin.papers.zhao2017_3p4s.common import KEY, artefact
-from parakin.papers.zhao2017_3p4s.kinematics import write_and_draw
 from parakin.registry import ROUNDING
 
 #: tolerances stated in the figures and tested (relative to the peak of the analytic curve)
@@ -412,7 +411,7 @@ def fig05(config: dict, outdir: Path) -> list[Path]:
             **_motion_columns(motion),
         }
     )
-    return write_and_draw(data, outdir, "fig05_drive_velocities", draw_fig05)
+    return write_and_draw(data, outdir / "fig05_drive_velocities.csv", draw_fig05)
 
 
 def draw_fig06(frame: pd.DataFrame, path: Path) -> Path:
@@ -446,7 +445,7 @@ def fig06(config: dict, outdir: Path) -> list[Path]:
             **_motion_columns(motion),
         }
     )
-    return write_and_draw(data, outdir, "fig06_drive_accelerations", draw_fig06)
+    return write_and_draw(data, outdir / "fig06_drive_accelerations.csv", draw_fig06)
 
 
 def draw_fig07(frame: pd.DataFrame, path: Path) -> Path:
@@ -491,7 +490,7 @@ def fig07(config: dict, outdir: Path) -> list[Path]:
         data[f"diff{i + 1}_fd_m_s"] = tr["qdot_fd"][:, i] - kin.qdot[:, i]
         data[f"diff{i + 1}_mujoco_m_s"] = mj.qdot[:, i] - kin.qdot[:, i]
     data = data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
-    return write_and_draw(data, outdir, "fig07_velocity_check", draw_fig07)
+    return write_and_draw(data, outdir / "fig07_velocity_check.csv", draw_fig07)
 
 
 def draw_fig08(frame: pd.DataFrame, path: Path) -> Path:
@@ -540,7 +539,7 @@ def fig08(config: dict, outdir: Path) -> list[Path]:
         data[f"diff{i + 1}_mujoco_m_s2"] = mj.qddot[:, i] - kin.qddot[:, i]
         data[f"diff{i + 1}_printed_h_m_s2"] = tr["qddot_paper"][:, i] - kin.qddot[:, i]
     data = data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
-    return write_and_draw(data, outdir, "fig08_acceleration_check", draw_fig08)
+    return write_and_draw(data, outdir / "fig08_acceleration_check.csv", draw_fig08)
 
 
 # ---------------------------------------------------------------------------------------- Figs 9-10
@@ -592,7 +591,7 @@ def fig09(config: dict, outdir: Path) -> list[Path]:
             "g_m_s2": -params.g[2],
         }
     )
-    return write_and_draw(data, outdir, "fig09_driving_forces", draw_fig09)
+    return write_and_draw(data, outdir / "fig09_driving_forces.csv", draw_fig09)
 
 
 def draw_fig10(frame: pd.DataFrame, path: Path) -> Path:
@@ -640,7 +639,7 @@ def fig10(config: dict, outdir: Path) -> list[Path]:
     data["mujoco_loop_error_m"] = np.maximum(eq.loop_error, par.loop_error)
     data["mujoco_lstsq_residual"] = np.maximum(eq.lstsq_residual, par.lstsq_residual)
     data = data.assign(**_motion_columns(tr["motion"]))
-    return write_and_draw(data, outdir, "fig10_mujoco_forces", draw_fig10)
+    return write_and_draw(data, outdir / "fig10_mujoco_forces.csv", draw_fig10)
 
 
 # ---------------------------------------------------------------------------------------- extras
@@ -717,7 +716,7 @@ def power_balance(config: dict, outdir: Path) -> list[Path]:
     for label, _, _, _ in VARIANTS[1:]:
         data[f"residual_{_slug(label)}_W"] = _balance(key, label).residual
     data = data.assign(**_motion_columns(tr["motion"]))
-    return write_and_draw(data, outdir, "extra_power_balance", draw_power_balance)
+    return write_and_draw(data, outdir / "extra_power_balance.csv", draw_power_balance)
 
 
 def _slug(label: str) -> str:
@@ -896,7 +895,7 @@ def dynamics_printed(config: dict, outdir: Path) -> list[Path]:
         for i in range(3):
             data[f"f{i + 1}_{_slug(label)}_N"] = tr["forces"][label][:, i]
     data = data.assign(**_motion_columns(tr["motion"]))
-    return write_and_draw(data, outdir, "extra_dynamics_printed", draw_dynamics_printed)
+    return write_and_draw(data, outdir / "extra_dynamics_printed.csv", draw_dynamics_printed)
 
 
 #: the open-loop MuJoCo runs of extra_mujoco_tracking: (variant, rod model), in drawing order
@@ -988,7 +987,7 @@ def mujoco_tracking(config: dict, outdir: Path) -> list[Path]:
         results[("corrected (ours)", "parallelogram")].loop_error,
     )
     data = data.assign(**_motion_columns(_trajectory(key)["motion"]))
-    return write_and_draw(data, outdir, "extra_mujoco_tracking", draw_mujoco_tracking)
+    return write_and_draw(data, outdir / "extra_mujoco_tracking.csv", draw_mujoco_tracking)
 
 
 # ---------------------------------------------------------------------------------------- report

@@ -17,10 +17,10 @@ import pandas as pd
 
 from parakin.claims import Claim, printed_value
 from parakin.config import rng, seed_for
-from parakin.io import atomic_write_text, atomic_writer, write_csv, write_table
+from parakin.io import atomic_write_text, atomic_writer, write_and_draw, write_csv, write_table
 from parakin.mechanisms import P3P4S
 from parakin.papers.zhao2017_3p4s.common import KEY, artefact
-from parakin.papers.zhao2017_3p4s.kinematics import table1_inputs, write_and_draw
+from parakin.papers.zhao2017_3p4s.kinematics import table1_inputs
 from parakin.registry import EXACT, ITERATIVE, Tolerance
 from parakin.solvers import solve_fk
 from parakin.workspace import sample_reachable
@@ -242,7 +242,7 @@ def _fmt_box(v) -> str:
 
 def _training_figure(log: pd.DataFrame, outdir: Path) -> list[Path]:
     """extra_bp_training.{csv,png}: the log written, read back and drawn from the CSV alone."""
-    return write_and_draw(log, outdir, "extra_bp_training", draw_training)
+    return write_and_draw(log, outdir / "extra_bp_training.csv", draw_training)
 
 
 # ---------------------------------------------------------------------------------- Table 2

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -11,7 +10,7 @@ import pandas as pd
 from scipy.optimize import least_squares, minimize
 
 from parakin.claims import Claim, load_reference, printed_value
-from parakin.io import write_csv, write_table
+from parakin.io import write_and_draw, write_table
 from parakin.mechanisms import P3P4S
 from parakin.papers.zhao2017_3p4s.common import KEY, artefact
 from parakin.registry import DESCRIPTIVE, ROUNDING
@@ -279,15 +278,6 @@ def draw_table1_region(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-def write_and_draw(
-    data: pd.DataFrame, outdir: Path, stem: str, draw: Callable[[pd.DataFrame, Path], Path]
-) -> list[Path]:
-    """Write ``stem.csv``, read it back and draw ``stem.png`` from it alone (``draw(frame, path)``,
-    declared with the artefact's ``draws``: the committed figure is redrawn from the committed CSV)."""
-    csv = write_csv(data, outdir / f"{stem}.csv")
-    return [csv, draw(pd.read_csv(csv), outdir / f"{stem}.png")]
-
-
 @artefact(
     "table1_region",
     outputs=["extra_table1_region.png", "extra_table1_region.csv"],
@@ -316,7 +306,7 @@ def table1_region(config: dict, outdir: Path) -> list[Path]:
     geo = pd.read_csv(outdir / "extra_table1_fit.csv")
     data = pd.concat([grid, geo[["geometry", "delta", "phi_deg", "max_abs_err"]]])
     data["L_m"] = L
-    return write_and_draw(data, outdir, "extra_table1_region", draw_table1_region)
+    return write_and_draw(data, outdir / "extra_table1_region.csv", draw_table1_region)
 
 
 # ---------------------------------------------------------------------------------------- Figs 1-2
@@ -357,7 +347,7 @@ def _mechanism_table() -> pd.DataFrame:
 )
 def fig01(config: dict, outdir: Path) -> list[Path]:
     """Fig. 1: the 3-P(4S) mechanism (the paper shows a CAD model; we draw our kinematic model)."""
-    return write_and_draw(_mechanism_table(), outdir, "fig01_mechanism", draw_fig01)
+    return write_and_draw(_mechanism_table(), outdir / "fig01_mechanism.csv", draw_fig01)
 
 
 @artefact(
@@ -368,7 +358,7 @@ def fig01(config: dict, outdir: Path) -> list[Path]:
 )
 def fig02(config: dict, outdir: Path) -> list[Path]:
     """Fig. 2: sketch with the frames {O}, {P}, {u_i} and the points u_i, c_i, d_i of §1.1."""
-    return write_and_draw(_mechanism_table(), outdir, "fig02_sketch", draw_fig02)
+    return write_and_draw(_mechanism_table(), outdir / "fig02_sketch.csv", draw_fig02)
 
 
 # ---------------------------------------------------------------------------------------- report
