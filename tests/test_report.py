@@ -168,10 +168,47 @@ def test_report_csv_beside_report(tmp_path):
     assert "consistent after fitting or assuming" in text and "## At a glance" in text
 
 
-def test_readme_status_block_matches_report():
-    from parakin.report import readme_status, status_block
+def test_readme_status_and_glance_blocks_match_report():
+    from parakin.report import readme_blocks_match
 
     report_csv = ROOT / "figures" / "report.csv"
     if not report_csv.exists():
         pytest.skip("figures/report.csv is written by the next recorded run")
-    assert readme_status((ROOT / "README.md").read_text()) == status_block(report_csv)
+    assert readme_blocks_match((ROOT / "README.md").read_text(), report_csv)
+
+
+def test_every_item_of_every_paper_is_drawn_or_says_why_not():
+    """items.csv lists each paper's tables and figures; each is judged, drawn, or says why not."""
+    from parakin.glance import item_table, load_items
+
+    report_csv = ROOT / "figures" / "report.csv"
+    if not report_csv.exists():
+        pytest.skip("figures/report.csv is written by the next recorded run")
+    report = pd.read_csv(report_csv, dtype=str, keep_default_na=False)
+    items = load_items()
+    table = item_table(report, ROOT / "figures", items)
+    missing = table[table["status"] == "missing"]
+    assert missing.empty, f"items no file draws: {missing[['paper', 'item']].values.tolist()}"
+    assert (items.loc[items["coverage"] != "", "reason"] != "").all()
+    # every table/figure label the report judges is an item of its paper
+    known = set(zip(items["paper"], items["item"].str.replace(r"(\D)0+(\d)", r"\1\2", regex=True)))
+    labels = report[report["artefact"].str.fullmatch(r"(fig|table)\d+")]
+    judged = set(
+        zip(labels["paper"], labels["artefact"].str.replace(r"(\D)0+(\d)", r"\1\2", regex=True))
+    )
+    assert judged <= known, sorted(judged - known)
+
+
+def test_item_status_comes_from_verdicts():
+    from parakin.glance import item_status
+
+    assert item_status(pd.Series(["reproduced", "bound satisfied"])) == "reproduced"
+    assert item_status(pd.Series(["reproduced", "differs — cause shown"])) == "partly reproduced"
+    assert item_status(pd.Series(["consistent after fitting or assuming"])) == (
+        "consistent after fitting or assuming"
+    )
+    assert (
+        item_status(pd.Series(["consistent after fitting or assuming", "differs — cause unknown"]))
+        == "differs"
+    )
+    assert item_status(pd.Series(["not comparable"])) == "not comparable"

@@ -667,15 +667,15 @@ def cmd_readme(args) -> int:
 
     readme = Path(args.readme) if args.readme else ROOT / "README.md"
     bench = Path(args.benchmarks) if args.benchmarks else ROOT / "figures" / "benchmarks.md"
-    from parakin.report import readme_status, status_block, sync_status
+    from parakin.report import readme_blocks_match, sync_status
 
     report_csv = bench.with_name("report.csv")  # the status table: from report.csv and the registry
     if args.check:
         same = readme_block(readme.read_text()) == readme_block(bench.read_text())
         print(f"{readme}: benchmark block {'matches' if same else 'differs from'} {bench}")
         if report_csv.exists():
-            status = readme_status(readme.read_text()) == status_block(report_csv)
-            print(f"{readme}: status block {'matches' if status else 'differs from'} {report_csv}")
+            status = readme_blocks_match(readme.read_text(), report_csv)
+            print(f"{readme}: status and glance blocks {'match' if status else 'differ from'} {report_csv}")
             same = same and status
         return 0 if same else EXIT_NOT_CONVERGED
     print(sync_readme(readme, bench))

@@ -32,6 +32,14 @@ from parakin.claims import (
     resolve,
     row_verdicts,
 )
+from parakin.glance import (
+    CONSISTENT,
+    REPRODUCED_GROUP,
+    glance_block,
+    item_table,
+    load_items,
+    readme_glance,
+)
 from parakin.io import atomic_write_text, markdown_table
 from parakin.papers import PAPERS
 from parakin.studies import solver_atlas
@@ -190,6 +198,15 @@ def _build(figures_dir: Path, reference_dir: Path) -> tuple[str, pd.DataFrame]:
             module.summary(Path(figures_dir) / key, ref).strip(),
             "",
         ]
+        items = item_table(rows, Path(figures_dir), load_items(Path(reference_dir) / "items.csv"))
+        items = items[items["paper"] == key].drop(columns="paper")
+        if len(items):
+            sections += [
+                "Tables and figures of the paper (status from the verdicts of their published numbers):",
+                "",
+                markdown_table(items),
+                "",
+            ]
         sections += [markdown_table(claims_table(claims)), ""]
         rest = rows[
             [
@@ -247,8 +264,7 @@ def write_report(figures_dir: Path, out: Path, reference_dir: Path = REFERENCE_D
 STATUS_BEGIN = "<!-- status:begin -->"
 STATUS_END = "<!-- status:end -->"
 #: verdict groups of the README's status table
-REPRODUCED_GROUP = (REPRODUCED, WITHIN_ROUNDING, "bound satisfied")
-PARTIAL_GROUP = ("consistent after fitting or assuming",)
+PARTIAL_GROUP = (CONSISTENT,)
 
 
 def status_block(report_csv: Path) -> str:
@@ -299,7 +315,21 @@ def readme_status(readme_text: str) -> str:
     return readme_text[i : j + len(STATUS_END)]
 
 
+def readme_glance_block(report_csv: Path) -> str:
+    """README's "Results at a glance" block for every paper (see :mod:`parakin.glance`)."""
+    return glance_block(report_csv, {key: module.TITLE for key, module in PAPERS.items()})
+
+
+def readme_blocks_match(readme_text: str, report_csv: Path) -> bool:
+    """Whether README's status and glance blocks are the ones ``report_csv`` generates."""
+    return readme_status(readme_text) == status_block(report_csv) and readme_glance(
+        readme_text
+    ) == readme_glance_block(report_csv)
+
+
 def sync_status(readme: Path, report_csv: Path) -> Path:
-    """Replace README's status block by the one generated from ``report_csv`` (atomically)."""
+    """Replace README's status and glance blocks by those generated from ``report_csv`` (atomically)."""
     text = Path(readme).read_text()
-    return atomic_write_text(readme, text.replace(readme_status(text), status_block(report_csv)))
+    text = text.replace(readme_status(text), status_block(report_csv))
+    text = text.replace(readme_glance(text), readme_glance_block(report_csv))
+    return atomic_write_text(readme, text)

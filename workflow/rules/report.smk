@@ -8,6 +8,7 @@ rule report:
     input:
         ALL_OUTPUTS,
         expand("{ref}/{paper}.csv", ref=REFERENCE, paper=sorted({a.study for a in ARTEFACTS.values() if reference(a)})),
+        f"{REFERENCE}/items.csv",
     output:
         report(REPORT, caption="../report/claims.rst", category="REPORT.md (claim by claim)"),
     log:
