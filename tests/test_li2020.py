@@ -93,9 +93,8 @@ def test_artefacts_and_claims(outputs):
     assert {("text_intro", "analytic_fk_cost"), ("text_intro", "newton_failure_from_home")} <= set(
         q
     )
-    assert (
-        q[("text_intro", "analytic_fk_cost")].verdict == "differs — cause shown"
-    )  # < 1 ms: not costly
+    # 'costly' is qualitative and a wall-clock time on a shared machine cannot decide it
+    assert q[("text_intro", "analytic_fk_cost")].verdict == "not comparable"
     text = L.summary(outputs, ref)
     assert "Table 2 cannot satisfy" in text and "α = 0" in text
     df = pd.read_csv(outputs / "table2.csv")

@@ -675,7 +675,8 @@ def cmd_readme(args) -> int:
         print(f"{readme}: benchmark block {'matches' if same else 'differs from'} {bench}")
         if report_csv.exists():
             status = readme_blocks_match(readme.read_text(), report_csv)
-            print(f"{readme}: status and glance blocks {'match' if status else 'differ from'} {report_csv}")
+            verb = "match" if status else "differ from"
+            print(f"{readme}: status and glance blocks {verb} {report_csv}")
             same = same and status
         return 0 if same else EXIT_NOT_CONVERGED
     print(sync_readme(readme, bench))

@@ -369,7 +369,6 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 rank_dof,
                 "1",
                 variant="6 - rank of the constraint Jacobian of (6)+(12)",
-                tol=0.0,
             )
         )
         alpha = float(df.loc["max |alpha| (rad), loop-closure model", "value"])
@@ -382,7 +381,6 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 float(np.rad2deg(alpha)),
                 "deg",
                 variant="max |alpha| over random assemblies of an independent loop-closure model",
-                tol=1e-9,
                 reason="also symbolic: B2B3.e_y = -sqrt2 b sin(alpha) cos(beta) = 0 gives alpha = 0 "
                 "(pi = flipped platform); but X = rho sin(beta), Z = rho cos(beta) are parasitic translations",
             )
@@ -410,7 +408,6 @@ def _equation_claims(df: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
             float(v["B2B3 = R (B3' - B2') equals eq (7)"]),
             "1",
             variant="sympy: R(alpha, beta, gamma) (eq 1) applied to B3' - B2' (eq 5) minus eq (7)",
-            tol=0.0,
             reason=enc + " (the extracted 'S_beta' is read as sin(beta))",
         ),
         Claim(
@@ -421,7 +418,6 @@ def _equation_claims(df: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
             float(v["eq (14) satisfies (6) and (12)"]),
             "1",
             variant="sympy: P = (sin b sqrt(c^2 - Y^2), Y, cos b sqrt(c^2 - Y^2)) satisfies (6) and (12)",
-            tol=0.0,
             reason=enc,
         ),
         Claim(
@@ -432,7 +428,6 @@ def _equation_claims(df: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
             float(v["max |X - rho sin beta| (m)"]) * 1e3,
             "mm",
             variant="max |X - sin(b) sqrt(c^2 - Y^2)| over an independent loop-closure model",
-            tol=1e-9,
             reason="numeric residual of eq (14), tolerance 1e-9 mm (round-off)",
         ),
         Claim(
@@ -443,7 +438,6 @@ def _equation_claims(df: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
             float(v["max |Z - rho cos beta| (m)"]) * 1e3,
             "mm",
             variant="max |Z - cos(b) sqrt(c^2 - Y^2)| over an independent loop-closure model",
-            tol=1e-9,
             reason="numeric residual of eq (14), tolerance 1e-9 mm (round-off)",
         ),
     ]
@@ -457,7 +451,6 @@ def _equation_claims(df: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
                 float(v[f"|l{j}|^2 vector form = closed form"]),
                 "1",
                 variant=f"sympy: |l{j}|^2 of the vector form (eqs 9-11, 14) = our scalar closed form",
-                tol=0.0,
                 reason=enc,
             )
         )
@@ -471,7 +464,6 @@ def _equation_claims(df: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
             1.0 - float(diff["value"]),
             "1",
             variant="sympy: printed scalar (16)^2 - vector |l2|^2 (1 = identical)",
-            tol=0.0,
             evidence=f"{KEY}/extra_concomitant.md",
             reason=f"typo in the printed (16): the difference is {diff['detail']}; we code (9)-(11) + (14), "
             "which the paper's own vector derivation gives",
