@@ -81,7 +81,7 @@ def table3_artefact(config: dict, outdir: Path) -> list[Path]:
         t,
         outdir / "table3",
         floatfmt=".4g",
-        title="Table 3 — the paper's 19 'forward solutions', decoded, with their residuals",
+        title=f"Table 3 — the paper's {len(t)} 'forward solutions', decoded, with their residuals",
         notes=f"{INPUT_NOTE}. F = eq. (4) (squared-length residual); max_leg_err = max |IK(row) - L|. "
         f"Row 1 is exact by construction; a real solution would have F ~ 1e-30. Default b = {b0}.",
     )
@@ -522,7 +522,8 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                     f"(b = {', '.join(f'{v:g}' for v in c['b'])})",
                     evidence=f"{KEY}/extra_solution_counts.md",
                     reason="the polynomial has degree 16, so no input has more than 16 real or 8 above-base "
-                    "solutions; the paper's 19 (all above the base) cannot be distinct solutions of one input",
+                    f"solutions; the paper's {printed_value(ref, 'table3', 'n_solutions')} (all above the base) "
+                    "cannot be distinct solutions of one input",
                 )
             )
     path, sols_path = figdir / "table3.csv", figdir / "extra_solutions.csv"
@@ -611,7 +612,7 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
                 f"({r.wall_time_ms:.2g} ms)"
                 for r in c.itertuples()
             )
-            + ". The paper lists 19 'solutions', all above the base."
+            + f". The paper lists {printed_value(ref, 'table3', 'n_solutions')} 'solutions', all above the base."
         )
     path = figdir / "table3.csv"
     if path.exists():
