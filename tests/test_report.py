@@ -212,3 +212,24 @@ def test_item_status_comes_from_verdicts():
         == "differs"
     )
     assert item_status(pd.Series(["not comparable"])) == "not comparable"
+
+
+def test_no_claim_carries_a_tolerance_typed_in_code():
+    """The tolerance of every claim is the reference CSV's (``resolve``); code passes none."""
+    import ast
+
+    typed = []
+    for path in sorted((ROOT / "src" / "parakin").rglob("*.py")):
+        if path.name == "claims.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not isinstance(node, ast.Call):
+                continue
+            name = getattr(node.func, "id", getattr(node.func, "attr", ""))
+            if name == "Claim":
+                typed += [
+                    f"{path.relative_to(ROOT)}:{kw.lineno} {kw.arg}="
+                    for kw in node.keywords
+                    if kw.arg in ("tol", "kind", "margin")
+                ]
+    assert not typed, typed

@@ -168,8 +168,9 @@ class Claim:
     ``basis`` names what was fitted or assumed *because it matches* (the verdict is then at most
     "consistent after fitting or assuming"); ``evidence`` names the artefact or test that shows why
     ours differs (without it a difference is "cause unknown"); ``comparable=False`` marks a number
-    that cannot be compared (``reason`` says why). ``tol`` / ``kind`` are the code's reading of the
-    tolerance; the report replaces them by the reference CSV's declaration (:func:`resolve`).
+    that cannot be compared (``reason`` says why). ``tol`` / ``kind`` / ``margin`` are set by
+    :func:`resolve` from the reference CSV's ``tolerance`` cell, the one place a tolerance is declared;
+    paper code never passes them (``tests/test_report.py`` checks).
     """
 
     paper: str
