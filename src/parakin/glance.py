@@ -125,6 +125,7 @@ def item_table(
                 "title": it.title,
                 "status": status,
                 "published results": len(results),
+                "reproduced": int(results.isin(REPRODUCED_GROUP).sum()),
                 "verdicts / reason": why,
                 "ours": ", ".join(files),
             }
@@ -177,7 +178,11 @@ def glance_block(report_csv: Path, titles: dict[str, str]) -> str:
         for status in STATUSES:
             s = t[t["status"] == status]
             if len(s):
-                lines.append(f"  - {status} ({len(s)}): {', '.join(_label(i) for i in s['item'])}")
+                names = [
+                    _label(r.item) + (f" ({r.reproduced} of {n})" if (n := r[4]) else "")
+                    for r in s.itertuples(index=False)
+                ]
+                lines.append(f"  - {status} ({len(s)}): {', '.join(names)}")
         items = set(t["item"].map(_normal))
         text = results[~results["artefact"].map(_normal).isin(items)]
         if len(text):
