@@ -20,6 +20,8 @@ def test_value_verdicts():
     assert judge("0.42", 0.4251, tol=1e-3) == "differs"
     assert judge("0.42", 0.42005, tol=1e-4) == "reproduced"
     assert judge("0.42", float("nan")) == "differs"
+    assert judge("0", 0.19) == "reproduced within rounding"  # a printed 0 read as rounded
+    assert judge("0", 0.19, tol=0.0) == "differs"  # declared exact: no rounding reading
 
 
 def test_bound_and_order_verdicts():

@@ -331,3 +331,68 @@ def test_divergence_stops_as_nonfinite_with_last_finite_iterate():
 def test_closed_form_requires_an_fk():
     with pytest.raises(ValueError, match="Exp has no closed-form fk"):
         solve_fk(Exp(), [0.3], method="closed-form")
+
+
+# ---------------------------------------------------------------------------- Broyden's inverse update
+def _trajectory(mech, joints, x0, **options):
+    traj = []
+    res = solve_fk(
+        mech, joints, x0=x0, tol=0.0, maxiter=12, callback=lambda k, x, r: traj.append(x), **options
+    )
+    return res, np.array(traj)
+
+
+def test_broyden_inverse_update_equals_direct_on_a_square_system():
+    """Square regular J: the inverse update is the Sherman-Morrison twin of the direct one, so
+    both take the same iterates to rounding (and differ once the system is over-determined)."""
+    mech = P3P4S()
+    truth = np.array([[0.01, -0.02, 0.58], [-0.03, 0.02, 0.6]])
+    x0 = truth * np.array([1.3, 0.7, 1.05])
+    direct = _trajectory(mech, mech.ik(truth), x0, method="broyden")[1]
+    inverse = _trajectory(mech, mech.ik(truth), x0, method="broyden", update="inverse")[1]
+    # the first 6 iterates: down to a residual of ~1e-16, after which both only shuffle round-off
+    assert len(direct) > 6 and len(inverse) > 6
+    assert np.allclose(inverse[:6], direct[:6], rtol=0, atol=1e-12)
+    assert np.abs(inverse[5] - inverse[0]).max() > 1e-3  # it moved
+    toy = Toy(m=3)
+    q, start = toy.ik([[1.5, -0.5]]), np.array([[2.5, 0.5]])
+    d3 = _trajectory(toy, q, start, method="broyden")[1]
+    i3 = _trajectory(toy, q, start, method="broyden", update="inverse")[1]
+    assert np.max(np.abs(d3[2:4] - i3[2:4])) > 1e-6  # rectangular: two different algorithms
+
+
+def test_broyden_inverse_update_secant_condition_and_convergence():
+    """After each inverse update ``H+ (r+ - r) = d`` (the secant condition), on an over-determined
+    (3 x 2) consistent system, and the iteration converges to the known root."""
+    from parakin.solvers.quasi_newton import _broyden_inverse_init, _broyden_inverse_step
+    from parakin.solvers.result import Evaluator
+
+    toy = Toy(m=3)
+    truth = np.array([[1.5, -0.5], [0.7, 0.2]])
+    ev = Evaluator(toy, toy.ik(truth))
+    rows = np.arange(2)
+    x = truth * np.array([1.3, 0.8])
+    s = {"x": x, "r": ev.residual(x, rows)}
+    s |= _broyden_inverse_init(ev, rows, s)
+    assert np.allclose(s["H"], np.linalg.pinv(toy.jacobian_pose(x, None)))  # H0 = J+
+    for _ in range(4):
+        new, _info = _broyden_inverse_step(ev, rows, s)
+        d, y = new["x"] - s["x"], new["r"] - s["r"]
+        assert np.allclose(np.einsum("kij,kj->ki", new["H"], y), d, rtol=1e-10, atol=1e-14)
+        s = new
+    res = solve_fk(
+        toy,
+        toy.ik(truth),
+        x0=truth * np.array([1.3, 0.8]),
+        method="broyden",
+        update="inverse",
+        tol=1e-12,
+        maxiter=50,
+    )
+    assert np.all(res.success) and np.allclose(res.x, truth, atol=1e-10)
+
+
+def test_broyden_update_option_rejects_unknown_values():
+    mech = P3P4S()
+    with pytest.raises(ValueError, match=r"update = 'bad' must be one of \('direct', 'inverse'\)"):
+        solve_fk(mech, mech.ik([0.01, -0.02, 0.58]), method="broyden", update="bad")

@@ -109,8 +109,8 @@ def judge(
     """The raw outcome of comparing our value with the printed one.
 
     ``kind="value"``: ``reproduced`` when ``|ours - paper| <= tol`` (a tolerance declared in the
-    reference CSV), ``reproduced within rounding`` within half a unit of the last printed digit,
-    ``differs`` otherwise. ``kind="upper"`` / ``"lower"``: the paper states a bound: ``bound
+    reference CSV), ``reproduced within rounding`` within half a unit of the last printed digit
+    (not for a tolerance declared exact, ``tol = 0``), ``differs`` otherwise. ``kind="upper"`` / ``"lower"``: the paper states a bound: ``bound
     satisfied`` when ours meets it with the declared ``margin`` (``ours * margin <= paper`` for an
     upper bound). ``kind="order"``: an order of magnitude ("10^-4 level"): ``reproduced`` within
     half a decade.
@@ -129,6 +129,8 @@ def judge(
     diff = abs(float(ours) - float(printed))
     if tol is not None and diff <= tol:
         return REPRODUCED
+    if tol == 0.0:  # declared exact (counts, symbolic results, a printed zero width): no rounding
+        return DIFFERS
     if diff <= half_ulp(printed) * (1 + 1e-9):
         return WITHIN_ROUNDING
     return DIFFERS

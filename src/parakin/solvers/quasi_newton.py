@@ -16,7 +16,7 @@ from parakin.mechanisms.base import Array, Mechanism
 from parakin.solvers.newton import newton_direction, solve_linear
 from parakin.solvers.result import Evaluator, FKResult, State, StepInfo, inf_norm, iterate
 
-__all__ = ["bfgs", "broyden"]
+__all__ = ["BROYDEN_UPDATES", "bfgs", "broyden"]
 
 Callback = Callable[[int, Array, Array], Any]
 
@@ -34,8 +34,49 @@ def _outer(a: Array, b: Array) -> Array:
 
 
 # ---------------------------------------------------------------------------- Broyden
+#: the two forms of Broyden's rank-one secant update (``broyden(..., update=...)``)
+BROYDEN_UPDATES = ("direct", "inverse")
+
+
 def _broyden_init(ev: Evaluator, rows: NDArray[np.intp], s: State) -> State:
     return {"B": ev.jacobian(s["x"], rows)}
+
+
+def _pinv(a: Array) -> Array:
+    """Batched Moore-Penrose pseudo-inverse (SVD); NaN for a row with a non-finite matrix."""
+    out = np.full(a.shape[:-2] + (a.shape[-1], a.shape[-2]), np.nan)
+    ok = np.all(np.isfinite(a), axis=(-2, -1))
+    if ok.any():
+        try:
+            out[ok] = np.linalg.pinv(a[ok])
+        except np.linalg.LinAlgError:  # SVD did not converge somewhere in the batch: row by row
+            for i in np.flatnonzero(ok):
+                try:
+                    out[i] = np.linalg.pinv(a[i])
+                except np.linalg.LinAlgError:
+                    pass
+    return out
+
+
+def _broyden_inverse_init(ev: Evaluator, rows: NDArray[np.intp], s: State) -> State:
+    return {"H": _pinv(ev.jacobian(s["x"], rows))}
+
+
+def _broyden_inverse_step(
+    ev: Evaluator, rows: NDArray[np.intp], s: State
+) -> tuple[State, StepInfo]:
+    """``x+ = x - H r``, then ``H+ = H + (d - H y) d^T H / (d^T H y)`` with ``y = r+ - r``."""
+    h = s["H"]
+    d = -_matvec(h, s["r"])
+    x = s["x"] + d
+    r = ev.residual(x, rows)
+    hy = _matvec(h, r - s["r"])
+    dh = np.einsum("...i,...ij->...j", d, h)  # d^T H
+    den = _dot(d, hy)
+    ok = np.isfinite(den) & (den != 0)  # the update's condition d^T H y != 0; else H is kept
+    gain = np.where(ok, 1.0 / np.where(ok, den, 1.0), 0.0)
+    h = h + _outer((d - hy) * gain[:, None], dh)
+    return {"x": x, "r": r, "H": h}, StepInfo(step=inf_norm(d))
 
 
 def _broyden_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
@@ -57,6 +98,7 @@ def broyden(
     tol: float,
     maxiter: int,
     xtol: float = 0.0,
+    update: str = "direct",
     callback: Callback | None = None,
 ) -> FKResult:
     """Broyden's "good" method on ``residual(x, q) = 0``.
@@ -70,15 +112,28 @@ def broyden(
     Superlinear near a solution, no line search. For ``m > n`` the step is the least-squares one,
     ``-pinv(B) r`` (then identical to ``"broyden-ls"``).
 
+    ``update="inverse"``: the good update written for an approximation ``H`` of the *inverse*
+    Jacobian (Broyden 1965's inverse form, obtained from the update above by Sherman-Morrison;
+    not his "second", or "bad", method): ``H0 = pinv(J(x0))``, step ``d = -H r``, then
+    ``H += (d - H y) d^T H / (d^T H y)`` with ``y = r+ - r`` (skipped where ``d^T H y = 0``), so
+    that the secant condition ``H+ y = d`` holds. ``H`` is ``n x m``, so it also runs on
+    over-determined systems (``m > n``), where it is a different algorithm from the direct update
+    with least-squares steps (their iterates part after the first step). For square regular
+    systems the two take the same steps to rounding. ``update="direct"`` (default) is the update
+    of ``B`` described above.
+
     Options: ``xtol`` (stop with success when the step inf-norm is ``<= xtol``; 0 = off),
-    ``callback(k, x, residual_norm)``.
+    ``update`` (``"direct"`` | ``"inverse"``), ``callback(k, x, residual_norm)``.
     """
+    if update not in BROYDEN_UPDATES:
+        raise ValueError(f"update = {update!r} must be one of {BROYDEN_UPDATES}")
+    inverse = update == "inverse"
     return iterate(
         mech,
         joints,
         x0,
-        init=_broyden_init,
-        step=_broyden_step,
+        init=_broyden_inverse_init if inverse else _broyden_init,
+        step=_broyden_inverse_step if inverse else _broyden_step,
         tol=tol,
         maxiter=maxiter,
         xtol=xtol,

@@ -1,7 +1,9 @@
 """Ye, You, Shen, Wu, Ru: the Stewart-derived 12-leg cube mechanism — closed-form FK, the six
 compatibility equations, N-R vs Broyden, drive modes with redundancy 0..5. Mechanism:
 :class:`parakin.mechanisms.stewart12.Stewart12` (and its :class:`DriveMode`); solvers: the generic
-``gauss-newton`` / ``broyden-ls`` (= ``newton`` / ``broyden`` on square systems) and ``lm``.
+``gauss-newton`` (= ``newton`` on square systems), ``broyden`` with ``update="inverse"`` (the
+paper's inverse rank-one update, every mode), ``broyden-ls`` (the direct update of a rectangular
+``B``, beyond the paper) and ``lm`` (``common.METHODS_USED``).
 One module per section; each has ``ARTEFACTS``, ``claims(figdir, ref)`` and ``summary(figdir, ref)``.
 Configuration: ``config["ye_stewart12"]``. The paper in our own words: ``docs/ye_stewart12.md``.
 """

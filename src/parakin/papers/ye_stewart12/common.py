@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
@@ -11,9 +12,25 @@ from parakin import registry
 from parakin.mechanisms.stewart12 import NESTED_PASSIVE, DriveMode, Stewart12
 from parakin.solvers import solve_fk
 
-#: the paper's two methods -> our generic solvers (least-squares forms: equal to newton / broyden
-#: on the square R = 0 system, Gauss-Newton / rectangular Broyden for R > 0)
-METHODS_USED = {"nr": "gauss-newton", "broyden": "broyden-ls"}
+#: the methods, key -> (generic solver, its options). "nr": the paper's N-R (eq. 30) in
+#: least-squares form (Gauss-Newton; Newton on the square R = 0 system). "broyden": the paper's
+#: inverse rank-one update (eqs 31-32, docs/ye_stewart12.md#s2.4) with H0 = pinv(J(X0)) for every
+#: mode. "broyden_direct" (beyond the paper): the direct rank-one update of a rectangular B with
+#: least-squares steps; the two Broyden forms coincide, to rounding, only for R = 0
+#: (docs/ye_stewart12.md#s5.6)
+METHODS_USED: dict[str, tuple[str, dict]] = {
+    "nr": ("gauss-newton", {}),
+    "broyden": ("broyden", {"update": "inverse"}),
+    "broyden_direct": ("broyden-ls", {}),
+}
+#: the paper's two methods (what its numbers are judged against)
+PAPER_METHODS = ("nr", "broyden")
+#: how figures and tables name each method
+METHOD_LABELS = {
+    "nr": "N-R (Gauss-Newton)",
+    "broyden": "Broyden, inverse update (the paper's)",
+    "broyden_direct": "Broyden, direct update (beyond the paper)",
+}
 
 KEY = "ye_stewart12"
 
@@ -27,6 +44,35 @@ TITLE = (
 
 #: paper mode numbers (Table 6): I = R5 ... VI = R0
 MODE_NAMES = {5: "I", 4: "II", 3: "III", 2: "IV", 1: "V", 0: "VI"}
+
+
+@dataclass(frozen=True)
+class Setup:
+    """What every solver artefact reads from the ``ye_stewart12`` config section, read once."""
+
+    c: dict  #: the config section itself (artefact-specific keys)
+    mech: Stewart12  #: the configured structure (n, L, lambda convention)
+    pose: np.ndarray  #: §3.3's test pose (SI)
+    sets: dict[int, tuple[int, ...]]  #: passive legs per redundancy R
+    tol_mm: float  #: stopping tolerance |dX|_2 < tol (mm)
+    maxiter: int
+
+    @property
+    def tol_m(self) -> float:
+        return self.tol_mm * 1e-3
+
+
+def setup(config: dict) -> Setup:
+    """The shared set-up of the solver artefacts (:class:`Setup`) from ``config``."""
+    c = config[KEY]
+    return Setup(
+        c=c,
+        mech=mech(config),
+        pose=test_pose(config),
+        sets=passive_sets(config),
+        tol_mm=float(c["tol"]),
+        maxiter=int(c["maxiter"]),
+    )
 
 
 def mech(config: dict, n_mm: float | None = None, L_mm: float | None = None) -> Stewart12:
@@ -70,8 +116,10 @@ def run_mode(
     method: str,
     maxiter: int,
     xtol_floor: float = 1e-13,
+    options: dict | None = None,
 ) -> dict[str, np.ndarray]:
-    """Solve the drive mode from ``X0 = (1 + d) X*`` for every d (batched, generic solver).
+    """Solve the drive mode from ``X0 = (1 + d) X*`` for every d (batched, generic solver
+    ``method`` with ``options``, e.g. ``METHODS_USED[key]``).
 
     The solver runs with ``tol = 0`` and a step floor ``xtol_floor`` (m) well below every
     tolerance used, recording the trajectory; the step count under a stopping rule
@@ -90,6 +138,7 @@ def run_mode(
         maxiter=maxiter,
         xtol=xtol_floor,
         callback=lambda k, x, r: traj.append(x),
+        **(options or {}),
     )
     return {"xstar": xs, "traj": np.array(traj), "status": res.status, "nit": res.nit, "x": res.x}
 
@@ -117,6 +166,7 @@ def time_solve(
     method: str,
     tol: float,
     repeats: int,
+    options: dict | None = None,
 ) -> float:
     """Median wall time (s) of one single-case solve stopped by ``xtol = tol`` (inf-norm)."""
     dm = DriveMode(m, passive)
@@ -124,6 +174,15 @@ def time_solve(
     times = []
     for _ in range(repeats):
         t = time.perf_counter()
-        solve_fk(dm, act, x0=(1.0 + d) * xs, method=method, tol=0.0, maxiter=100, xtol=tol)
+        solve_fk(
+            dm,
+            act,
+            x0=(1.0 + d) * xs,
+            method=method,
+            tol=0.0,
+            maxiter=100,
+            xtol=tol,
+            **(options or {}),
+        )
         times.append(time.perf_counter() - t)
     return float(np.median(times))

@@ -255,7 +255,6 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 float(t["max_position_error_mm"]),
                 "mm",
                 variant=f"{int(t['poses'])} random poses",
-                tol=1e-10,
                 reason="C1: the paper: computed pose 'fully consistent' with the exact one",
             )
         )
@@ -270,7 +269,6 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 "0",
                 float(t["composite"].iloc[0]),
                 "mm^2",
-                tol=1e-9,
                 reason="C3: zero error (ours: rounding of the FK products) at the initial state",
             )
         )
@@ -282,7 +280,6 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 "1e-6",
                 float(t["composite"].iloc[1]),
                 "mm^2",
-                kind="upper",
                 reason=(
                     "C3: 'negligible' at an arbitrary state (bound 1e-6 mm^2 is ours; the "
                     "values are lost). Rounding only, not the paper's 'Taylor truncation'"

@@ -4,6 +4,8 @@ maximum admissible deviation over the 36 structures (Fig. 12), the perturbation-
 
 Readings (ASSUMED, docs/ye_stewart12.md#s5): passive sets from config (default nested), X0 = (1 + d) X* on the
 configured d grid, success = the iterate at the stopping step (|dX|_2 < tol) within 1e-4 mm of X*,
+Broyden = the paper's inverse rank-one update from H0 = pinv(J(X0)) for every mode, with the
+direct update of a rectangular B (beyond the paper) computed beside it (``METHODS_USED``),
 d_max = the last d before the first failure, pose = §3.3's test pose for every structure;
 eq. (33) lost: P = (max - min) / mean of d_max over the structures (``p_definition`` switches to
 (max - min) / min).
@@ -22,17 +24,19 @@ from parakin.io import draw_from_csv, write_csv, write_table
 from parakin.mechanisms.stewart12 import NESTED_PASSIVE, ActiveLegs, DriveMode
 from parakin.papers.ye_stewart12.common import (
     KEY,
+    METHOD_LABELS,
     METHODS_USED,
     MODE_NAMES,
+    PAPER_METHODS,
     artefact,
     caption_of,
     mech,
     passive_caption,
     passive_sets,
     run_mode,
+    setup,
     state_at,
     steps,
-    test_pose,
 )
 from parakin.plot import new_figure, save_figure, use_style
 from parakin.registry import DESCRIPTIVE, ITERATIVE
@@ -48,14 +52,23 @@ SCAN = ITERATIVE.but(
         "d_max_pct": (0.0, 5.0),
         "nr_width_pct": (0.0, 5.0),
         "broyden_width_pct": (0.0, 5.0),
+        "broyden_direct_width_pct": (0.0, 5.0),
         "median_iterations": (0.0, 1.0),
         "p_converge": (0.0, 0.05),
         "lm_pose_iterations_max": (0.0, 1.0),
         "nr_d_max_pct": (0.0, 5.0),
         "broyden_d_max_pct": (0.0, 5.0),
+        "broyden_direct_d_max_pct": (0.0, 5.0),
         "lm_pose_d_max_pct": (0.0, 5.0),
     },
-    skip=("nr_P", "nr_P_alt", "broyden_P", "broyden_P_alt"),
+    skip=(
+        "nr_P",
+        "nr_P_alt",
+        "broyden_P",
+        "broyden_P_alt",
+        "broyden_direct_P",
+        "broyden_direct_P_alt",
+    ),
 )
 
 ACCURATE_MM = 1e-4  #: "converges to the given pose" (docs/ye_stewart12.md#s5.10, ASSUMED)
@@ -74,12 +87,20 @@ def structures(config: dict) -> tuple[np.ndarray, np.ndarray]:
 
 
 def scan_case(
-    m, passive, pose, dpct: np.ndarray, method: str, maxiter: int, tols_mm: tuple[float, ...]
+    m,
+    passive,
+    pose,
+    dpct: np.ndarray,
+    method: str,
+    maxiter: int,
+    tols_mm: tuple[float, ...],
+    options: dict | None = None,
 ):
-    """Steps per tol (-1 = failure) on the d grid, batched over d, and d_max per tol."""
+    """Steps per tol (-1 = failure) on the d grid, batched over d, and d_max per tol (solver
+    ``method`` with ``options``)."""
     # stop once the inf-norm step is below min(tol)/sqrt(n): then the 2-norm rule has fired too
     floor = min(tols_mm) * 1e-3 / np.sqrt(len(passive))
-    run = run_mode(m, passive, pose, dpct / 100, method, maxiter, xtol_floor=floor)
+    run = run_mode(m, passive, pose, dpct / 100, method, maxiter, xtol_floor=floor, options=options)
     out = {}
     for tol in tols_mm:
         k = steps(run["traj"], tol * 1e-3, "2")
@@ -90,14 +111,23 @@ def scan_case(
     return out
 
 
+def _paper(df: pd.DataFrame) -> pd.DataFrame:
+    """The rows of the paper's two methods (N-R and its inverse-update Broyden)."""
+    return df[df["method"].isin(PAPER_METHODS)]
+
+
+def _methods_in(df: pd.DataFrame) -> list[str]:
+    """The method keys present in a CSV, in ``METHODS_USED`` order."""
+    return [k for k in METHODS_USED if k in set(df["method"])]
+
+
 def _scan_nominal(config: dict) -> pd.DataFrame:
-    c = config[KEY]
-    m, pose, sets = mech(config), test_pose(config), passive_sets(config)
+    s = setup(config)
     dpct = d_grid(config)
     rows = []
     for r in range(5, -1, -1):
-        for key, method in METHODS_USED.items():
-            res = scan_case(m, sets[r], pose, dpct, method, int(c["maxiter"]), (1e-6, 1e-9))
+        for key, (method, opts) in METHODS_USED.items():
+            res = scan_case(s.mech, s.sets[r], s.pose, dpct, method, s.maxiter, (1e-6, 1e-9), opts)
             for tol, (k, dmax) in res.items():
                 for d, kk in zip(dpct, k):
                     rows.append(
@@ -114,13 +144,16 @@ def _scan_nominal(config: dict) -> pd.DataFrame:
 
 
 def _draw_steps(frame: pd.DataFrame, path: Path, tol: float) -> Path:
-    """Steps vs d (rows up to d_max), one panel per method, one line per mode; the suptitle is the
-    CSV's constant column ``passive_caption``."""
+    """Steps vs d (rows up to d_max), one panel per method (N-R, the paper's inverse Broyden, the
+    direct Broyden beyond the paper), one line per mode; the suptitle is the CSV's constant column
+    ``passive_caption``."""
     sub = frame
-    fig, axes = new_figure((7.0, 3.0))
+    keys = _methods_in(sub)
+    fig, axes = new_figure((3.5 * len(keys), 3.0))
     fig.clf()
-    axs = fig.subplots(1, 2, sharey=True)
-    for ax, key, name in zip(axs, ("nr", "broyden"), ("N-R (Gauss-Newton)", "Broyden")):
+    axs = fig.subplots(1, len(keys), sharey=True)
+    for ax, key in zip(axs, keys):
+        name = METHOD_LABELS[key]
         for r in range(5, -1, -1):
             s = sub[
                 (sub["method"] == key)
@@ -130,9 +163,9 @@ def _draw_steps(frame: pd.DataFrame, path: Path, tol: float) -> Path:
             ax.plot(s["deviation_pct"], s["steps"], lw=1.2, label=f"R={r}")
         ax.set_xscale("log")
         ax.set_xlabel("admissible initial deviation d (%)")
-        ax.set_title(f"{name}, tol {tol:g} mm", fontsize=9)
+        ax.set_title(f"{name}, tol {tol:g} mm", fontsize=8)
     axs[0].set_ylabel("iteration steps")
-    axs[1].legend(fontsize=7, ncol=2)
+    axs[-1].legend(fontsize=7, ncol=2)
     fig.suptitle(str(sub["passive_caption"].iloc[0]), fontsize=7)
     return save_figure(fig, path)
 
@@ -184,15 +217,14 @@ def fig11(config: dict, outdir: Path) -> list[Path]:
 
 
 def _scan_structure(config: dict, n: float, L: float) -> list[dict]:
-    c = config[KEY]
-    pose, sets = test_pose(config), passive_sets(config)
+    s = setup(config)
     dpct = d_grid(config)
     m = mech(config, n_mm=n, L_mm=L)
-    tol = float(c["tol"])
+    tol = s.tol_mm
     rows = []
     for r in range(6):
-        for key, method in METHODS_USED.items():
-            _, dmax = scan_case(m, sets[r], pose, dpct, method, int(c["maxiter"]), (tol,))[tol]
+        for key, (method, opts) in METHODS_USED.items():
+            _, dmax = scan_case(m, s.sets[r], s.pose, dpct, method, s.maxiter, (tol,), opts)[tol]
             rows.append({"n_mm": n, "L_mm": L, "R": r, "method": key, "d_max_pct": dmax})
     return rows
 
@@ -215,16 +247,19 @@ def scan_structures(config: dict) -> tuple[pd.DataFrame, float]:
 
 
 def draw_fig12(frame: pd.DataFrame, path: Path) -> Path:
-    """Fig. 12 from its CSV: log10 d_max over the (n, L) grid, one panel per mode and method; the
-    grid is the CSV's n_mm and L_mm values, the suptitle its constant column ``passive_caption``."""
+    """Fig. 12 from its CSV: log10 d_max over the (n, L) grid, one panel per mode and method (rows:
+    N-R, the paper's inverse Broyden, the direct Broyden beyond the paper); the grid is the CSV's
+    n_mm and L_mm values, the suptitle its constant column ``passive_caption``."""
     df = frame
     ns, ls = np.unique(df["n_mm"].to_numpy()), np.unique(df["L_mm"].to_numpy())
-    fig, _ = new_figure((9.0, 3.6))
+    keys = _methods_in(df)
+    short = {"nr": "N-R", "broyden": "Broyden inv. (paper)", "broyden_direct": "Broyden direct"}
+    fig, _ = new_figure((9.0, 1.3 + 1.15 * len(keys)))
     fig.clf()
-    axs = fig.subplots(2, 6)
+    axs = fig.subplots(len(keys), 6, squeeze=False)
     vmax = np.log10(max(df["d_max_pct"].max(), 1.0))
     for j, r in enumerate(range(5, -1, -1)):
-        for i, key in enumerate(("nr", "broyden")):
+        for i, key in enumerate(keys):
             s = df[(df["R"] == r) & (df["method"] == key)].pivot(
                 index="n_mm", columns="L_mm", values="d_max_pct"
             )
@@ -236,9 +271,9 @@ def draw_fig12(frame: pd.DataFrame, path: Path) -> Path:
                 extent=(ls[0] - 2.5, ls[-1] + 2.5, ns[0] - 2.5, ns[-1] + 2.5),
                 aspect="auto",
             )
-            axs[i, j].set_title(f"{'N-R' if key == 'nr' else 'Broyden'}, R={r}", fontsize=7)
+            axs[i, j].set_title(f"{short[key]}, R={r}", fontsize=6)
             axs[i, j].tick_params(labelsize=6)
-            if i == 1:
+            if i == len(keys) - 1:
                 axs[i, j].set_xlabel("L (mm)", fontsize=7)
             if j == 0:
                 axs[i, j].set_ylabel("n (mm)", fontsize=7)
@@ -281,7 +316,7 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
     rows = []
     for r in range(5, -1, -1):
         row = {"mode": MODE_NAMES[r], "R": r}
-        for key in ("nr", "broyden"):
+        for key in METHODS_USED:
             v = df[(df["R"] == r) & (df["method"] == key)]["d_max_pct"].to_numpy()
             w = v.max() - v.min()
             row[f"{key}_width_pct"] = w
@@ -305,27 +340,22 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
         floatfmt=".3g",
         notes=(
             f"P = {c['p_definition']} with w = max - min of d_max over {len(ns) * len(ls)} "
-            f"structures (P_alt: {alt}). Eq. (33) is lost (ASSUMED). {passive_caption(config)}."
+            f"structures (P_alt: {alt}). Eq. (33) is lost (ASSUMED). {passive_caption(config)}. "
+            f"broyden = {METHOD_LABELS['broyden']}; broyden_direct = "
+            f"{METHOD_LABELS['broyden_direct']}."
         ),
     )
     # batched vs per-case loop on a sample
-    m, pose, sets = mech(config), test_pose(config), passive_sets(config)
+    s = setup(config)
     dpct = d_grid(config)
     sample = dpct[:: max(1, len(dpct) // int(c["loop_sample"]))]
+    nr, nr_opts = METHODS_USED["nr"]
     t = time.perf_counter()
     for d in sample:
-        scan_case(
-            m,
-            sets[0],
-            pose,
-            np.array([d]),
-            METHODS_USED["nr"],
-            int(c["maxiter"]),
-            (float(c["tol"]),),
-        )
+        scan_case(s.mech, s.sets[0], s.pose, np.array([d]), nr, s.maxiter, (s.tol_mm,), nr_opts)
     loop_per_case = (time.perf_counter() - t) / len(sample)
     t = time.perf_counter()
-    scan_case(m, sets[0], pose, dpct, METHODS_USED["nr"], int(c["maxiter"]), (float(c["tol"]),))
+    scan_case(s.mech, s.sets[0], s.pose, dpct, nr, s.maxiter, (s.tol_mm,), nr_opts)
     batched_per_case = (time.perf_counter() - t) / len(dpct)
     bench = pd.DataFrame(
         [
@@ -362,9 +392,9 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
 def conditioning(config: dict, outdir: Path) -> list[Path]:
     """Extra: cond(dF/dX) and the smallest singular value per mode at the test pose, beside d_max,
     plus the pose-space LM (active legs, linear-FK start) as a third method."""
-    c = config[KEY]
-    m, pose, sets = mech(config), test_pose(config), passive_sets(config)
-    lengths = m.ik(pose)
+    s = setup(config)
+    m, sets = s.mech, s.sets
+    lengths = m.ik(s.pose)
     dpct = d_grid(config)
     rows = []
     for r in range(5, -1, -1):
@@ -372,10 +402,10 @@ def conditioning(config: dict, outdir: Path) -> list[Path]:
         xs, act = dm.split(lengths)
         sv = np.linalg.svd(dm.jacobian_pose(xs, act)[:6], compute_uv=False)
         res = {
-            key: scan_case(m, sets[r], pose, dpct, method, int(c["maxiter"]), (float(c["tol"]),))[
-                float(c["tol"])
+            key: scan_case(m, sets[r], s.pose, dpct, method, s.maxiter, (s.tol_mm,), opts)[
+                s.tol_mm
             ][1]
-            for key, method in METHODS_USED.items()
+            for key, (method, opts) in METHODS_USED.items()
         }
         # pose-space LM: passive guesses (1 + d) X* complete the 12 lengths -> linear FK -> LM on active legs
         al = ActiveLegs(m, dm.active)
@@ -389,7 +419,7 @@ def conditioning(config: dict, outdir: Path) -> list[Path]:
             np.einsum("...i,...i->...", x0[:, 3:], x0[:, 3:]) < 1
         )
         x0 = np.where(valid[:, None], x0, 0.0)
-        lm = solve_fk(al, act, x0=x0, method="lm", tol=1e-13, maxiter=int(c["maxiter"]))
+        lm = solve_fk(al, act, x0=x0, method="lm", tol=1e-13, maxiter=s.maxiter)
         ok = (
             valid
             & lm.success
@@ -404,6 +434,7 @@ def conditioning(config: dict, outdir: Path) -> list[Path]:
                 "sigma_min_mm": sv[-1] * 1e3,
                 "nr_d_max_pct": res["nr"],
                 "broyden_d_max_pct": res["broyden"],
+                "broyden_direct_d_max_pct": res["broyden_direct"],
                 "lm_pose_d_max_pct": float(dpct[first - 1]) if first > 0 else 0.0,
                 "lm_pose_iterations_max": int(lm.nit[:first].max()) if first > 0 else 0,
             }
@@ -416,6 +447,8 @@ def conditioning(config: dict, outdir: Path) -> list[Path]:
         floatfmt=".4g",
         notes=(
             "cond and sigma_min of dF/dX (6 x (6-R)), F in m^2 and X in m (sigma in mm). "
+            "broyden: the paper's inverse update; broyden_direct: the direct update (beyond the "
+            "paper). "
             "lm_pose: Levenberg-Marquardt on the IK residuals of the active legs, started at the "
             "linear FK of (active, (1+d) X*); d_max on the same grid and rule."
         ),
@@ -428,11 +461,13 @@ def draw_basin(frame: pd.DataFrame, path: Path) -> Path:
     import textwrap
 
     df = frame
-    fig, _ = new_figure((7.0, 3.4))
+    keys = _methods_in(df)
+    fig, _ = new_figure((3.5 * len(keys), 3.4))
     fig.clf()
     with use_style():
-        axs = fig.subplots(1, 2, sharey=True)
-    for ax, key, name in zip(axs, ("nr", "broyden"), ("N-R (Gauss-Newton)", "Broyden")):
+        axs = fig.subplots(1, len(keys), sharey=True)
+    for ax, key in zip(axs, keys):
+        name = METHOD_LABELS[key]
         for r in range(5, -1, -1):
             s_ = df[(df["method"] == key) & (df["R"] == r)]
             ax.plot(s_["deviation_rms_pct"], s_["p_converge"], "o-", ms=3, lw=1.2, label=f"R={r}")
@@ -463,12 +498,12 @@ def basin(config: dict, outdir: Path) -> list[Path]:
     sqrt(6-R) (so |d u|_rms = d), per mode and method, at the test pose."""
     from parakin.config import rng
 
-    c = config[KEY]
-    m, pose, sets = mech(config), test_pose(config), passive_sets(config)
+    s = setup(config)
+    c, m, pose, sets = s.c, s.mech, s.pose, s.sets
     g = rng(config, f"{KEY}.basin")
     levels = np.asarray(c["basin_levels_pct"], dtype=float)
     trials = int(c["basin_trials"])
-    tol = float(c["tol"])
+    tol = s.tol_mm
     rows = []
     for r in range(5, -1, -1):
         dm = DriveMode(m, sets[r])
@@ -478,7 +513,7 @@ def basin(config: dict, outdir: Path) -> list[Path]:
         u *= np.sqrt(k) / np.linalg.norm(u, axis=-1, keepdims=True)
         x0 = (1 + levels[:, None, None] / 100 * u) * xs
         x0 = np.where(x0 > 0, x0, 1e-6).reshape(-1, k)
-        for key, method in METHODS_USED.items():
+        for key, (method, opts) in METHODS_USED.items():
             res = solve_fk(
                 dm,
                 act,
@@ -487,6 +522,7 @@ def basin(config: dict, outdir: Path) -> list[Path]:
                 tol=0.0,
                 maxiter=int(c["maxiter"]),
                 xtol=tol * 1e-3 / np.sqrt(k),
+                **opts,
             )
             ok = (res.success & (np.max(np.abs(res.x - xs), axis=-1) < ACCURATE_MM * 1e-3)).reshape(
                 len(levels), trials
@@ -611,7 +647,7 @@ def _step_stats(figdir: Path) -> tuple[pd.DataFrame, float] | None:
     p6, p9 = figdir / "fig10_steps_tol1e-6.csv", figdir / "fig11_steps_tol1e-9.csv"
     if not (p6.exists() and p9.exists()):
         return None
-    a, b = pd.read_csv(p6), pd.read_csv(p9)
+    a, b = _paper(pd.read_csv(p6)), _paper(pd.read_csv(p9))
     common = float(min(a["d_max_pct"].min(), b["d_max_pct"].min()))
     mm = a.merge(b, on=["R", "method", "deviation_pct"], suffixes=("6", "9"))
     mm = mm[(mm["deviation_pct"] <= common) & (mm["steps6"] > 0) & (mm["steps9"] > 0)]
@@ -659,7 +695,6 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 "3",
                 float(len(set(top3) & {0, 1, 3})),
                 "1",
-                tol=0.0,
                 reason=why
                 + f". Paper: R = 0, 1, 3 the most sensitive; ours the top 3 are R = {top3}",
             )
@@ -672,7 +707,6 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 "0",
                 float(w["nr"].idxmax()),
                 "1",
-                tol=0.0,
                 reason="C9: the mode whose N-R steps grow most from tol 1e-6 to 1e-9 (paper: R = 0). N-R "
                 "converges quadratically, so ~0.5 extra steps in every mode",
             )
@@ -687,7 +721,6 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 "3",
                 float(both.idxmin()),
                 "1",
-                tol=0.0,
                 reason=(
                     f"C8: the mode whose tol-1e-6 steps rise least from d = min to {common:g} % "
                     "(N-R + Broyden): " + ", ".join(f"R{r} {v:g}" for r, v in both.items())
@@ -702,7 +735,6 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 "1",
                 float(rise["broyden"].idxmax()),
                 "1",
-                tol=0.0,
                 reason=(
                     "C8: the mode whose Broyden steps rise most over the same range: "
                     + ", ".join(f"R{r} {v:g}" for r, v in rise["broyden"].items())
@@ -732,7 +764,6 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 "0",
                 float(dec["nr"]),
                 "1",
-                tol=1.0,
                 reason=base + " (paper: N-R 'varies smoothly', read as 0 drops; +-1)",
             )
         )
@@ -744,7 +775,6 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 "1",
                 float(dec["broyden"]),
                 "1",
-                kind="lower",
                 reason=base + " (paper: Broyden 'fluctuates', read as >= 1 drop)",
             )
         )
@@ -757,7 +787,6 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 "0.5",
                 frac,
                 "1",
-                kind="lower",
                 reason="C10: share of Broyden's drops at d >= d_max/2 (paper: fluctuations 'near d_max')",
             )
         )
@@ -769,7 +798,6 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 "0",
                 float(min(rho)),
                 "1",
-                kind="lower",
                 reason="C10: smallest Spearman rank correlation of Broyden's steps with d over the modes "
                 "(paper: 'a rising trend')",
             )
@@ -784,7 +812,7 @@ def _claims_structures(figdir: Path) -> list[Claim]:
     p = figdir / "fig12_dmax_structures.csv"
     if not p.exists():
         return out
-    df = pd.read_csv(p)
+    df = _paper(pd.read_csv(p))
     ratio = np.median(
         [
             _spearman((g["n_mm"] / g["L_mm"]).to_numpy(), g["d_max_pct"].to_numpy())
@@ -808,7 +836,6 @@ def _claims_structures(figdir: Path) -> list[Claim]:
                 "0",
                 float(np.median(r)),
                 "1",
-                kind=kind,
                 reason=(
                     f"C11: median over the 12 (R, method) of Spearman(d_max, {var[0]}) over the "
                     f"structures; paper: d_max {word} (sign only); {pos}/12 cases have that sign; median "
@@ -839,7 +866,6 @@ def _claims_odd_even(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 "1",
                 ratio,
                 "1",
-                kind="lower",
                 reason=(
                     f"C15: mean P over even R / mean P over odd R (paper: odd R 'stronger perturbation "
                     f"resistance'; its Table 6 gives {ratio_p:.2f}); P reading and passive sets ASSUMED"
@@ -849,6 +875,26 @@ def _claims_odd_even(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     return out
 
 
+def _direct(row: pd.Series, col: str) -> str:
+    """ "; direct update (beyond the paper): <value>" of Table 6's column ``broyden_direct_<col>``."""
+    c = f"broyden_direct_{col}"
+    if c not in row.index or pd.isna(row[c]):
+        return ""
+    return f"; direct update (beyond the paper): {row[c]:.3g}"
+
+
+def _best_R(t: pd.DataFrame, col: str, broyden: str, smallest: bool) -> int:
+    """The mode R whose ``nr_<col> + <broyden>_<col>`` is smallest (or largest) in Table 6."""
+    order = (t[f"nr_{col}"] + t[f"{broyden}_{col}"]).sort_values(kind="stable")
+    return int(t.loc[order.index[0] if smallest else order.index[-1], "R"])
+
+
+def _direct_best(t: pd.DataFrame, col: str, smallest: bool) -> str:
+    if f"broyden_direct_{col}" not in t.columns:
+        return ""
+    return f"; with the direct Broyden (beyond the paper): R = {_best_R(t, col, 'broyden_direct', smallest)}"
+
+
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     out: list[Claim] = []
     p = figdir / "table6.csv"
@@ -856,11 +902,11 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
         t = pd.read_csv(p)
         why = (
             "C14: eq. (33) and Fig. 9 lost; P = (max-min)/mean of d_max over the structures, nested passive sets "
-            "(ASSUMED); Broyden for R > 0 is the direct rank-1 update with pseudo-inverse steps, not the paper's "
-            "inverse update (docs/ye_stewart12.md#s5.6)"
+            "(ASSUMED); Broyden = the paper's inverse rank-1 update (31)-(32) from H0 = pinv(J) in every "
+            "mode (docs/ye_stewart12.md#s5.6)"
         )
         for _, r in t.iloc[:-1].iterrows():
-            for key in ("nr", "broyden"):
+            for key in PAPER_METHODS:
                 out.append(
                     Claim(
                         KEY,
@@ -869,11 +915,11 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                         printed_value(ref, "table6", f"R{int(r['R'])}.{key}"),
                         float(r[f"{key}_P"]),
                         "1",
-                        reason=why,
+                        reason=why + (_direct(r, "P") if key == "broyden" else ""),
                     )
                 )
         comp = t.iloc[-1]
-        for key in ("nr", "broyden"):
+        for key in PAPER_METHODS:
             out.append(
                 Claim(
                     KEY,
@@ -882,7 +928,7 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                     printed_value(ref, "table6", f"composite.{key}"),
                     float(comp[f"{key}_P"]),
                     "1",
-                    reason=why,
+                    reason=why + (_direct(comp, "P") if key == "broyden" else ""),
                 )
             )
         out.append(
@@ -893,12 +939,18 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 printed_value(ref, "text_s4.2", "composite_ratio"),
                 float(comp["nr_P"] / comp["broyden_P"]),
                 "1",
-                reason="C14: composite N-R / Broyden",
+                reason="C14: composite N-R / Broyden (the paper's inverse update)"
+                + (
+                    f"; with the direct update (beyond the paper) "
+                    f"{comp['nr_P'] / comp['broyden_direct_P']:.3g}"
+                    if "broyden_direct_P" in comp
+                    else ""
+                ),
             )
         )
         for r in (5, 2):
             row = t[t["R"] == r].iloc[0]
-            for key in ("nr", "broyden"):
+            for key in PAPER_METHODS:
                 out.append(
                     Claim(
                         KEY,
@@ -909,15 +961,14 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                         "%",
                         reason="C12: max - min of d_max over the structures"
                         + (
-                            "; Broyden for R > 0 is not the paper's inverse update (docs/ye_stewart12.md#s5.6)"
-                            if key == "broyden" and r > 0
+                            "; Broyden = the paper's inverse update" + _direct(row, "width_pct")
+                            if key == "broyden"
                             else ""
                         ),
                     )
                 )
-        best = int(
-            t.iloc[:-1].assign(s=lambda x: x["nr_P"] + x["broyden_P"]).sort_values("s")["R"].iloc[0]
-        )
+        modes6 = t.iloc[:-1]
+        best = _best_R(modes6, "P", "broyden", smallest=True)
         out.append(
             Claim(
                 KEY,
@@ -926,16 +977,11 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 printed_value(ref, "conclusion", "best_R.realtime_robust"),
                 float(best),
                 "1",
-                tol=0.0,
-                reason="C16: the mode with the smallest P (N-R + Broyden)",
+                reason="C16: the mode with the smallest P (N-R + the paper's inverse Broyden)"
+                + _direct_best(modes6, "P", smallest=True),
             )
         )
-        wid = int(
-            t.iloc[:-1]
-            .assign(s=lambda x: x["nr_width_pct"] + x["broyden_width_pct"])
-            .sort_values("s")["R"]
-            .iloc[-1]
-        )
+        wid = _best_R(modes6, "width_pct", "broyden", smallest=False)
         out.append(
             Claim(
                 KEY,
@@ -944,13 +990,13 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 printed_value(ref, "conclusion", "best_R.structure_sensitive"),
                 float(wid),
                 "1",
-                tol=0.0,
-                reason="C16: the mode with the widest d_max interval",
+                reason="C16: the mode with the widest d_max interval (N-R + the paper's inverse "
+                "Broyden)" + _direct_best(modes6, "width_pct", smallest=False),
             )
         )
     p = figdir / "fig10_steps_tol1e-6.csv"
     if p.exists():
-        df = pd.read_csv(p)
+        df = _paper(pd.read_csv(p))
         common = df.groupby("R")["d_max_pct"].min().min()
         mean = df[(df["deviation_pct"] <= common) & (df["steps"] > 0)].groupby("R")["steps"].mean()
         out.append(
@@ -961,14 +1007,16 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 printed_value(ref, "text_s4.1", "fewest_steps_R"),
                 float(mean.idxmin()),
                 "1",
-                tol=0.0,
-                reason=f"C8: mode with the fewest mean steps (both methods) over d <= {common:g} %, tol 1e-6",
+                reason=f"C8: mode with the fewest mean steps (N-R and the paper's inverse Broyden) "
+                f"over d <= {common:g} %, tol 1e-6",
             )
         )
     p = figdir / "fig12_dmax_structures.csv"
     if p.exists():
-        df = pd.read_csv(p)
+        full = pd.read_csv(p)
+        df = _paper(full)
         mean = df.groupby("R")["d_max_pct"].mean()
+        direct = full[full["method"].isin(["nr", "broyden_direct"])]
         out.append(
             Claim(
                 KEY,
@@ -977,8 +1025,14 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 printed_value(ref, "conclusion", "best_R.largest_dmax"),
                 float(mean.idxmax()),
                 "1",
-                tol=0.0,
-                reason="C16: the mode with the largest mean d_max over structures",
+                reason="C16: the mode with the largest mean d_max over structures (N-R and the "
+                "paper's inverse Broyden)"
+                + (
+                    f"; with the direct Broyden (beyond the paper): R = "
+                    f"{int(direct.groupby('R')['d_max_pct'].mean().idxmax())}"
+                    if (direct["method"] == "broyden_direct").any()
+                    else ""
+                ),
             )
         )
         s = df[(df["R"] == 0) & (df["method"] == "nr")].groupby("L_mm")["d_max_pct"].mean()
@@ -990,7 +1044,6 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 printed_value(ref, "text_s4.2", "bump.R0.L"),
                 float(s.idxmax()),
                 "mm",
-                tol=5.0,
                 reason="C13: L of the largest mean d_max (over n), R = 0, N-R; +-1 grid step",
             )
         )
@@ -1005,9 +1058,19 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
         parts.append(
             "Table 6 (ours, configured P reading): N-R "
             + ", ".join(f"R{int(r['R'])} {r['nr_P']:.2f}" for _, r in t.iloc[:-1].iterrows())
-            + "; Broyden "
+            + "; Broyden (the paper's inverse update) "
             + ", ".join(f"R{int(r['R'])} {r['broyden_P']:.2f}" for _, r in t.iloc[:-1].iterrows())
-            + f"; composite {t.iloc[-1]['nr_P']:.2f} / {t.iloc[-1]['broyden_P']:.2f}."
+            + f"; composite {t.iloc[-1]['nr_P']:.2f} / {t.iloc[-1]['broyden_P']:.2f}"
+            + (
+                "; the direct Broyden update (beyond the paper) "
+                + ", ".join(
+                    f"R{int(r['R'])} {r['broyden_direct_P']:.2f}" for _, r in t.iloc[:-1].iterrows()
+                )
+                + f", composite {t.iloc[-1]['broyden_direct_P']:.2f}"
+                if "broyden_direct_P" in t.columns
+                else ""
+            )
+            + "."
         )
     p = figdir / "extra_conditioning.csv"
     if p.exists():
@@ -1015,7 +1078,8 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
         parts.append(
             "cond(dF/dX) per mode at the test pose: "
             + ", ".join(
-                f"R{int(r['R'])} {r['cond_dF_dX']:.3g} (d_max N-R {r['nr_d_max_pct']:g} %, LM-pose {r['lm_pose_d_max_pct']:g} %)"
+                f"R{int(r['R'])} {r['cond_dF_dX']:.3g} (d_max N-R {r['nr_d_max_pct']:g} %, Broyden "
+                f"{r['broyden_d_max_pct']:g} %, LM-pose {r['lm_pose_d_max_pct']:g} %)"
                 for _, r in t.iterrows()
             )
             + "."

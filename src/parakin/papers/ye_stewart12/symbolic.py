@@ -142,7 +142,6 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                     printed_value(ref, "table2", f"{feat}.{stage}"),
                     float(t.loc[feat, stage]),
                     "1",
-                    tol=0.0,
                     reason="C2; counted in the B-coordinate form",
                 )
             )
