@@ -50,6 +50,7 @@ __all__ = [
     "residuals",
     "residual_jacobian",
     "nguyen_widrow_init",
+    "plateau_epoch",
     "FORMAT_VERSION",
 ]
 
@@ -393,10 +394,17 @@ def _split(
 
 def _position_errors(pred: Array, target: Array) -> dict[str, float]:
     """RMS, max and 95th percentile of the Euclidean error ``|pred - target|`` per sample (SI),
-    plus the largest absolute error of any single coordinate."""
+    plus the largest and the mean absolute error of a single coordinate (the mean is Zhao 2017's
+    ``E_3 = (|dx| + |dy| + |dz|) / 3`` averaged over the samples)."""
     if len(target) == 0:
         nan = float("nan")
-        return {"rms_m": nan, "max_m": nan, "p95_m": nan, "max_abs_axis_m": nan}
+        return {
+            "rms_m": nan,
+            "max_m": nan,
+            "p95_m": nan,
+            "max_abs_axis_m": nan,
+            "mean_abs_axis_m": nan,
+        }
     diff = pred - target
     norm = np.sqrt(np.einsum("ij,ij->i", diff, diff))
     return {
@@ -404,7 +412,20 @@ def _position_errors(pred: Array, target: Array) -> dict[str, float]:
         "max_m": float(norm.max()),
         "p95_m": float(np.percentile(norm, 95)),
         "max_abs_axis_m": float(np.abs(diff).max()),
+        "mean_abs_axis_m": float(np.abs(diff).mean()),
     }
+
+
+def plateau_epoch(errors: ArrayLike, window: int, improvement: float = 0.01) -> int | None:
+    """The first epoch at which :func:`train_lm`'s convergence rule (``plateau_window`` =
+    ``window``, ``plateau_improvement`` = ``improvement``) fires on the per-epoch errors ``errors``
+    (epoch 0 first): the best error so far is not ``improvement`` (relative) below the best error
+    ``window`` epochs earlier. None if it never fires. Applies the rule to a finished log, e.g. one
+    trained without it."""
+    best = np.minimum.accumulate(np.asarray(errors, dtype=np.float64))
+    k = np.arange(window, len(best))
+    hit = best[k] > (1.0 - improvement) * best[k - window]
+    return int(k[hit][0]) if hit.any() else None
 
 
 def train_lm(
@@ -423,6 +444,8 @@ def train_lm(
     max_fail: int = 6,
     min_grad: float = 1e-7,
     goal: float = 0.0,
+    plateau_window: int | None = None,
+    plateau_improvement: float = 0.01,
     progress: Callable[[int, float, float], None] | None = None,
     num_threads: int | None = 1,
 ) -> tuple[BPNetwork, pd.DataFrame, dict[str, Any]]:
@@ -438,8 +461,12 @@ def train_lm(
     Stops (checked at the start of each epoch, MATLAB order) when the training MSE ``<= goal``,
     ``mu > mu_max``, the gradient norm ``|2 J^T e / m|`` of the training MSE ``< min_grad``
     (``m`` = number of residuals), the validation MSE has not improved on its best for
-    ``max_fail`` consecutive epochs (MATLAB's ``val_fail``), or after ``max_epochs``. Returns the
-    weights of the epoch with the best validation MSE (the last epoch when ``val_fraction`` is 0).
+    ``max_fail`` consecutive epochs (MATLAB's ``val_fail``), or after ``max_epochs``. With
+    ``plateau_window`` = K (not MATLAB; off by default) it also stops, reason ``plateau``, once the
+    best validation RMS position error has not improved by at least ``plateau_improvement``
+    (relative, 0.01 = 1 %) over the last K epochs (the training error when there is no validation
+    set): a convergence rule that can be fixed before a run. Returns the weights of the epoch with
+    the best validation MSE (the last epoch when ``val_fraction`` is 0).
 
     Determinism: the split comes from ``numpy.random.default_rng(seed)``, the Nguyen-Widrow
     initialisation from a ``torch.Generator`` seeded with ``seed``; training runs in float64 with
@@ -451,9 +478,11 @@ def train_lm(
     weights): ``epoch``, ``mu`` (held after that epoch's step), ``train_mse``/``val_mse``/``test_mse``
     (normalised units, mean over all residuals), ``train_rms_m``/``val_rms_m``/``test_rms_m`` (RMS
     of the Euclidean error of the de-normalised outputs, SI units), ``grad_norm``. ``summary``:
-    ``epochs``, ``stop_reason`` (``goal``, ``mu_max``, ``min_grad``, ``max_fail``, ``max_epochs``),
+    ``epochs``, ``stop_reason`` (``goal``, ``mu_max``, ``min_grad``, ``max_fail``, ``plateau``,
+    ``max_epochs``),
     ``best_epoch``, and the errors of the returned network on each set (``test_rms_m``,
-    ``test_max_m`` = max Euclidean error, ``test_p95_m``, ``test_max_abs_axis_m``, likewise for
+    ``test_max_m`` = max Euclidean error, ``test_p95_m``, ``test_max_abs_axis_m``,
+    ``test_mean_abs_axis_m`` = mean absolute coordinate error, likewise for
     train and val), set sizes, hyper-parameters and ``wall_time_s``.
     """
     import pandas as pd
@@ -483,6 +512,11 @@ def train_lm(
         )
     if max_epochs < 0 or max_fail < 1:
         raise ValueError(f"max_epochs = {max_epochs} must be >= 0 and max_fail = {max_fail} >= 1")
+    if plateau_window is not None and not (plateau_window >= 1 and 0 < plateau_improvement < 1):
+        raise ValueError(
+            f"plateau_window = {plateau_window} must be >= 1 and 0 < plateau_improvement = "
+            f"{plateau_improvement} < 1"
+        )
 
     start = time.perf_counter()
     n_in, n_out = X.shape[1], Y.shape[1]
@@ -529,6 +563,7 @@ def train_lm(
         e = residuals(w, x_tr, t_tr, hidden)
         sse = float(e @ e)
         best_w, best_val, best_epoch, val_fail = w.clone(), math.inf, 0, 0
+        best_rms: list[float] = []  # best validation (or training) RMS error up to each epoch
         epoch, stop_reason = 0, "max_epochs"
         while True:
             J = residual_jacobian(w, x_tr, t_tr, hidden)
@@ -563,6 +598,13 @@ def train_lm(
                 best_w, best_val, best_epoch, val_fail = w, val_mse, epoch, 0
             elif epoch > 0:
                 val_fail += 1
+            watched = val_rms if len(iva) else train_rms
+            best_rms.append(min(watched, best_rms[-1]) if best_rms else watched)
+            plateau = (  # the rule of plateau_epoch, applied as the log grows
+                plateau_window is not None
+                and epoch >= plateau_window
+                and best_rms[-1] > (1.0 - plateau_improvement) * best_rms[-1 - plateau_window]
+            )
             # stopping criteria, MATLAB trainlm order
             if train_mse <= goal:
                 stop_reason = "goal"
@@ -572,6 +614,8 @@ def train_lm(
                 stop_reason = "min_grad"
             elif val_fail >= max_fail:
                 stop_reason = "max_fail"
+            elif plateau:
+                stop_reason = "plateau"
             elif epoch >= max_epochs:
                 stop_reason = "max_epochs"
             else:
@@ -628,6 +672,8 @@ def train_lm(
         "min_grad": min_grad,
         "goal": goal,
     }
+    if plateau_window is not None:  # only then: the meta of a MATLAB-rules network is unchanged
+        summary.update(plateau_window=plateau_window, plateau_improvement=plateau_improvement)
     for name, idx in (("train", itr), ("val", iva), ("test", ite)):
         errs = (
             _position_errors(net.predict(X[idx]), Y[idx])

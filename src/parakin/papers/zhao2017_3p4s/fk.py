@@ -15,10 +15,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from parakin.claims import Claim, printed_value
+from parakin.claims import REPRODUCED, Claim, judge, printed_value
 from parakin.config import rng, seed_for
+from parakin.errors import ConfigError
 from parakin.io import atomic_write_text, atomic_writer, write_and_draw, write_csv, write_table
 from parakin.mechanisms import P3P4S
+from parakin.nn.bp import plateau_epoch
 from parakin.papers.zhao2017_3p4s.common import KEY, artefact
 from parakin.papers.zhao2017_3p4s.kinematics import table1_inputs
 from parakin.registry import EXACT, ITERATIVE, Tolerance
@@ -37,6 +39,7 @@ TRAINING = Tolerance(
         "test_rms_m": (1.0, 0.0),
         "test_max_m": (1.0, 0.0),
         "test_p95_m": (1.0, 0.0),
+        "test_e3_m": (1.0, 0.0),
         "samples": (0.0, 0.0),
         "hidden": (0.0, 0.0),
         "weights": (0.0, 0.0),
@@ -191,6 +194,7 @@ def train(config: dict, outdir: Path) -> list[Path]:
         )
     )
     keys = ("epochs", "stop_reason", "best_epoch", "test_rms_m", "test_max_m", "test_p95_m")
+    e3 = "test_mean_abs_axis_m"  # the paper's E_3 (Table 2's measure) averaged over the test set
     lo, hi = data["bounds_low"], data["bounds_high"]
     rows = [
         {
@@ -199,6 +203,7 @@ def train(config: dict, outdir: Path) -> list[Path]:
             "high": _fmt_box(hi),
             "samples": int(data["count"]),
             **{k: summary[k] for k in keys},
+            "test_e3_m": summary[e3],
         }
     ]
     # The paper does not say where it sampled; the network's accuracy depends on it. The same
@@ -219,6 +224,7 @@ def train(config: dict, outdir: Path) -> list[Path]:
                 "high": _fmt_box(box["high"]),
                 "samples": len(poses),
                 **{k: s_box[k] for k in keys},
+                "test_e3_m": s_box[e3],
             }
         )
     acc = pd.DataFrame(rows)
@@ -229,8 +235,10 @@ def train(config: dict, outdir: Path) -> list[Path]:
         outdir / "extra_bp_accuracy",
         title="BP network accuracy on held-out test sets",
         notes="Errors: |predicted - true| platform position (m, 3-D) on samples the training never saw "
-        "(paper §1.1: 'output accuracy at the 10^-4 level', sampling region not stated). Row 1 is "
-        "the network the hybrid solver uses; the others retrain on smaller boxes of poses (m).",
+        "(paper §1.1: 'output accuracy at the 10^-4 level', sampling region and error measure not "
+        "stated); test_e3_m: the mean absolute coordinate error, Table 2's E_3 averaged over the test "
+        "set. Row 1 is the network the hybrid solver uses; the others retrain on smaller boxes of "
+        "poses (m).",
     )
     paths += _training_figure(log, outdir)
     return paths
@@ -243,6 +251,226 @@ def _fmt_box(v) -> str:
 def _training_figure(log: pd.DataFrame, outdir: Path) -> list[Path]:
     """extra_bp_training.{csv,png}: the log written, read back and drawn from the CSV alone."""
     return write_and_draw(log, outdir / "extra_bp_training.csv", draw_training)
+
+
+# ---------------------------------------------------------------------------------- convergence
+#: per region only what is stable is compared: how many runs converged and the median test error
+#: of the converged networks within a factor of two; each run's curve is one chaotic trajectory
+#: (another BLAS kernel, another number of epochs) and is not compared
+CONVERGENCE = Tolerance(
+    "statistical",
+    0.0,
+    0.0,
+    "network training to convergence: the per-epoch curves are chaotic trajectories (not "
+    "compared); per region the sample count, the number of converged runs and the median "
+    "test error within a factor of two are",
+    columns={
+        "samples": (0.0, 0.0),
+        "hidden": (0.0, 0.0),
+        "weights": (0.0, 0.0),
+        "restarts": (0.0, 0.0),
+        "window": (0.0, 0.0),
+        "min_improvement": (0.0, 0.0),
+        "max_epochs": (0.0, 0.0),
+        "converged_runs": (0.0, 0.0),
+        "test_rms_median_m": (1.0, 0.0),
+        "test_p95_median_m": (1.0, 0.0),
+        "test_e3_median_m": (1.0, 0.0),
+    },
+    files=("extra_bp_convergence_curves.csv", "extra_bp_convergence.png"),
+)
+#: the region of the pipeline's own network (the mechanism's workspace box)
+OURS = "workspace"
+
+
+def convergence_settings(config: dict) -> dict:
+    """``config[KEY]["network_convergence"]``, checked, with ``regions``: name -> (low, high), the
+    workspace box first, then every ``fk.accuracy_boxes`` entry."""
+    try:
+        cfg = dict(config[KEY]["network_convergence"])
+    except (KeyError, TypeError):
+        raise ConfigError(f"config has no '{KEY}.network_convergence' section") from None
+    lo, hi = _mech().pose_bounds()
+    regions = {OURS: (lo, hi)}
+    for box in config[KEY]["fk"]["accuracy_boxes"]:
+        regions[box["name"]] = (np.asarray(box["low"], float), np.asarray(box["high"], float))
+    if cfg.get("paper_region") not in regions or cfg["paper_region"] == OURS:
+        raise ConfigError(
+            f"{KEY}.network_convergence.paper_region = {cfg.get('paper_region')!r} must name one "
+            f"of the boxes in {KEY}.fk.accuracy_boxes: {', '.join(list(regions)[1:]) or 'none'}"
+        )
+    cfg["regions"] = regions
+    return cfg
+
+
+def draw_bp_convergence(frame: pd.DataFrame, path: Path) -> Path:
+    """extra_bp_convergence from its curves CSV: the validation RMS error per LM epoch of every
+    run on every region until the convergence rule stopped it, the test error of each returned
+    (best-validation) network at its epoch, and the paper's "1e-4 level" as the band within half a
+    decade of it."""
+    from parakin.plot import new_figure, save_figure, use_style
+
+    paper = float(frame["paper_accuracy_m"].iloc[0])
+    with use_style():
+        fig, ax = new_figure("single_tall")
+        ax.axhspan(
+            paper / 10**0.5,
+            paper * 10**0.5,
+            color="0.88",
+            lw=0,
+            label=f"paper: {paper:g} level (±½ decade)",
+        )
+        for k, (region, g) in enumerate(frame.groupby("region", sort=False)):
+            color = f"C{k}"
+            for j, (_, run) in enumerate(g.groupby("restart", sort=False)):
+                ax.semilogy(
+                    run["epoch"],
+                    run["val_rms_m"],
+                    color=color,
+                    lw=0.8,
+                    label=f"{region}: validation" if j == 0 else None,
+                )
+            best = g[g["best"]]
+            ax.plot(
+                best["epoch"], best["test_rms_m"], "o", color=color, ms=4, mfc="none",
+                label=f"{region}: test, returned network",
+            )  # fmt: skip
+        ax.set_xlabel("Levenberg–Marquardt epoch")
+        ax.set_ylabel("RMS position error (m)")
+        ax.set_title("Beyond the paper: BP 3-10-3 network\ntrained to convergence per region")
+        ax.legend(fontsize="x-small")
+    return save_figure(fig, path)
+
+
+@artefact(
+    "network_convergence",
+    outputs=[
+        "extra_bp_convergence.csv",
+        "extra_bp_convergence.md",
+        "extra_bp_convergence_curves.csv",
+        "extra_bp_convergence.png",
+    ],
+    config=["zhao2017_3p4s.fk", "zhao2017_3p4s.network_convergence"],
+    tolerance=CONVERGENCE,
+    resources={"runtime": 10, "mem_mb": 2000},
+    caption="the BP network trained to convergence on each sampling region (§1.1's 1e-4 level)",
+    draws=[("extra_bp_convergence.png", "extra_bp_convergence_curves.csv", draw_bp_convergence)],
+)
+def network_convergence(config: dict, outdir: Path) -> list[Path]:
+    """The paper's 3-10-3 network trained by the same LM on each candidate sampling region, from
+    ``restarts`` seeds, each until a convergence rule fixed in the config stops it (the best
+    validation RMS error has not improved by ``min_improvement`` over ``window`` epochs;
+    ``max_epochs`` is a cap a converged run never reaches). Shows whether the network-accuracy gap
+    (§1.1: "1e-4 level") comes from the epoch limit of the pipeline's training or from the region
+    sampled (docs/zhao2017_3p4s.md#s4.5)."""
+    from parakin.nn import train_lm
+
+    cfg = convergence_settings(config)
+    fk_cfg = config[KEY]["fk"]
+    mech = _mech()
+    printed = printed_value(_ref(), "text_s1.1", "network_accuracy")
+    rows, curves = [], []
+    for name, (lo, hi) in cfg["regions"].items():
+        poses = sample_reachable(
+            mech, cfg["samples"], rng(config, f"{KEY}.convergence.samples.{name}"), bounds=(lo, hi)
+        )
+        runs = []
+        for k in range(cfg["restarts"]):
+            print(
+                f"  network_convergence: {name}, run {k + 1}/{cfg['restarts']} ({len(poses)} samples)",
+                file=sys.stderr,
+                flush=True,
+            )
+            net, log, s = train_lm(
+                mech.ik(poses),
+                poses,
+                hidden=fk_cfg["hidden"],
+                seed=seed_for(config, f"{KEY}.convergence.train.{name}.{k}"),
+                max_epochs=cfg["max_epochs"],
+                max_fail=cfg["max_epochs"] + 1,  # MATLAB's val_fail stop off: the rule decides
+                val_fraction=fk_cfg["val_fraction"],
+                test_fraction=fk_cfg["test_fraction"],
+                plateau_window=cfg["window"],
+                plateau_improvement=cfg["min_improvement"],
+            )
+            runs.append(s)
+            curves.append(
+                pd.DataFrame(
+                    {
+                        "region": name,
+                        "restart": k,
+                        "epoch": log["epoch"],
+                        "train_rms_m": log["train_rms_m"],
+                        "val_rms_m": log["val_rms_m"],
+                        "test_rms_m": log["test_rms_m"],
+                        "best": log["epoch"] == s["best_epoch"],
+                        "stop_reason": s["stop_reason"],
+                        "paper_accuracy_m": float(printed),
+                    }
+                )
+            )
+        rms = np.array([s["test_rms_m"] for s in runs])
+        e3 = float(np.median([s["test_mean_abs_axis_m"] for s in runs]))
+        role = (
+            "ours (the pipeline's network)"
+            if name == OURS
+            else "the paper's working poses"
+            if name == cfg["paper_region"]
+            else "a smaller box"
+        )
+        rows.append(
+            {
+                "region": name,
+                "role": role,
+                "low": _fmt_box(lo),
+                "high": _fmt_box(hi),
+                "samples": len(poses),
+                "hidden": net.hidden,
+                "weights": net.n_weights,
+                "restarts": len(runs),
+                "window": cfg["window"],
+                "min_improvement": cfg["min_improvement"],
+                "max_epochs": cfg["max_epochs"],
+                "converged_runs": sum(s["stop_reason"] != "max_epochs" for s in runs),
+                "epochs_median": float(np.median([s["epochs"] for s in runs])),
+                "test_rms_median_m": float(np.median(rms)),
+                "test_rms_min_m": float(rms.min()),
+                "test_rms_max_m": float(rms.max()),
+                "test_p95_median_m": float(np.median([s["test_p95_m"] for s in runs])),
+                "test_e3_median_m": e3,
+                "median_at_paper_level": judge(printed, float(np.median(rms)), kind="order")
+                == REPRODUCED,
+                "e3_median_at_paper_level": judge(printed, e3, kind="order") == REPRODUCED,
+            }
+        )
+    tab = pd.DataFrame(rows)
+    notes = (
+        f"Each region: {cfg['samples']} IK samples uniform in the box (m), the 3-{fk_cfg['hidden']}-3 network "
+        f"trained {cfg['restarts']} times from different seeds, "
+        f"{1 - fk_cfg['val_fraction'] - fk_cfg['test_fraction']:.0%}/{fk_cfg['val_fraction']:.0%}/"
+        f"{fk_cfg['test_fraction']:.0%} split, LM as MATLAB trainlm but without its 6-failure validation stop. "
+        f"Convergence rule, fixed before the runs: stop when the best validation RMS error has not improved by "
+        f"{cfg['min_improvement']:.0%} over the last {cfg['window']} epochs ('mu_max' and 'min_grad' also mean no "
+        f"further progress); a run reaching the cap of {cfg['max_epochs']} epochs has not converged. Errors: "
+        "|predicted - true| platform position (m, 3-D) of each best-validation network on its test set; median, "
+        "min and max over the runs; test_e3_median_m: median over the runs of the mean absolute coordinate "
+        "error (Table 2's E_3 averaged over the test set). The paper (§1.1) claims a "
+        f"'{printed} level' without stating the region or the error measure; *_at_paper_level: the median "
+        "within half a decade of it (the reference CSV's tolerance)."
+    )
+    paths = write_table(
+        tab,
+        outdir / "extra_bp_convergence",
+        title="BP network trained to convergence on each sampling region",
+        notes=notes,
+    )
+    paths += write_and_draw(
+        pd.concat(curves, ignore_index=True),
+        outdir / "extra_bp_convergence_curves.csv",
+        draw_bp_convergence,
+        outdir / "extra_bp_convergence.png",
+    )
+    return paths
 
 
 # ---------------------------------------------------------------------------------- Table 2
@@ -454,6 +682,73 @@ def fk_benchmark(config: dict, outdir: Path) -> list[Path]:
 
 
 # ---------------------------------------------------------------------------------- report
+def network_accuracy_cause(
+    accuracy: pd.DataFrame, log: pd.DataFrame | None, conv: pd.DataFrame | None, printed: str
+) -> tuple[str, str]:
+    """``(reason, evidence)`` of the network-accuracy claim, from extra_bp_accuracy
+    (``accuracy``; row 0 is the pipeline's network), that network's training log (extra_bp_training, ``log``) and
+    extra_bp_convergence (``conv``), with the convergence rule that table records (fixed before the
+    runs, docs/zhao2017_3p4s.md#s4.5). The two candidate causes, each shown when the median of its
+    converged runs reaches the paper's level (within half a decade, the reference CSV's tolerance):
+    the epoch limit (our box trained to convergence) and the sampling region (the paper's working
+    poses). Neither reaching it, or a run that did not converge, leaves the cause unknown (no
+    evidence); the reason then says what was ruled out. Table 2's E_3 measure is reported, not
+    judged: it was looked at after the runs."""
+    at_level = lambda v: judge(printed, float(v), kind="order") == REPRODUCED  # noqa: E731
+    acc = accuracy.iloc[0]
+    stopped = (
+        f"the pipeline's training stopped by {acc['stop_reason']} (best epoch "
+        f"{int(acc['best_epoch'])} of {int(acc['epochs'])})"
+    )
+    if conv is None:
+        return stopped + "; extra_bp_convergence not run: neither region nor convergence shown", ""
+    c = conv.set_index("region")
+    if (c["converged_runs"] < c["restarts"]).any():
+        return stopped + "; not every training to convergence converged: cause not shown", ""
+    evidence = f"{KEY}/extra_bp_convergence.md"
+    ours = c.loc[OURS]
+    paper = c[c["role"] == "the paper's working poses"].iloc[0]
+    if at_level(ours["test_rms_median_m"]):
+        return (
+            f"{stopped}; cause: the epoch limit: trained to convergence on the same box, the median "
+            f"test RMS error is {ours['test_rms_median_m']:.1e} m, at the paper's level",
+            evidence,
+        )
+    if at_level(paper["test_rms_median_m"]):
+        return (
+            f"{stopped}; cause: the sampling region: on the paper's working poses (Table 1's box) "
+            f"the converged median is {paper['test_rms_median_m']:.1e} m, at the paper's level",
+            evidence,
+        )
+    rule = (int(ours["window"]), float(ours["min_improvement"]))
+    e = None if log is None else plateau_epoch(log["val_rms_m"], *rule)
+    limit = (
+        f"by the declared rule ({rule[1]:.0%} over {rule[0]} epochs) the pipeline's own training "
+        f"had converged at epoch {e}, the rest improving its validation error by "
+        f"{1 - log['val_rms_m'].min() / log['val_rms_m'][: e + 1].min():.0%}; "
+        if e is not None
+        else ""
+    )
+    longer = accuracy[accuracy["box"] == paper.name]
+    longer = (
+        f"; the pipeline's set-up on that box ({int(longer['samples'].iloc[0])} samples, stopped by "
+        f"{longer['stop_reason'].iloc[0]} at epoch {int(longer['epochs'].iloc[0])}) gives "
+        f"{longer['test_rms_m'].iloc[0]:.1e} m"
+        if len(longer)
+        else ""
+    )
+    return (
+        f"cause unknown. Ruled out: the epoch limit on our box ({limit}trained to convergence "
+        f"{int(ours['restarts'])} times: median {ours['test_rms_median_m']:.1e} m). Not shown: the "
+        f"paper's working poses as region (Table 1's box, converged by the rule: median "
+        f"{paper['test_rms_median_m']:.1e} m{longer}). "
+        f"Not tested: the error measure (seen after the runs): Table 2's E_3 gives "
+        f"{float(acc.get('test_e3_m', np.nan)):.1e} m for this network, {paper['test_e3_median_m']:.1e} m "
+        f"on Table 1's box and {ours['test_e3_median_m']:.1e} m converged on our box",
+        "",
+    )
+
+
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     out: list[Claim] = []
     t2 = figdir / "table2.csv"
@@ -540,19 +835,27 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
             )
     acc = figdir / "extra_bp_accuracy.csv"
     if acc.exists():
-        a = pd.read_csv(acc).iloc[0]
+        accuracy = pd.read_csv(acc)
+        a = accuracy.iloc[0]
+        printed = printed_value(ref, "text_s1.1", "network_accuracy")
+        conv, log = figdir / "extra_bp_convergence.csv", figdir / "extra_bp_training.csv"
+        reason, evidence = network_accuracy_cause(
+            accuracy,
+            pd.read_csv(log) if log.exists() else None,
+            pd.read_csv(conv) if conv.exists() else None,
+            printed,
+        )
         out.append(
             Claim(
                 KEY,
                 "text_s1.1",
                 "network_accuracy",
-                printed_value(ref, "text_s1.1", "network_accuracy"),
+                printed,
                 float(a["test_rms_m"]),
                 "m",
                 "test-set RMS error",
-                reason=f"training stopped at its epoch limit ({a['stop_reason']}, best epoch {int(a['best_epoch'])} "
-                f"of {int(a['epochs'])}: still improving); smaller sampling boxes give smaller errors "
-                "(extra_bp_accuracy.md) but neither the region nor convergence is shown to be the cause",
+                reason=reason,
+                evidence=evidence,
             )
         )
     bench = figdir / "fk_benchmark.csv"
@@ -615,6 +918,20 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
             f"{printed_value(ref, 'text_s1.1', 'fk_iterations')} iterations, "
             f"< {printed_value(ref, 'text_s1.1', 'fk_time_max')} ms). Rows 2 and 4 of the printed table are internally "
             "inconsistent (see the notes of the reference CSV)."
+        )
+    if (figdir / "extra_bp_convergence.csv").exists():
+        c = pd.read_csv(figdir / "extra_bp_convergence.csv").set_index("region")
+        row = lambda role: c[c["role"] == role].iloc[0]  # noqa: E731
+        ours, paper = row("ours (the pipeline's network)"), row("the paper's working poses")
+        parts.append(
+            f"**Network accuracy trained to convergence.** With a convergence rule fixed before the runs "
+            f"(best validation error not {ours['min_improvement']:.0%} better over {int(ours['window'])} "
+            f"epochs), {int(c['converged_runs'].sum())} of {int(c['restarts'].sum())} trainings converged; "
+            f"median test RMS error {ours['test_rms_median_m']:.1e} m on our box, "
+            f"{paper['test_rms_median_m']:.1e} m on Table 1's box, "
+            f"{c['test_rms_median_m'].min():.1e} m on the smallest, against the paper's "
+            f"'{printed_value(ref, 'text_s1.1', 'network_accuracy')} level' "
+            "(`zhao2017_3p4s/extra_bp_convergence.md`; the cause is judged in the table above)."
         )
     if (figdir / "fk_benchmark.csv").exists():
         b = pd.read_csv(figdir / "fk_benchmark.csv")

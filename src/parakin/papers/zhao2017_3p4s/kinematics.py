@@ -361,6 +361,227 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
     return write_and_draw(_mechanism_table(), outdir / "fig02_sketch.csv", draw_fig02)
 
 
+# ---------------------------------------------------------------------------------------- Fig. 4
+FIG04_TITLE = "Fig. 4 — equivalent P(4S) limb 1 at (0, 0, 0.592) m, stated geometry"
+#: drawn length of the unit vectors e_i, m_i, n_i, s_i (m); they have no length of their own
+UNIT_ARROW = 0.1
+_FIG04_COLORS = {"e": "#0072B2", "m": "#E69F00", "n": "#CC79A7", "s": "#009E73"}
+
+
+def _fig04_table() -> pd.DataFrame:
+    """The drawn numbers of Fig. 4 from our model at the home pose (Table 1's case 1), limb 1.
+
+    Panel ``side``: the limb in the vertical plane of ``e_1`` (h = X . e_1, v = Z, m), where the
+    loop of eq. (6), ``r = r_b e_1 + q_1 m_1 + l n_1 + r_a cos(theta) s_1``, lies whole at this pose
+    (x = y = 0). Panel ``parallelogram``: the 4S parallelogram face-on (h = (X - c_1) . t_1 along its
+    short edges, v = (X - c_1) . n_1 along its rods), whose edge midpoints ``c_1``, ``d_1`` carry the
+    equivalent rod. Points, segments and the loop come from :meth:`P3P4S.skeleton`; unit vectors
+    are drawn ``UNIT_ARROW`` long. World coordinates ``x0..z1`` beside the panel's ``h0..v1``.
+    """
+    mech = P3P4S.zhao2017()
+    pose = mech.home()
+    sk = mech.skeleton(pose)
+    pt = sk.points
+    o, p, u, c, d = pt["O"], pt["p"], pt["u_1"], pt["c_1"], pt["d_1"]
+    near = lambda a, b: float(np.linalg.norm(np.asarray(a) - b)) <= mech.d  # noqa: E731
+    limb = [(k, np.asarray(seg)) for k, seg in sk.segments if near(seg[0], u) or near(seg[0], c)]
+    rods = [seg for k, seg in limb if k == "passive" and not near(seg[1], c)]
+    (edge,) = [seg for k, seg in limb if k == "passive" and near(seg[1], c)]
+    (rail,) = [seg for k, seg in limb if k == "rail"]
+    e1, z = u / np.linalg.norm(u), np.array([0.0, 0.0, 1.0])
+    m1 = (c - u) / np.linalg.norm(c - u)
+    n1 = (d - c) / np.linalg.norm(d - c)
+    s1 = (p - d) / np.linalg.norm(p - d)
+    t1 = (edge[1] - edge[0]) / np.linalg.norm(edge[1] - edge[0])
+    base = dict(sk.polygons)["base"]
+    plat = dict(sk.polygons)["platform"]
+    rows: list[dict] = []
+
+    def add(panel: str, element: str, kind: str, name: str, a, b) -> None:
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        if panel == "side":
+            h = (a @ e1, a[2], b @ e1, b[2])
+        else:
+            h = ((a - c) @ t1, (a - c) @ n1, (b - c) @ t1, (b - c) @ n1)
+        rows.append(
+            {
+                "panel": panel,
+                "element": element,
+                "kind": kind,
+                "name": name,
+                **dict(zip(("h0", "v0", "h1", "v1"), (float(v) for v in h))),
+                **dict(zip(("x0", "y0", "z0", "x1", "y1", "z1"), (float(v) for v in (*a, *b)))),
+            }
+        )
+
+    # side view: base and platform seen edge-on, the rail, the loop of eq. (6), the unit vectors
+    hb, hp = base @ e1, plat @ e1
+    add("side", "segment", "base", "base", hb.min() * e1, hb.max() * e1)
+    add(
+        "side",
+        "segment",
+        "platform",
+        "platform",
+        p + (hp.min() - p @ e1) * e1,
+        p + (hp.max() - p @ e1) * e1,
+    )
+    add("side", "segment", "rail", "rail", *rail)
+    add("side", "loop", "loop", "r_b e_1", o, u)
+    add("side", "loop", "actuator", "q_1 m_1", u, c)
+    add("side", "loop", "equivalent", "l n_1", c, d)
+    add("side", "loop", "loop", "r_a cos(theta) s_1", d, p)
+    add("side", "loop", "position", "r", o, p)
+    for name, at, vec in (("e", o, e1), ("m", u, m1), ("n", c, n1), ("s", d, s1)):
+        add("side", "unit", name, f"{name}_1", at, at + UNIT_ARROW * vec)
+    for name, at in (("o", o), ("u", u), ("c", c), ("d", d), ("p", p)):
+        add("side", "point", "point", name, at, at)
+    add("side", "axis", "z", "z", o, o + UNIT_ARROW * z)
+    # the parallelogram face-on: two side rods of length l, short edges of length d
+    for k, rod in enumerate(rods):
+        add("parallelogram", "segment", "passive", f"side rod {k + 1}", *rod)
+    add("parallelogram", "segment", "slider edge", "slider edge", *edge)
+    add("parallelogram", "segment", "platform edge", "platform edge", rods[0][1], rods[1][1])
+    add("parallelogram", "loop", "equivalent", "l n_1", c, d)
+    for name, at in (("c", c), ("d", d)):
+        add("parallelogram", "point", "point", name, at, at)
+    frame = pd.DataFrame(rows)
+    frame["l_m"], frame["d_m"], frame["q_1_m"] = mech.L, mech.d, float(mech.ik(pose)[0])
+    return frame
+
+
+def _arrow(ax, r, size: float, color: str, lw: float, ls="-") -> None:
+    """An arrow from (h0, v0) to (h1, v1) of the CSV row ``r``."""
+    style = {"arrowstyle": "-|>", "shrinkA": 0, "shrinkB": 0, "mutation_scale": size}
+    ax.annotate(
+        "",
+        xy=(r.h1, r.v1),
+        xytext=(r.h0, r.v0),
+        arrowprops={**style, "color": color, "lw": lw, "ls": ls},
+    )
+
+
+def draw_fig04(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 4 from its CSV: (a) limb 1 in its vertical plane with the vector loop of eq. (6) and
+    the unit vectors e_1, m_1, n_1, s_1; (b) its 4S parallelogram face-on with the equivalent rod
+    joining the midpoints c_1, d_1 of the short edges."""
+    from parakin.plot import KIND_STYLES, new_figure, save_figure, use_style
+
+    mathname = {
+        "r_b e_1": r"$r_b\,\mathbf{e}_1$",
+        "q_1 m_1": r"$q_1\mathbf{m}_1$",
+        "l n_1": r"$l\,\mathbf{n}_1$",
+        "r_a cos(theta) s_1": r"$r_a\cos\theta\,\mathbf{s}_1$",
+        "r": r"$\mathbf{r}$",
+    }
+    seg_style = {
+        "base": {"color": KIND_STYLES["base"]["color"], "lw": 2.0, "label": "base (edge-on)"},
+        "platform": {
+            "color": KIND_STYLES["platform"]["color"],
+            "lw": 2.5,
+            "label": "platform (edge-on)",
+        },
+        "rail": {"color": "0.55", "lw": 0.9, "ls": (0, (5, 3)), "label": "rail"},
+        "passive": {"color": "0.15", "lw": 1.3, "label": "side rod (length l)"},
+        "slider edge": {
+            "color": KIND_STYLES["actuator"]["color"],
+            "lw": 2.5,
+            "label": "slider edge (length d)",
+        },
+        "platform edge": {
+            "color": KIND_STYLES["platform"]["color"],
+            "lw": 2.5,
+            "label": "platform edge (length d)",
+        },
+    }
+    loop_style = {
+        "loop": {"color": "0.2", "lw": 1.0},
+        "actuator": {"color": KIND_STYLES["actuator"]["color"], "lw": 2.0},
+        "equivalent": {"color": KIND_STYLES["equivalent"]["color"], "lw": 1.6},
+        "position": {"color": "0.4", "lw": 0.9, "ls": "--"},
+    }
+    row = frame.iloc[0]
+    labelled: set[str | None] = set()
+    with use_style():
+        fig, _ = new_figure("double_tall")
+        fig.clear()
+        ax, axp = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.6, 1.0]})
+        for panel, a in (("side", ax), ("parallelogram", axp)):
+            g = frame[frame["panel"] == panel]
+            for r in g[g["element"] == "segment"].itertuples():
+                st = dict(seg_style[r.kind])
+                if st["label"] in labelled:
+                    st["label"] = None  # one legend entry per kind
+                labelled.add(st["label"])
+                a.plot([r.h0, r.h1], [r.v0, r.v1], solid_capstyle="butt", **st)
+            for r in g[g["element"] == "loop"].itertuples():
+                st = loop_style[r.kind]
+                _arrow(a, r, 9, st["color"], st["lw"], st.get("ls", "-"))
+                a.annotate(
+                    mathname[r.name],
+                    ((r.h0 + r.h1) / 2, (r.v0 + r.v1) / 2),
+                    xytext=(6, -10 if r.name in ("r_b e_1", "r_a cos(theta) s_1") else 4),
+                    textcoords="offset points",
+                    fontsize="small",
+                    color=st["color"],
+                )
+            for r in g[g["element"].isin(["unit", "axis"])].itertuples():
+                color = _FIG04_COLORS.get(r.kind, "0.3")
+                _arrow(a, r, 11, color, 2.2)
+                label = r"$z$" if r.element == "axis" else rf"$\mathbf{{{r.kind}}}_1$"
+                a.annotate(
+                    label,
+                    (r.h1, r.v1),
+                    xytext=(3, 3),
+                    textcoords="offset points",
+                    color=color,
+                    fontsize="small",
+                )
+            pts = g[g["element"] == "point"]
+            a.plot(pts["h0"], pts["v0"], "o", color="k", ms=3.5, zorder=6, label="point of §1.2")
+            for r in pts.itertuples():
+                a.annotate(
+                    rf"${r.name}$" if len(r.name) == 1 else r.name,
+                    (r.h0, r.v0),
+                    xytext=(-9, 3),
+                    textcoords="offset points",
+                    fontsize="small",
+                )
+            a.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel(r"along $\mathbf{e}_1$ (m)")
+        ax.set_ylabel(r"$z$ (m)")
+        ax.set_title("(a) limb 1 in its vertical plane: loop of eq. (6)", fontsize="small")
+        axp.set_xlabel(r"along the short edges (m)")
+        axp.set_ylabel(r"along $\mathbf{n}_1$ (m)")
+        axp.set_title(
+            f"(b) its 4S parallelogram: l = {row['l_m']:g} m, d = {row['d_m']:g} m",
+            fontsize="small",
+        )
+        ax.plot([], [], color=loop_style["loop"]["color"], lw=1.0, label="loop vector of eq. (6)")
+        ax.plot([], [], color=loop_style["equivalent"]["color"], lw=1.6, label="equivalent rod c–d")
+        handles, labels = ax.get_legend_handles_labels()
+        more = axp.get_legend_handles_labels()
+        for h, lab in zip(*more):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
+        ax.legend(handles, labels, fontsize="x-small", loc="upper left")
+        fig.suptitle(f"{FIG04_TITLE}; stroke q_1 = {row['q_1_m']:.4f} m")
+    return save_figure(fig, path)
+
+
+@artefact(
+    "fig04",
+    outputs=["fig04_equivalent_limb.png", "fig04_equivalent_limb.csv"],
+    tolerance=DESCRIPTIVE,
+    caption="Fig. 4: the equivalent P(4S) limb and its unit vectors, drawn from our model",
+    draws=[("fig04_equivalent_limb.png", "fig04_equivalent_limb.csv", draw_fig04)],
+)
+def fig04(config: dict, outdir: Path) -> list[Path]:
+    """Fig. 4: the P(4S) limb and its equivalent rod with the unit vectors e_i, m_i, n_i, s_i of
+    eq. (6) (the paper draws a schematic; we draw limb 1 of our model at the home pose)."""
+    return write_and_draw(_fig04_table(), outdir / "fig04_equivalent_limb.csv", draw_fig04)
+
+
 # ---------------------------------------------------------------------------------------- report
 def _geometry_rows(figdir: Path) -> pd.DataFrame:
     return pd.read_csv(figdir / "extra_table1_fit.csv").set_index("geometry")
