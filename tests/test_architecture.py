@@ -2,8 +2,8 @@
 
 Every top-level module (``src/parakin/*.py``) and every solver (``src/parakin/solvers/*.py``)
 works on the :class:`~parakin.mechanisms.base.Mechanism` protocol alone; mechanism-specific code
-(kernels, torch ports, ...) lives beside its mechanism and is reached through a hook of the
-protocol (``kernel()``, ``torch_residual()``). The CLI, the studies and the papers name
+(its kernels in ``parakin.kernels``, ...) lives beside its mechanism and is reached through a
+hook of the protocol (``kernel()``, ``torch_residual()``). The CLI, the studies and the papers name
 mechanisms on purpose and are not checked.
 """
 
@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src"
 
 #: modules of parakin.mechanisms that any module may import: the protocol and shared helpers
-GENERIC_MODULES = {"base", "base_torch"}
+GENERIC_MODULES = {"base"}
 #: names that ``from parakin.mechanisms import ...`` may bring in without naming a mechanism
 GENERIC_NAMES = GENERIC_MODULES | {"Mechanism"}
 #: files allowed to name concrete mechanisms, with the reason
@@ -86,7 +86,6 @@ def test_the_checker_sees_concrete_imports():
     code = "\n".join(
         [
             "from parakin.mechanisms.base import Mechanism",
-            "from parakin.mechanisms.base_torch import TorchConstants",
             "from parakin.mechanisms import Mechanism",
             "from parakin.mechanisms.p3p4s import P3P4S",
             "import parakin.mechanisms.ups2",
@@ -99,7 +98,7 @@ def test_the_checker_sees_concrete_imports():
         ]
     )
     bad = _concrete_imports(code, "parakin.solvers")
-    assert [b.split(":")[0] for b in bad] == ["4", "5", "6", "7", "8", "10"]
+    assert [b.split(":")[0] for b in bad] == ["3", "4", "5", "6", "7", "9"]
 
 
 def test_torch_newton_reaches_mechanisms_only_through_the_protocol():
@@ -110,8 +109,9 @@ def test_torch_newton_reaches_mechanisms_only_through_the_protocol():
 
 
 def test_packages_import_without_torch():
-    """The torch ports are imported lazily (inside ``torch_residual()``): with torch missing the
-    mechanisms and the torch solver still import, and asking for a port says torch is missing."""
+    """torch is imported lazily (the kernels' torch binding, :func:`parakin.kernels.torch_kernel`):
+    with torch missing the mechanisms and the torch solver still import, and asking for a torch
+    residual says torch is missing."""
     code = "\n".join(
         [
             "import sys",
@@ -119,13 +119,14 @@ def test_packages_import_without_torch():
             "import parakin.mechanisms as m",
             "import parakin.solvers.torch_newton as t",
             "assert not t.gpu_available()",
+            "import parakin.kernels as k",
             "assert m.Stewart12().torch_residual() is None",
             "try:",
-            "    m.P3P4S().torch_residual()",
+            "    k.torch_kernel(m.P3P4S().kernel())",
             "except ImportError:",
             "    pass",
             "else:",
-            "    raise AssertionError('a port imported without torch')",
+            "    raise AssertionError('torch kernels built without torch')",
             "try:",
             "    t.torch_residual(m.P3P4S())",
             "except ImportError as e:",

@@ -314,3 +314,17 @@ def test_units_paper_says_when_it_is_si(capsys):
     assert main(["ik", "2ups", "--pose", "10", "-20", "30", "--units", "paper"]) == 0
     captured = capsys.readouterr()
     assert " mm" in captured.out and not captured.err
+
+
+def test_cold_start_imports_no_heavy_module():
+    """A cold `parakin fk` must stay under 1 s (issue 17): importing the CLI, the solvers and the
+    mechanisms loads neither scipy.optimize (0.35 s; imported by the scipy-root solver when used)
+    nor numba, pandas, torch or matplotlib (each imported where it is used)."""
+    code = (
+        "import sys, parakin.cli, parakin.solvers, parakin.mechanisms; "
+        "print(sorted(m for m in ('scipy.optimize', 'numba', 'pandas', 'torch', 'matplotlib') "
+        "if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]"

@@ -82,3 +82,41 @@ def test_bad_options():
         solve_fk(UPS2(), Q[0], method="pso", inertia="cubic", maxiter=2)
     with pytest.raises(ValueError, match="seed"):
         solve_fk(UPS2(), Q, method="pso", seed=[1, 2], maxiter=2)
+
+
+@pytest.mark.parametrize("inertia", ["linear", "constant", "chaotic"])
+def test_compiled_loop_same_as_numpy(inertia, monkeypatch):
+    """With kernels (parakin.kernels: pso_block) the same random stream, the same updates in the
+    same order: the same swarms to the bit, for every schedule whose weights do not depend on
+    which runs are still going."""
+    pytest.importorskip("numba")
+    from parakin import kernels
+    from parakin.mechanisms import Stewart36
+
+    if not kernels.enabled():
+        pytest.skip("compiled kernels switched off")
+    for m, q in ((UPS2(), Q), (Stewart36(), Stewart36().ik(Stewart36().home())[None])):
+
+        def solve(m=m, q=q):
+            w = pso_mod.ChaoticLogistic(mu=4.0) if inertia == "chaotic" else inertia
+            kw = dict(method="pso", tol=1e-9, maxiter=150, swarm=20, vclamp=0.2, inertia=w)
+            return solve_fk(m, np.repeat(q, 3, 0)[:3], seed=[3, 4, 5], **kw)
+
+        got = solve()
+        with monkeypatch.context() as mp:
+            mp.setenv("PARAKIN_KERNELS", "0")
+            ref = solve()
+        for k in ("x", "fitness", "history", "nit", "nfev", "status"):
+            assert np.array_equal(getattr(got, k), getattr(ref, k)), k
+        assert np.allclose(got.inertia, ref.inertia, equal_nan=True)
+
+
+def test_compiled_loop_not_used_with_callback_or_own_fitness(monkeypatch):
+    calls = []
+    monkeypatch.setattr(pso_mod, "_compiled_loop", lambda *a, **k: calls.append(1))
+    m = UPS2()
+    kw = dict(method="pso", tol=1e-9, maxiter=5, seed=1)
+    solve_fk(m, Q[0], callback=lambda k, x, f: None, **kw)
+    fit = lambda x, q: np.sum(m.residual(x, q[:, None, :]) ** 2, -1)  # noqa: E731
+    solve_fk(m, Q[0], fitness=fit, **kw)
+    assert not calls

@@ -290,3 +290,45 @@ def test_independent_check_by_bertini2(mech):
     ours = r.study[:40] / r.study[:40, :1]
     d = np.abs(theirs[:, None] - ours[None]).max(-1)
     assert len(theirs) == 40 and np.all(d.min(0) < 1e-6) and np.all(d.min(1) < 1e-6)
+
+
+# ------------------------------------------------------------------------- compiled tracker
+def test_compiled_tracker_same_as_numpy(mech, random_mechs, monkeypatch):
+    """parakin.kernels.stewart66_track: the same paths, certificates and solutions as the numpy
+    tracker (rounding apart); serial and parallel drivers identical."""
+    pytest.importorskip("numba")
+    from parakin import kernels
+    from parakin.kernels import stewart66_track as tk
+
+    if not kernels.enabled():
+        pytest.skip("compiled kernels switched off")
+    rng = np.random.default_rng(12)
+    for m in (mech, random_mechs[0]):
+        q = m.ik(study.random_pose(rng, 4, m))
+        got = m.fk_all(q, return_info=True)
+        with monkeypatch.context() as mp:
+            mp.setenv("PARAKIN_KERNELS", "0")
+            ref = m.fk_all(q, return_info=True)
+        for k in ("n_found", "n_real", "complete", "is_real"):
+            assert np.array_equal(getattr(got, k), getattr(ref, k)), k
+        assert np.array_equal(np.isnan(got.poses), np.isnan(ref.poses))
+        assert np.nanmax(np.abs(_wrap(got.poses - ref.poses))) < 1e-9
+        assert np.nanmax(np.abs(got.study - ref.study)) < 1e-9
+        assert np.nanmax(got.alpha) < hc.ALPHA0
+    st = mech.fk_start
+    c1 = mech._target_c(q)
+    x0 = np.repeat(st["solutions"][None], len(q), 0).reshape(-1, 8)
+    cc = np.repeat(c1, len(st["solutions"]), 0)
+    args = (st["q0"].real, st["patch"], st["c"], cc, None, x0, {"h0": 0.2, "hmax": 1.0})
+    a, b = tk.track(*args, parallel=False), tk.track(*args, parallel=True)
+    assert all(np.array_equal(u, v) for u, v in zip(a, b))
+
+
+def test_numpy_tracker_when_kernels_are_off(mech, monkeypatch):
+    from parakin.mechanisms import stewart66 as s66
+
+    monkeypatch.setenv("PARAKIN_KERNELS", "0")
+    assert s66._compiled_tracker(mech.fk_start["q0"]) is None
+    monkeypatch.setenv("PARAKIN_KERNELS", "1")
+    q0 = mech.fk_start["q0"].astype(complex) * (1 + 1e-3j)  # a complex geometry: numpy
+    assert s66._compiled_tracker(q0) is None

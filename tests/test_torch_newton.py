@@ -43,7 +43,7 @@ def _t(a):
     return torch.as_tensor(np.asarray(a, dtype=float))
 
 
-# ---------------------------------------------------------------------------- residual ports
+# ---------------------------------------------------------------------------- residual (the kernels)
 @pytest.mark.parametrize("key", IDS)
 def test_residual_matches_numpy(key):
     mech = MECHS[key]
@@ -106,18 +106,44 @@ def test_active_legs_outside_lambda_domain_is_nan_like_numpy():
     np.testing.assert_allclose(got[1], want[1], rtol=0, atol=1e-12)
 
 
-def test_unported_mechanisms_raise_not_implemented():
+def test_mechanisms_without_kernel_raise_not_implemented():
     @dataclasses.dataclass(frozen=True)
     class Sub(P3P4S):  # a subclass may change the kinematics: refused, not solved as its parent
         pass
 
-    for mech in (Stewart12(), DriveMode(), Sub()):
+    for mech in (DriveMode(), Sub(), ActiveLegs(mech=Stewart12(convention="cayley"))):
         with pytest.raises(NotImplementedError, match=type(mech).__name__):
             torch_residual(mech)
-    with pytest.raises(NotImplementedError, match="Stewart12"):
+    with pytest.raises(NotImplementedError, match="DriveMode"):
+        newton_torch(DriveMode(), np.full(6, 0.025), np.zeros(6), device="cpu")
+    # the 12-leg cube has a kernel (12 equations, 6 unknowns): a residual, but no square Newton
+    r = torch_residual(Stewart12())(_t(np.zeros(6)), _t(np.full(12, 0.025)))
+    assert r.shape == (12,)
+    with pytest.raises(ShapeError, match="12 joints"):
         newton_torch(Stewart12(), np.full(12, 0.025), np.zeros(6), device="cpu")
-    with pytest.raises(NotImplementedError, match="cayley"):
-        torch_residual(ActiveLegs(mech=Stewart12(convention="cayley")))
+
+
+def test_own_torch_residual_without_kernel_is_solved():
+    """A mechanism with no kernel but its own torch residual: torch.func gives the Jacobian."""
+
+    @dataclasses.dataclass(frozen=True)
+    class Own(P3P4S):
+        def torch_residual(self):
+            e, m = _t(self.e), _t(self.m)
+
+            def f(pose, joints):
+                rod = pose[..., None, :] - self.delta * e - joints[..., :, None] * m
+                return ((rod * rod).sum(-1) - self.L**2) / (2 * self.L)
+
+            return f
+
+    mech = Own()
+    truth = _poses(mech, n=20)
+    res = newton_torch(mech, mech.ik(truth), None, device="cpu")
+    assert res.success.all()
+    np.testing.assert_allclose(res.x, truth, atol=1e-9)
+    with pytest.raises(ValueError, match="analytic"):
+        newton_torch(mech, mech.ik(truth), None, device="cpu", jacobian="analytic")
 
 
 # ---------------------------------------------------------------------------- the solver

@@ -9,6 +9,8 @@ one batched call. Ratios are taken against ``scipy.optimize.root`` measured in t
 
 from __future__ import annotations
 
+import contextlib
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -124,6 +126,8 @@ GOALS = {
     "lm_per_s": 5e5,
     "stewart36_all_per_s": 2e4,
     "li2017_pso_s": 2.0,
+    "stewart66_all_ms": 1.0,  # issue 19: <= 1 ms per input, >= 2000 inputs/s
+    "stewart66_all_per_s": 2000.0,
 }
 
 
@@ -134,6 +138,20 @@ def _sample(mech: Mechanism, n: int, seed: int) -> tuple[Array, Array]:
     x = rng.uniform(lo, hi, size=(3 * n, mech.n_pose))
     x = x[mech.in_domain(x)][:n]
     return x, mech.ik(x)
+
+
+@contextlib.contextmanager
+def _kernels_off():
+    """``PARAKIN_KERNELS=0`` inside the block (the numpy path), restored after."""
+    old = os.environ.get("PARAKIN_KERNELS")
+    os.environ["PARAKIN_KERNELS"] = "0"
+    try:
+        yield
+    finally:
+        if old is None:
+            del os.environ["PARAKIN_KERNELS"]
+        else:
+            os.environ["PARAKIN_KERNELS"] = old
 
 
 def _best(f: Callable[[], Any], repeats: int) -> float:
@@ -149,6 +167,7 @@ def kernel_goals(
     n_single: int = 200,
     n_batch: int = 100_000,
     n_all: int = 2000,
+    n_all_66: int = 50,
     repeats: int = 3,
     pso: bool = True,
     progress: Callable[[str], None] | None = None,
@@ -156,10 +175,12 @@ def kernel_goals(
     """The compiled path's goals measured in one run (ratios against ``scipy.optimize.root`` in the
     same run): per mechanism, the median single-call latency of ``solve_fk`` (Newton, LM, Broyden,
     BFGS; one joint vector per call, start = home) over ``scipy-root``'s, and the batched Newton
-    and LM throughput (``n_batch`` inputs, one call); the 3-6 Stewart's all-solutions FK (inputs/s)
-    and Li 2017's PSO experiment as published (50 runs x 50 particles x 1000 iterations, seconds).
+    and LM throughput (``n_batch`` inputs, one call); the 3-6 Stewart's all-solutions FK (inputs/s,
+    ``n_all`` inputs) and the 6-6's (ms per input and inputs/s, ``n_all_66`` inputs; 0 skips it),
+    each also against its numpy path (``PARAKIN_KERNELS=0``) in the same run; and Li 2017's PSO
+    experiment as published (50 runs x 50 particles x 1000 iterations, seconds).
     One row per measurement: ``mechanism, what, value, unit, goal, met``."""
-    from parakin.mechanisms import P3P4S, UPS2, Stewart12, Stewart36
+    from parakin.mechanisms import P3P4S, UPS2, Stewart12, Stewart36, Stewart66
 
     rows: list[dict[str, Any]] = []
 
@@ -207,8 +228,26 @@ def kernel_goals(
     mech = Stewart36()
     _, qa = _sample(mech, n_all, seed=19)
     solve_fk(mech, qa[:10], method="all-solutions")
-    t = _best(lambda: solve_fk(mech, qa, method="all-solutions"), 1)
+    t = _best(lambda: solve_fk(mech, qa, method="all-solutions"), repeats)
     add(mech.name, "all-solutions FK", len(qa) / t, "inputs/s", GOALS["stewart36_all_per_s"])
+    with _kernels_off():  # the numpy path, the baseline of the same run
+        t_np = _best(lambda: solve_fk(mech, qa, method="all-solutions"), 1)
+    add(mech.name, "all-solutions FK, numpy path", len(qa) / t_np, "inputs/s", np.nan)
+    add(mech.name, "all-solutions FK vs numpy path", t_np / t, "x", np.nan)
+    if n_all_66:
+        if progress:
+            progress("stewart66 all-solutions")
+        m66 = Stewart66()
+        _, q66 = _sample(m66, n_all_66, seed=20)
+        m66.fk_all(q66[:2])  # warm-up: the geometry's start system, the cached kernels
+        t = _best(lambda: m66.fk_all(q66), repeats)
+        with _kernels_off():
+            t_np = _best(lambda: m66.fk_all(q66), 1)
+        per = GOALS["stewart66_all_ms"]
+        add(m66.name, "all-solutions FK", 1e3 * t / len(q66), "ms/input", per, higher=False)
+        add(m66.name, "all-solutions FK", len(q66) / t, "inputs/s", GOALS["stewart66_all_per_s"])
+        add(m66.name, "all-solutions FK, numpy path", 1e3 * t_np / len(q66), "ms/input", np.nan)
+        add(m66.name, "all-solutions FK vs numpy path", t_np / t, "x", np.nan)
     if pso:
         if progress:
             progress("Li 2017 PSO")
@@ -237,6 +276,24 @@ def kernel_goals(
             GOALS["li2017_pso_s"],
             higher=False,
         )
+        # one run per call as the atlas's PSO rows (40 particles, 300 iterations, eq. 20 fitness):
+        # the compiled loop (parakin.kernels: pso_block) against the numpy loop, same results
+        _, qp = _sample(mech, 10, seed=21)
+        kw = dict(method="pso", tol=1e-9, maxiter=300, swarm=40, vclamp=0.2, inertia="linear")
+
+        def rate() -> float:
+            solve_fk(mech, qp[0], seed=0, **kw)
+            t0 = time.perf_counter()
+            for i in range(len(qp)):
+                solve_fk(mech, qp[i], seed=i, **kw)
+            return len(qp) / (time.perf_counter() - t0)
+
+        r = rate()
+        with _kernels_off():
+            r_np = rate()
+        add(mech.name, "PSO single solve (40 x 300)", r, "solves/s", np.nan)
+        add(mech.name, "PSO single solve (40 x 300), numpy loop", r_np, "solves/s", np.nan)
+        add(mech.name, "PSO single solve vs numpy loop", r / r_np, "x", np.nan)
     return pd.DataFrame(rows)
 
 
@@ -247,7 +304,7 @@ def format_goals(df: pd.DataFrame) -> str:
         goal = (
             ""
             if not np.isfinite(r.goal)
-            else f"{'<=' if r.unit == 's' else '>='} {r.goal:.3g} {r.unit}"
+            else f"{'<=' if r.unit in ('s', 'ms/input') else '>='} {r.goal:.3g} {r.unit}"
         )
         met = "" if not np.isfinite(r.goal) else ("yes" if r.met else "no")
         lines.append(f"| {r.mechanism} | {r.what} | {r.value:.3g} {r.unit} | {goal} | {met} |")
@@ -262,6 +319,7 @@ if __name__ == "__main__":  # python -m parakin.bench [--quick]
         n_single=50 if quick else 200,
         n_batch=10_000 if quick else 100_000,
         n_all=200 if quick else 2000,
+        n_all_66=10 if quick else 50,
         pso=not quick,
         progress=lambda s: print(f"parakin.bench: {s} ...", file=sys.stderr),
     )

@@ -777,7 +777,7 @@ def _version() -> str:
 SOLVER_HELP = {
     "newton": "Newton-Raphson",
     "broyden": "Broyden's good method (quasi-Newton)",
-    "broyden-ls": "Broyden on a redundant (least-squares) system, e.g. the 12-leg drive modes",
+    "broyden-ls": "Broyden, direct update of a rectangular B with pseudo-inverse steps (redundant systems; the 12-leg drive modes' variant beside the paper's inverse update, broyden update=inverse)",
     "bfgs": "BFGS on |residual|^2 / 2",
     "lm": "Levenberg-Marquardt",
     "gauss-newton": "Gauss-Newton (least squares, redundant systems)",

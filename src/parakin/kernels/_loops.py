@@ -62,6 +62,23 @@ def _eval(p, x, q, r):
 
 
 @njit(**_O)
+def _checked(x, r):
+    """``(|r|_inf, x and r finite)``: what the stopping rule (:func:`_code`) is given."""
+    res = _infnorm(r)
+    return res, _finite(x) and math.isfinite(res)
+
+
+@njit(**_O)
+def _max_diag(a):
+    """``max_i a[i, i]``, NaN propagating."""
+    big = -math.inf
+    for i in range(N):
+        if not a[i, i] <= big:
+            big = a[i, i]
+    return big
+
+
+@njit(**_O)
 def _solve(a, b, out, w):
     """``a out = b`` for square ``a`` (n, n): LU with partial pivoting; minimum-norm least squares
     ``pinv(a) b`` where ``a`` is exactly singular; NaN where ``a`` or ``b`` is not finite."""
@@ -207,12 +224,12 @@ def newton_row(p, q, x0, opts, x, info):
     """Newton-Raphson on one pose (see parakin.solvers.newton); info = status, nit, nfev, njev."""
     r = np.empty(M)
     rt = np.empty(M)
-    jac = np.empty((M, N))
-    dx = np.empty(N)
     xt = np.empty(N)
     w = np.empty((N, N + 1))
     a = np.empty((N, N))
     g = np.empty(N)
+    jac = np.empty((M, N))
+    dx = np.empty(N)
     status, res = _start(p, q, x0, x, r, opts, info)
     for _ in range(int(opts[MAXIT])):
         if status != RUNNING:
@@ -224,8 +241,7 @@ def newton_row(p, q, x0, opts, x, info):
             xt[i] = x[i] - dx[i]
         info[2] += _eval(p, xt, q, rt)
         info[1] += 1
-        new_res = _infnorm(rt)
-        finite = _finite(xt) and math.isfinite(new_res)
+        new_res, finite = _checked(xt, rt)
         status = _code(opts, _infnorm(dx), math.nan, False, new_res, finite)
         if finite:
             x[:] = xt
@@ -241,14 +257,14 @@ def lm_row(p, q, x0, opts, x, info):
     """Levenberg-Marquardt with Nielsen's damping on one pose (see parakin.solvers.lm)."""
     r = np.empty(M)
     rt = np.empty(M)
-    jac = np.empty((M, N))
-    h = np.empty(N)
-    mg = np.empty(N)
     xt = np.empty(N)
     w = np.empty((N, N + 1))
     a = np.empty((N, N))
-    damped = np.empty((N, N))
     g = np.empty(N)
+    jac = np.empty((M, N))
+    h = np.empty(N)
+    mg = np.empty(N)
+    damped = np.empty((N, N))
     status, res = _start(p, q, x0, x, r, opts, info)
     mu = 0.0
     nu = 2.0
@@ -256,11 +272,7 @@ def lm_row(p, q, x0, opts, x, info):
         JAC(p, x, q, jac)
         info[3] += 1
         _gram(jac, r, a, g)
-        mu = -math.inf
-        for i in range(N):
-            if not a[i, i] <= mu:  # max with NaN propagating
-                mu = a[i, i]
-        mu = opts[TAU] * mu
+        mu = opts[TAU] * _max_diag(a)
         if mu < 2.2250738585072014e-308:
             mu = 2.2250738585072014e-308
     for _ in range(int(opts[MAXIT])):
@@ -294,8 +306,7 @@ def lm_row(p, q, x0, opts, x, info):
         else:
             mu = mu * nu
             nu = 2.0 * nu
-        new_res = _infnorm(r)
-        finite = _finite(x) and math.isfinite(new_res)
+        new_res, finite = _checked(x, r)
         status = _code(opts, _infnorm(h), _infnorm(g), False, new_res, finite)
         if finite:
             res = new_res
@@ -309,13 +320,13 @@ def broyden_row(p, q, x0, opts, x, info):
     """Broyden's good method on one pose (see parakin.solvers.quasi_newton.broyden)."""
     r = np.empty(M)
     rt = np.empty(M)
-    b = np.empty((M, N))
-    d = np.empty(N)
-    u = np.empty(M)
     xt = np.empty(N)
     w = np.empty((N, N + 1))
     a = np.empty((N, N))
     g = np.empty(N)
+    b = np.empty((M, N))
+    d = np.empty(N)
+    u = np.empty(M)
     status, res = _start(p, q, x0, x, r, opts, info)
     if status == RUNNING:
         JAC(p, x, q, b)
@@ -336,8 +347,7 @@ def broyden_row(p, q, x0, opts, x, info):
             for i in range(N):
                 s += b[k, i] * d[i]
             u[k] = (rt[k] - r[k] - s) * gain
-        new_res = _infnorm(rt)
-        finite = _finite(xt) and math.isfinite(new_res)
+        new_res, finite = _checked(xt, rt)
         status = _code(opts, _infnorm(d), math.nan, False, new_res, finite)
         if finite:
             for k in range(M):
@@ -356,17 +366,17 @@ def bfgs_row(p, q, x0, opts, x, info):
     """BFGS with Armijo backtracking on |r|^2 / 2 for one pose (see parakin.solvers.quasi_newton.bfgs)."""
     r = np.empty(M)
     rt = np.empty(M)
+    xt = np.empty(N)
+    w = np.empty((N, N + 1))
+    a = np.empty((N, N))
+    g = np.empty(N)
     jac = np.empty((M, N))
     hh = np.empty((N, N))
-    g = np.empty(N)
     gn = np.empty(N)
     pp = np.empty(N)
-    xt = np.empty(N)
     y = np.empty(N)
     d = np.empty(N)
     hy = np.empty(N)
-    a = np.empty((N, N))
-    w = np.empty((N, N + 1))
     e = np.empty(N)
     col = np.empty(N)
     status, res = _start(p, q, x0, x, r, opts, info)
@@ -374,10 +384,7 @@ def bfgs_row(p, q, x0, opts, x, info):
         JAC(p, x, q, jac)
         info[3] += 1
         _gram(jac, r, a, g)
-        big = -math.inf
-        for i in range(N):
-            if not a[i, i] <= big:
-                big = a[i, i]
+        big = _max_diag(a)
         if big < 1.0e-300:
             big = 1.0e-300
         lam = opts[REG] * big
@@ -448,8 +455,7 @@ def bfgs_row(p, q, x0, opts, x, info):
             v = abs(alpha * pp[i])
             if v != v or v > step:
                 step = v
-        new_res = _infnorm(r)
-        finite = _finite(x) and math.isfinite(new_res)
+        new_res, finite = _checked(x, r)
         status = _code(opts, step, _infnorm(g), not found, new_res, finite)
         if finite:
             res = new_res
@@ -478,6 +484,111 @@ def verify_row(p, q, x, flags):
         if v > err:
             err = v
     return err
+
+
+# ---------------------------------------------------------------------------- particle swarm
+@njit(**_O)
+def _pso_fitness(p, x, q, r):
+    """Li 2020's eq. (20), ``sum |f_j|`` (inf where not finite), as ``parakin.solvers.pso``."""
+    if not _finite(x):
+        return math.inf
+    RES(p, x, q, r)
+    s = 0.0
+    for k in range(M):
+        s += abs(r[k])
+    return s if math.isfinite(s) else math.inf
+
+
+@njit(**_O)
+def pso_row(p, q, x, v, pb, pf, gb, gf, rnd, w, k0, lo, hi, vmax, coef, state, hist):
+    """Up to ``len(w)`` iterations (``k0, k0 + 1, ...``) of one run of ``parakin.solvers.pso`` with
+    the random block ``rnd (B, 2, P, N)`` and inertia weights ``w``: the same updates in the same
+    order as the numpy loop. ``coef = (c1, c2, ftol, clamp)``; ``state = (running, nfev, nit)``;
+    ``gf`` (1,) the best fitness; ``hist[k]`` the best fitness after iteration k."""
+    c1, c2, ftol, clamp = coef[0], coef[1], coef[2], coef[3] != 0
+    P = x.shape[0]
+    r = np.empty(M)
+    for s in range(w.shape[0]):
+        k = k0 + s
+        if state[0] == 0:
+            hist[k] = gf[0]
+            continue
+        wk = w[s]
+        for i in range(P):
+            for j in range(N):
+                vv = wk * v[i, j] + c1 * rnd[s, 0, i, j] * (pb[i, j] - x[i, j])
+                vv = vv + c2 * rnd[s, 1, i, j] * (gb[j] - x[i, j])
+                if clamp:
+                    vv = min(max(vv, -vmax[j]), vmax[j])
+                v[i, j] = vv
+                x[i, j] = min(max(x[i, j] + vv, lo[j]), hi[j])
+            f = _pso_fitness(p, x[i], q, r)
+            if f < pf[i]:
+                pf[i] = f
+                for j in range(N):
+                    pb[i, j] = x[i, j]
+        gi = 0
+        for i in range(1, P):  # first minimum, as argmin
+            if pf[i] < pf[gi]:
+                gi = i
+        for j in range(N):
+            gb[j] = pb[gi, j]
+        gf[0] = pf[gi]
+        state[1] += P
+        state[2] += 1
+        hist[k] = gf[0]
+        if not (gf[0] > ftol):
+            state[0] = 0
+
+
+@njit(parallel=True, **_O)
+def pso_block(p, Q, X, V, PB, PF, GB, GF, RND, W, k0, lo, hi, vmax, coef, STATE, HIST):
+    """:func:`pso_row` for every run (rows independent: their own random numbers and weights)."""
+    for i in prange(Q.shape[0]):
+        pso_row(
+            p,
+            Q[i],
+            X[i],
+            V[i],
+            PB[i],
+            PF[i],
+            GB[i],
+            GF[i],
+            RND[i],
+            W[i],
+            k0,
+            lo,
+            hi,
+            vmax,
+            coef,
+            STATE[i],
+            HIST[i],
+        )
+
+
+@njit(**_O)
+def pso_block_serial(p, Q, X, V, PB, PF, GB, GF, RND, W, k0, lo, hi, vmax, coef, STATE, HIST):
+    """:func:`pso_block` on one thread (the same rows, the same results)."""
+    for i in range(Q.shape[0]):
+        pso_row(
+            p,
+            Q[i],
+            X[i],
+            V[i],
+            PB[i],
+            PF[i],
+            GB[i],
+            GF[i],
+            RND[i],
+            W[i],
+            k0,
+            lo,
+            hi,
+            vmax,
+            coef,
+            STATE[i],
+            HIST[i],
+        )
 
 
 # ---------------------------------------------------------------------------- batches

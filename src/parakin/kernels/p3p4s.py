@@ -1,84 +1,79 @@
-"""Compiled single-pose kernels of the 3-P(4S) mechanism (:class:`parakin.mechanisms.P3P4S`).
+"""Kernels of the 3-P(4S) mechanism (:class:`parakin.mechanisms.P3P4S`), written once.
 
-The same equations as ``P3P4S.residual`` / ``jacobian_pose`` / ``ik`` / ``in_domain`` /
-``on_assembly``, one pose at a time. ``p`` (see ``P3P4S.kernel``): ``delta, L``, the radial unit
-vectors ``e_i`` (``p[2:11]``, 3 x 3) and the rail unit vectors ``m_i`` (``p[11:20]``).
+``residual`` / ``jacobian`` / ``ik`` / ``in_domain`` / ``on_assembly`` of ``P3P4S``, elementwise
+and branch-free (:mod:`parakin.kernels._math`): one pose under numba, a batch on the trailing
+axis under numpy (what the ``P3P4S`` methods call) and torch. ``p`` (see ``P3P4S.kernel``):
+``delta, L``, the radial unit vectors ``e_i`` (``p[2:11]``, 3 x 3) and the rail unit vectors
+``m_i`` (``p[11:20]``).
 """
 
 from __future__ import annotations
 
-import math
-
-from numba import njit
-
-_OPTS = dict(cache=True, error_model="numpy", nogil=True)
+from parakin.kernels._math import kernel, nan, sqrt, where
 
 
-@njit(**_OPTS)
+@kernel
+def _rod(p, x, q, i, c):
+    """Coordinate ``c`` of rod ``i``: ``d_i - c_i = w_i - l_i m_i``, ``w_i = p - delta e_i`` (eq 3)."""
+    return x[c] - p[0] * p[2 + 3 * i + c] - q[i] * p[11 + 3 * i + c]
+
+
+@kernel
+def _discriminant(p, x, i):
+    """``b_i = w_i . m_i`` and eq (5)'s ``L^2 - |w_i - b_i m_i|^2`` of limb ``i``."""
+    w0 = x[0] - p[0] * p[2 + 3 * i]
+    w1 = x[1] - p[0] * p[3 + 3 * i]
+    w2 = x[2] - p[0] * p[4 + 3 * i]
+    b = w0 * p[11 + 3 * i] + w1 * p[12 + 3 * i] + w2 * p[13 + 3 * i]
+    return b, p[1] * p[1] - ((w0 * w0 + w1 * w1 + w2 * w2) - b * b)
+
+
+@kernel
 def residual(p, x, q, out):
-    """``(|d_i - c_i|^2 - L^2) / 2L`` with rod ``w_i - l_i m_i``, ``w_i = p - delta e_i``."""
-    delta, ll = p[0], p[1]
+    """``(|d_i - c_i|^2 - L^2) / 2L`` (eq 4): metres to first order, polynomial everywhere."""
+    ll = p[1]
     for i in range(3):
-        s = 0.0
-        for c in range(3):
-            rod = x[c] - delta * p[2 + 3 * i + c] - q[i] * p[11 + 3 * i + c]
-            s += rod * rod
-        out[i] = (s - ll * ll) / (2 * ll)
+        r0, r1, r2 = _rod(p, x, q, i, 0), _rod(p, x, q, i, 1), _rod(p, x, q, i, 2)
+        out[i] = (r0 * r0 + r1 * r1 + r2 * r2 - ll * ll) / (2 * ll)
 
 
-@njit(**_OPTS)
+@kernel
 def jacobian(p, x, q, out):
-    """Row i: ``(d_i - c_i) / L``."""
-    delta, ll = p[0], p[1]
+    """``d residual / d p``: row i is ``(d_i - c_i) / L`` (= n_i on the constraint manifold)."""
     for i in range(3):
         for c in range(3):
-            out[i, c] = (x[c] - delta * p[2 + 3 * i + c] - q[i] * p[11 + 3 * i + c]) / ll
+            out[i, c] = _rod(p, x, q, i, c) / p[1]
 
 
-@njit(**_OPTS)
+@kernel
 def ik(p, x, out):
-    """Strokes ``b_i - sqrt(L^2 - |w_i - b_i m_i|^2)``; False where a square root is imaginary."""
-    delta, ll = p[0], p[1]
+    """Strokes ``l_i = b_i - sqrt(L^2 - |w_i - b_i m_i|^2)`` (eqs 2-5, the minus root: the
+    working mode); False (and NaN) where a square root is imaginary."""
     ok = True
     for i in range(3):
-        b = 0.0
-        ww = 0.0
-        for c in range(3):
-            w = x[c] - delta * p[2 + 3 * i + c]
-            b += w * p[11 + 3 * i + c]
-            ww += w * w
-        disc = ll * ll - (ww - b * b)
-        if not disc >= 0:
-            ok = False
-        out[i] = b - math.sqrt(disc) if disc >= 0 else math.nan
+        b, disc = _discriminant(p, x, i)
+        good = disc >= 0
+        ok = ok & good
+        out[i] = where(good, b - sqrt(where(good, disc, 0.0)), nan)
     return ok
 
 
-@njit(**_OPTS)
+@kernel
 def in_domain(p, x):
-    """Every limb's eq. (5) discriminant ``>= 0``."""
-    delta, ll = p[0], p[1]
+    """Every limb's eq. (5) discriminant ``>= 0`` (the caller checks finiteness)."""
+    ok = True
     for i in range(3):
-        b = 0.0
-        ww = 0.0
-        for c in range(3):
-            w = x[c] - delta * p[2 + 3 * i + c]
-            b += w * p[11 + 3 * i + c]
-            ww += w * w
-        if not ll * ll - (ww - b * b) >= 0:
-            return False
-    return True
+        ok = ok & (_discriminant(p, x, i)[1] >= 0)
+    return ok
 
 
-@njit(**_OPTS)
+@kernel
 def on_assembly(p, x, q):
-    """Every rod leans along its rail: ``n_i . m_i >= -1e-6``."""
-    delta, ll = p[0], p[1]
+    """The working mode of :func:`ik`: every rod leans along its rail, ``n_i . m_i >= -1e-6``."""
+    ok = True
     for i in range(3):
         nm = 0.0
         for c in range(3):
-            rod = x[c] - delta * p[2 + 3 * i + c] - q[i] * p[11 + 3 * i + c]
-            nm += rod * p[11 + 3 * i + c]
-        if not nm / ll >= -1e-6:
-            return False
-    return True
+            nm = nm + _rod(p, x, q, i, c) * p[11 + 3 * i + c]
+        ok = ok & (nm / p[1] >= -1e-6)
+    return ok

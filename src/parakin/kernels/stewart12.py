@@ -1,28 +1,26 @@
-"""Compiled single-pose kernels of the 12-leg cube mechanism (:class:`parakin.mechanisms.Stewart12`)
-in its default Euler-parameter convention.
+"""Kernels of the 12-leg cube mechanism (:class:`parakin.mechanisms.Stewart12`) in its default
+Euler-parameter convention, written once.
 
-The same equations as ``Stewart12.residual`` (12 leg lengths minus the joints; NaN outside
-``|lambda| < 1``), ``jacobian_pose``, ``ik``, ``in_domain``. ``p`` (see ``Stewart12.kernel``): the
-platform point of each leg in the moving frame (``p[0:36]``, 12 x 3) and the base points
-(``p[36:72]``, 12 x 3).
+``residual`` (leg lengths minus the joints; NaN outside ``|lambda| < 1``), ``jacobian``, ``ik``,
+``in_domain``, ``on_assembly`` of ``Stewart12`` and of its ``ActiveLegs`` (any subset of the
+legs), elementwise and branch-free (:mod:`parakin.kernels._math`): one pose under numba, a batch
+on the trailing axis under numpy (what the methods call) and torch. ``p`` (see
+``Stewart12.kernel``): for each of the ``n = len(p) // 6`` legs its platform point in the moving
+frame (``p[0:3n]``, n x 3), then the base points (``p[3n:6n]``, n x 3).
 """
 
 from __future__ import annotations
 
-import math
-
-from numba import njit
-
-_OPTS = dict(cache=True, error_model="numpy", nogil=True)
+from parakin.kernels._math import kernel, nan, sqrt, where
 
 
-@njit(**_OPTS)
+@kernel
 def _rotation(x):
-    """``l0`` (NaN outside ``|lambda| < 1``) and the nine entries of
-    ``R = (2 l0^2 - 1) I + 2 (lam lam^T + l0 [lam]x)``, row by row."""
+    """``l0 = sqrt(1 - |lambda|^2)`` (NaN outside ``|lambda| < 1``) and the nine entries of
+    ``R = (2 l0^2 - 1) I + 2 (lam lam^T + l0 [lam]x)``, row by row (docs/ye_stewart12.md#s1.3)."""
     l1, l2, l3 = x[3], x[4], x[5]
     l0sq = 1.0 - (l1 * l1 + l2 * l2 + l3 * l3)
-    l0 = math.sqrt(l0sq) if l0sq > 0 else math.nan
+    l0 = sqrt(where(l0sq > 0, l0sq, nan))
     d = 2 * l0sq - 1
     return l0, (
         d + 2 * l1 * l1,
@@ -37,9 +35,10 @@ def _rotation(x):
     )
 
 
-@njit(**_OPTS)
+@kernel
 def _leg(p, x, r, k):
-    """``w = R p_j(k)`` and the leg vector ``v = M + w - b_k`` (six scalars)."""
+    """``w = R p_j(k)`` and the leg vector ``v = M + w - b_k`` (six scalars), eq (2)."""
+    nb = 3 * (len(p) // 6)
     a0, a1, a2 = p[3 * k], p[3 * k + 1], p[3 * k + 2]
     w0 = r[0] * a0 + r[1] * a1 + r[2] * a2
     w1 = r[3] * a0 + r[4] * a1 + r[5] * a2
@@ -48,40 +47,36 @@ def _leg(p, x, r, k):
         w0,
         w1,
         w2,
-        x[0] + w0 - p[36 + 3 * k],
-        x[1] + w1 - p[37 + 3 * k],
-        x[2] + w2 - p[38 + 3 * k],
+        x[0] + w0 - p[nb + 3 * k],
+        x[1] + w1 - p[nb + 3 * k + 1],
+        x[2] + w2 - p[nb + 3 * k + 2],
     )
 
 
-@njit(**_OPTS)
+@kernel
 def residual(p, x, q, out):
-    """``l_k(pose) - q_k``; NaN where ``|lambda| >= 1``."""
+    """``l_k(pose) - q_k``; NaN where ``|lambda| >= 1`` (a solver iterate may leave the domain:
+    there ``l0`` is NaN, so is every off-diagonal entry of ``R`` and with them every ``w``)."""
     l0, r = _rotation(x)
-    for k in range(12):
-        if not l0 > 0:
-            out[k] = math.nan
-            continue
+    for k in range(len(p) // 6):
         w0, w1, w2, v0, v1, v2 = _leg(p, x, r, k)
-        out[k] = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2) - q[k]
+        out[k] = sqrt(v0 * v0 + v1 * v1 + v2 * v2) - q[k]
 
 
-@njit(**_OPTS)
+@kernel
 def jacobian(p, x, q, out):
-    """``d l / d pose`` (12, 6): ``[e_k, 2 (R p x e_k) . (l0 I + lam lam^T / l0 + [lam]x)]``; NaN
-    where ``|lambda| >= 1``."""
+    """``d l / d pose`` (n, 6): ``[e_k, 2 (R p x e_k) . (l0 I + lam lam^T / l0 + [lam]x)]`` (the
+    angular velocity of the unit quaternion ``(l0, lam)``); NaN where ``|lambda| >= 1`` (``l0`` NaN,
+    as in :func:`residual`)."""
     l0, r = _rotation(x)
-    if not l0 > 0:
-        out[:, :] = math.nan
-        return
     a, b, c = x[3], x[4], x[5]
     # omega / 2 = l0 I + lam lam^T / l0 + [lam]x, entry by entry
     o00, o01, o02 = l0 + a * a / l0, a * b / l0 - c, a * c / l0 + b
     o10, o11, o12 = b * a / l0 + c, l0 + b * b / l0, b * c / l0 - a
     o20, o21, o22 = c * a / l0 - b, c * b / l0 + a, l0 + c * c / l0
-    for k in range(12):
+    for k in range(len(p) // 6):
         w0, w1, w2, v0, v1, v2 = _leg(p, x, r, k)
-        n = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+        n = sqrt(v0 * v0 + v1 * v1 + v2 * v2)
         e0, e1, e2 = v0 / n, v1 / n, v2 / n
         c0 = w1 * e2 - w2 * e1
         c1 = w2 * e0 - w0 * e2
@@ -92,26 +87,24 @@ def jacobian(p, x, q, out):
         out[k, 5] = 2 * (c0 * o02 + c1 * o12 + c2 * o22)
 
 
-@njit(**_OPTS)
+@kernel
 def ik(p, x, out):
-    """Leg lengths; False where ``|lambda| >= 1``."""
+    """Leg lengths ``l_k = |M + R p_j(k) - b_k|`` (eq 2); False (and NaN) where ``|lambda| >= 1``."""
     l0, r = _rotation(x)
-    if not l0 > 0:
-        out[:] = math.nan
-        return False
-    for k in range(12):
+    ok = l0 > 0
+    for k in range(len(p) // 6):
         w0, w1, w2, v0, v1, v2 = _leg(p, x, r, k)
-        out[k] = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-    return True
+        out[k] = where(ok, sqrt(v0 * v0 + v1 * v1 + v2 * v2), nan)
+    return ok
 
 
-@njit(**_OPTS)
+@kernel
 def in_domain(p, x):
-    """``|lambda|^2 < 1``."""
+    """``|lambda|^2 < 1`` (the caller checks finiteness)."""
     return x[3] * x[3] + x[4] * x[4] + x[5] * x[5] < 1.0
 
 
-@njit(**_OPTS)
+@kernel
 def on_assembly(p, x, q):
     """No assembly modes told apart (the base default)."""
-    return True
+    return x[0] == x[0]

@@ -1,26 +1,23 @@
-"""Compiled single-pose kernels of the 3-6 Stewart platform (:class:`parakin.mechanisms.Stewart36`).
+"""Kernels of the 3-6 Stewart platform (:class:`parakin.mechanisms.Stewart36`), written once.
 
-The same equations as ``Stewart36.residual`` / ``jacobian_pose`` / ``ik`` / ``in_domain`` /
-``on_assembly``, one pose at a time, no allocation. ``p`` (see ``Stewart36.kernel``) holds the
-platform point of each leg in the moving frame (``p[0:18]``, 6 x 3) and the base points
-(``p[18:36]``, 6 x 3).
+``residual`` / ``jacobian`` / ``ik`` / ``in_domain`` / ``on_assembly`` of ``Stewart36``,
+elementwise and branch-free (:mod:`parakin.kernels._math`): one pose under numba, a batch on the
+trailing axis under numpy (what the ``Stewart36`` methods call) and torch. ``p`` (see
+``Stewart36.kernel``) holds the platform point of each leg in the moving frame (``p[0:18]``,
+6 x 3) and the base points (``p[18:36]``, 6 x 3).
 """
 
 from __future__ import annotations
 
-import math
-
-from numba import njit
-
-_OPTS = dict(cache=True, error_model="numpy", nogil=True)
+from parakin.kernels._math import cos, kernel, sin, sqrt
 
 
-@njit(**_OPTS)
+@kernel
 def _rotation(x):
-    """The nine entries of ``T = Rz(alpha) Ry(beta) Rx(gamma)``, row by row."""
-    ca, sa = math.cos(x[0]), math.sin(x[0])
-    cb, sb = math.cos(x[1]), math.sin(x[1])
-    cc, sc = math.cos(x[2]), math.sin(x[2])
+    """The nine entries of ``T = Rz(alpha) Ry(beta) Rx(gamma)`` (eq 1), row by row."""
+    ca, sa = cos(x[0]), sin(x[0])
+    cb, sb = cos(x[1]), sin(x[1])
+    cc, sc = cos(x[2]), sin(x[2])
     return (
         ca * cb,
         ca * sb * sc - sa * cc,
@@ -34,7 +31,7 @@ def _rotation(x):
     )
 
 
-@njit(**_OPTS)
+@kernel
 def _leg(p, x, t, i):
     """``w = T a_i`` and the leg vector ``v = O_A + w - B_i`` of leg ``i`` (six scalars)."""
     a0, a1, a2 = p[3 * i], p[3 * i + 1], p[3 * i + 2]
@@ -51,21 +48,21 @@ def _leg(p, x, t, i):
     )
 
 
-@njit(**_OPTS)
+@kernel
 def residual(p, x, q, out):
-    """``f_i = |T A_p(i) + O_A - B_i|^2 - L_i^2``."""
+    """``f_i = |T A_p(i) + O_A - B_i|^2 - L_i^2`` (eq 2)."""
     t = _rotation(x)
     for i in range(6):
         w0, w1, w2, v0, v1, v2 = _leg(p, x, t, i)
         out[i] = v0 * v0 + v1 * v1 + v2 * v2 - q[i] * q[i]
 
 
-@njit(**_OPTS)
+@kernel
 def jacobian(p, x, q, out):
-    """``d f / d pose`` (6, 6), as ``Stewart36.jacobian_pose``: ``2 v_i`` for X, Y, Z and
-    ``2 u_q . (w_i x v_i)`` for the angles (``u_alpha = z``, ``u_beta = Rz(alpha) y``, ``u_gamma = T x``)."""
+    """``d f / d pose`` (6, 6): ``2 u_q . (w_i x v_i)`` for the angles (``u_alpha = z``,
+    ``u_beta = Rz(alpha) y``, ``u_gamma = T x``) and ``2 v_i`` for X, Y, Z."""
     t = _rotation(x)
-    ca, sa = math.cos(x[0]), math.sin(x[0])
+    ca, sa = cos(x[0]), sin(x[0])
     for i in range(6):
         w0, w1, w2, v0, v1, v2 = _leg(p, x, t, i)
         c0 = w1 * v2 - w2 * v1
@@ -79,23 +76,23 @@ def jacobian(p, x, q, out):
         out[i, 5] = 2 * v2
 
 
-@njit(**_OPTS)
+@kernel
 def ik(p, x, out):
     """Leg lengths; every pose has one (returns True)."""
     t = _rotation(x)
     for i in range(6):
         w0, w1, w2, v0, v1, v2 = _leg(p, x, t, i)
-        out[i] = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-    return True
+        out[i] = sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    return x[0] == x[0]
 
 
-@njit(**_OPTS)
+@kernel
 def in_domain(p, x):
     """Every finite pose (the caller checks finiteness)."""
-    return True
+    return x[0] == x[0]
 
 
-@njit(**_OPTS)
+@kernel
 def on_assembly(p, x, q):
     """Above the base, ``Z > 0``."""
     return x[5] > 0

@@ -218,19 +218,19 @@ class Mechanism(ABC):
     fk: Any = None
 
     def kernel(self) -> Kernel | None:
-        """The compiled single-pose kernels of this mechanism (:mod:`parakin.kernels`), or ``None``
-        (the default): numeric FK then runs the generic numpy solvers on the methods above.
-        A kernel must compute exactly what ``residual``, ``jacobian_pose``, ``ik``, ``in_domain``
-        and ``on_assembly`` compute, so subclasses that override one of them return ``None``
-        unless they provide their own."""
+        """This mechanism's kernels (:mod:`parakin.kernels`), or ``None`` (the default): numeric FK
+        then runs the generic numpy solvers on the methods above, and the torch solver needs
+        :meth:`torch_residual`. A kernel module writes ``residual``, ``jacobian_pose``, ``ik``,
+        ``in_domain`` and ``on_assembly`` once, for numba (the compiled loops), numpy (the batched
+        methods, which call it) and torch (:mod:`parakin.solvers.torch_newton`); see
+        docs/kernels.md. Subclasses that override one of those methods return ``None`` unless
+        they provide their own kernel."""
         return None
 
     def torch_residual(self) -> TorchResidual | None:
-        """A torch port of :meth:`residual`, ``f(pose (..., n), joints (..., m)) -> (..., m)`` on
-        torch tensors (for :mod:`parakin.solvers.torch_newton`), or ``None`` (the default): no
-        port. Ports live beside their mechanism (``<mechanism>_torch.py``, imported lazily here:
-        they need torch) and, like :meth:`kernel`, are refused to subclasses that may change the
-        kinematics."""
+        """A torch residual ``f(pose (..., n), joints (..., m)) -> (..., m)`` for a mechanism
+        without a :meth:`kernel` (the torch solver differentiates it with ``torch.func``), or
+        ``None`` (the default). Mechanisms with a kernel need none: the solver runs the kernel."""
         return None
 
     def replace(self, **changes: Any) -> Mechanism:

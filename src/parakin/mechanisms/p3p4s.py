@@ -28,15 +28,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from parakin.errors import SingularityError, UnreachableError
-from parakin.kernels import Kernel
-from parakin.mechanisms.base import (
-    Array,
-    Mechanism,
-    Skeleton,
-    TorchResidual,
-    as_batch,
-    describe_first,
-)
+from parakin.kernels import Kernel, evaluate
+from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
 __all__ = ["P3P4S"]
 
@@ -147,17 +140,16 @@ class P3P4S(Mechanism):
         b = np.einsum("...ij,ij->...i", w, self.m)
         return b, self.L**2 - (np.einsum("...ij,...ij->...i", w, w) - b**2)
 
+    # residual, jacobian_pose, ik, in_domain and on_assembly are the kernels of
+    # parakin.kernels.p3p4s (one source for numpy, numba and torch; docs/kernels.md)
     def is_reachable(self, pose: ArrayLike) -> np.ndarray:
         """True where every limb's eq. (5) square root is real."""
-        _, disc = self._discriminant(as_batch(pose, 3, "pose"))
-        return np.all(disc >= 0, axis=-1)
+        return evaluate(self._kernel, "in_domain", as_batch(pose, 3, "pose"))
 
     def in_domain(self, pose: ArrayLike) -> np.ndarray:
         """Finite and reachable (every limb's eq. (5) square root real)."""
         x = np.asarray(pose, dtype=float)
-        with np.errstate(all="ignore"):
-            _, disc = self._discriminant(x)
-        return np.all(np.isfinite(x), axis=-1) & np.all(disc >= 0, axis=-1)
+        return np.all(np.isfinite(x), axis=-1) & evaluate(self._kernel, "in_domain", x)
 
     def on_assembly(self, pose: ArrayLike, joints: ArrayLike) -> np.ndarray:
         """The working mode of :meth:`ik` (the minus root of eq. 5): every rod leans along its rail,
@@ -165,9 +157,7 @@ class P3P4S(Mechanism):
         workspace edge (there the joint tolerance decides). The mirror assembly below the rails
         (z ~ -0.16 m at home strokes) has ``n_i . m_i < 0``."""
         x, q = np.asarray(pose, dtype=float), np.asarray(joints, dtype=float)
-        with np.errstate(all="ignore"):
-            nm = np.einsum("...ij,ij->...i", self._rod(x, q), self.m) / self.L
-        return np.all(nm >= -1e-6, axis=-1)
+        return evaluate(self._kernel, "on_assembly", x, q)
 
     def ik(self, pose: ArrayLike) -> Array:
         """Strokes ``l_i`` (m) of platform position ``pose`` (m), eqs (2)-(5), working branch.
@@ -177,21 +167,23 @@ class P3P4S(Mechanism):
         Raises UnreachableError where the square root is imaginary.
         """
         x = as_batch(pose, 3, "pose")
-        b, disc = self._discriminant(x)
-        bad = disc < 0
-        if np.any(bad):
+        q, ok = evaluate(self._kernel, "ik", x)
+        if not np.all(ok):
+            _, disc = self._discriminant(x)
+            bad = ~(disc >= 0)
             idx = tuple(np.argwhere(bad)[0])
             raise UnreachableError(
                 f"pose (x, y, z) = {tuple(np.round(x[idx[:-1]], 6).tolist())} m is unreachable: limb "
                 f"{idx[-1] + 1} needs L^2 - x_u^2 - z_u^2 = {disc[idx]:.6g} m^2 >= 0 (eq. 5, "
                 f"L = {self.L} m){describe_first(np.any(bad, axis=-1), x.shape[:-1])}"
             )
-        return b - np.sqrt(disc)
+        return q
 
     def residual(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """``(|d_i - c_i|^2 - L^2) / 2L`` (eq 4): metres to first order, polynomial everywhere."""
-        r = self._rod(as_batch(pose, 3, "pose"), as_batch(joints, 3, "joints"))
-        return (np.einsum("...ij,...ij->...i", r, r) - self.L**2) / (2 * self.L)
+        return evaluate(
+            self._kernel, "residual", as_batch(pose, 3, "pose"), as_batch(joints, 3, "joints")
+        )
 
     def _rod(self, pose: Array, joints: Array) -> Array:
         """Rod vectors ``d_i - c_i = w_i - l_i m_i`` (..., 3, 3)."""
@@ -199,7 +191,9 @@ class P3P4S(Mechanism):
 
     def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """``d residual / d p``: row i is ``(d_i - c_i)/L`` (= n_i on the constraint manifold)."""
-        return self._rod(as_batch(pose, 3, "pose"), as_batch(joints, 3, "joints")) / self.L
+        return evaluate(
+            self._kernel, "jacobian", as_batch(pose, 3, "pose"), as_batch(joints, 3, "joints")
+        )
 
     def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """``d residual / d l``: diagonal, ``-n_i . m_i``."""
@@ -297,18 +291,11 @@ class P3P4S(Mechanism):
 
     # ------------------------------------------------------------------ closed-form FK
     def kernel(self) -> Kernel | None:
-        """Compiled kernels (:mod:`parakin.kernels.p3p4s`); None for a subclass."""
+        """The kernels (:mod:`parakin.kernels.p3p4s`) for the compiled and torch paths; None for
+        a subclass (it may change the kinematics; its numpy methods still run them)."""
         if type(self) is not P3P4S:
             return None
         return self._kernel
-
-    def torch_residual(self) -> TorchResidual | None:
-        """Torch port of :meth:`residual` (:mod:`parakin.mechanisms.p3p4s_torch`); None for a subclass."""
-        if type(self) is not P3P4S:
-            return None
-        from parakin.mechanisms.p3p4s_torch import torch_residual
-
-        return torch_residual(self.e, self.m, self.delta, self.L)
 
     @cached_property
     def _kernel(self) -> Kernel:

@@ -37,12 +37,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from parakin.errors import UnreachableError
-from parakin.kernels import Kernel
+from parakin.kernels import Kernel, evaluate
 from parakin.mechanisms.base import (
     Array,
     Mechanism,
     Skeleton,
-    TorchResidual,
     as_batch,
     describe_first,
 )
@@ -300,15 +299,24 @@ class Stewart12(Mechanism):
         b = self.joint_centres(pose)
         return b[..., list(self.leg_joint), :] - self.base_points
 
+    # ik, residual, jacobian_pose and in_domain of the default Euler-parameter convention are the
+    # kernels of parakin.kernels.stewart12 (one source for numpy, numba and torch; docs/kernels.md)
     def ik(self, pose: ArrayLike) -> Array:
         """Leg lengths ``l_k = |M + R p_{j(k)} - b_k|`` (eq. 2), shape (..., 12), metres."""
+        if self.convention == "euler_parameters":
+            x = as_batch(pose, 6, "pose")
+            self._check_orientation(x)
+            return evaluate(self._kernel, "ik", x)[0]
         v = self.leg_vectors(pose)
         return np.sqrt(np.einsum("...ij,...ij->...i", v, v))
 
     def in_domain(self, pose: ArrayLike) -> np.ndarray:
         """Finite, and ``|lambda|^2 < 1`` for Euler parameters (lambda0 real)."""
         x = np.asarray(pose, dtype=float)
-        return np.all(np.isfinite(x), axis=-1) & ~self._outside(x)
+        fin = np.all(np.isfinite(x), axis=-1)
+        if self.convention == "euler_parameters":
+            return fin & evaluate(self._kernel, "in_domain", x)
+        return fin & ~self._outside(x)
 
     def _outside(self, x: Array) -> np.ndarray:
         """True where lambda leaves the convention's domain (Euler parameters: |lambda| >= 1)."""
@@ -322,6 +330,8 @@ class Stewart12(Mechanism):
         outside the lambda domain (a solver iterate may leave it, which must not raise mid-solve)."""
         q = as_batch(joints, 12, "joints")
         x = as_batch(pose, 6, "pose")
+        if self.convention == "euler_parameters":
+            return evaluate(self._kernel, "residual", x, q)
         bad = self._outside(x)
         r = self.ik(np.where(bad[..., None], 0.0, x)) - q
         return np.where(bad[..., None], np.nan, r)
@@ -330,6 +340,8 @@ class Stewart12(Mechanism):
         """Analytic ``d l / d pose`` (..., 12, 6): ``e_k . dB_j`` (see :meth:`leg_jacobian`); NaN
         rows outside the lambda domain."""
         x = as_batch(pose, 6, "pose")
+        if self.convention == "euler_parameters":
+            return evaluate(self._kernel, "jacobian", x, np.zeros(12))  # reads no joints
         bad = self._outside(x)
         j = self.leg_jacobian(np.where(bad[..., None], 0.0, x), range(12))
         return np.where(bad[..., None, None], np.nan, j)
@@ -413,8 +425,9 @@ class Stewart12(Mechanism):
         return m, u.reshape(*u.shape[:-1], 2, 3)
 
     def kernel(self) -> Kernel | None:
-        """Compiled kernels (:mod:`parakin.kernels.stewart12`) of the default Euler-parameter
-        convention; None for the other conventions and for subclasses."""
+        """The kernels (:mod:`parakin.kernels.stewart12`) of the default Euler-parameter
+        convention for the compiled and torch paths; None for the other conventions and for
+        subclasses."""
         if type(self) is not Stewart12 or self.convention != "euler_parameters":
             return None
         return self._kernel
@@ -423,9 +436,10 @@ class Stewart12(Mechanism):
     def _kernel(self) -> Kernel:
         return Kernel("parakin.kernels.stewart12", self._kernel_params(), 6, 12, self.home())
 
-    def _kernel_params(self) -> Array:
-        p = self.platform_points_local[list(self.leg_joint)]
-        return np.concatenate([p.ravel(), self.base_points.ravel()])
+    def _kernel_params(self, legs: tuple[int, ...] = tuple(range(12))) -> Array:
+        """Platform point (local frame) of each of ``legs`` (0-based), then their base points."""
+        p = self.platform_points_local[[self.leg_joint[k] for k in legs]]
+        return np.concatenate([p.ravel(), self.base_points[list(legs)].ravel()])
 
     def fk(self, joints: ArrayLike, check: bool = True) -> Array:
         """Closed-form FK: the pose (..., 6) from all 12 leg lengths (m), batched.
@@ -705,19 +719,30 @@ class ActiveLegs(Mechanism):
     def in_domain(self, pose: ArrayLike) -> np.ndarray:
         return self.mech.in_domain(pose)
 
-    def torch_residual(self) -> TorchResidual | None:
-        """Torch port of :meth:`residual` (:mod:`parakin.mechanisms.stewart12_torch`, the
-        ``"euler_parameters"`` convention; NotImplementedError for the others); None for a subclass."""
-        if type(self) is not ActiveLegs:
-            return None
-        from parakin.mechanisms.stewart12_torch import active_legs_residual
+    def kernel(self) -> Kernel | None:
+        """The kernels of :mod:`parakin.kernels.stewart12` over the active legs (the default
+        Euler-parameter convention) for the torch path; None for the other conventions and for
+        subclasses. Not compiled (``compiled=False``): ``solve_fk`` keeps the numpy solvers, as
+        before the kernels were one source (compiling loops for each leg count is left to a
+        decision on the solver atlas)."""
+        return self._kernel if type(self) is ActiveLegs and self._by_kernel else None
 
-        legs = [k - 1 for k in self.active]
-        joint_of_leg = np.asarray(self.mech.leg_joint)[legs]
-        return active_legs_residual(
-            self.mech.platform_points_local[joint_of_leg],
-            self.mech.base_points[legs],
-            self.mech.convention,
+    @property
+    def _by_kernel(self) -> bool:
+        """Whether residual and jacobian_pose run the kernels (the Stewart12 itself, not a
+        subclass of it, in the Euler-parameter convention)."""
+        return type(self.mech) is Stewart12 and self.mech.convention == "euler_parameters"
+
+    @cached_property
+    def _kernel(self) -> Kernel:
+        legs = tuple(k - 1 for k in self.active)
+        return Kernel(
+            "parakin.kernels.stewart12",
+            self.mech._kernel_params(legs),
+            6,
+            len(legs),
+            self.home(),
+            compiled=False,
         )
 
     def _inside(self, pose: ArrayLike) -> tuple[Array, Array]:
@@ -731,11 +756,17 @@ class ActiveLegs(Mechanism):
 
     def residual(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """``l_k(pose) - l_k`` over the active legs; NaN rows outside the lambda domain."""
+        if self._by_kernel:
+            q = np.asarray(joints, dtype=float)
+            return evaluate(self._kernel, "residual", as_batch(pose, 6, "pose"), q)
         x, bad = self._inside(pose)
         r = self.ik(x) - np.asarray(joints, dtype=float)
         return np.where(bad[..., None], np.nan, r)
 
     def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
+        if self._by_kernel:
+            x = as_batch(pose, 6, "pose")
+            return evaluate(self._kernel, "jacobian", x, np.zeros(self.n_joints))
         x, bad = self._inside(pose)
         j = self.mech.leg_jacobian(x, [k - 1 for k in self.active])
         return np.where(bad[..., None, None], np.nan, j)

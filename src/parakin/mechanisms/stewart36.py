@@ -31,15 +31,8 @@ from numpy.typing import ArrayLike
 
 from parakin.errors import UnreachableError
 from parakin.geometry import euler_zyx, euler_zyx_from_matrix
-from parakin.kernels import Kernel
-from parakin.mechanisms.base import (
-    Array,
-    Mechanism,
-    Skeleton,
-    TorchResidual,
-    as_batch,
-    describe_first,
-)
+from parakin.kernels import Kernel, evaluate
+from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
 __all__ = ["Stewart36", "TABLE3_ROW1"]
 
@@ -117,16 +110,16 @@ class Stewart36(Mechanism):
         """``A_p(i) - B_i`` (..., 6, 3)."""
         return self.platform_world(pose)[..., LEG_TOP, :] - self.base_points
 
+    # ik, residual, jacobian_pose and on_assembly are the kernels of parakin.kernels.stewart36
+    # (one source for numpy, numba and torch; docs/kernels.md)
     def ik(self, pose: ArrayLike) -> Array:
         """Leg lengths ``L_i = |T A_p(i) + O_A - B_i|`` (eq. 2), shape (..., 6). Every pose has an IK."""
-        v = self.leg_vectors(pose)
-        return np.sqrt(np.einsum("...ij,...ij->...i", v, v))
+        return evaluate(self._kernel, "ik", as_batch(pose, 6, "pose"))[0]
 
     def residual(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """``f_i = |T A_p(i) + O_A - B_i|^2 - L_i^2`` (eq. 3, squared form)."""
         q = as_batch(joints, 6, "joints")
-        v = self.leg_vectors(pose)
-        return np.einsum("...ij,...ij->...i", v, v) - q * q
+        return evaluate(self._kernel, "residual", as_batch(pose, 6, "pose"), q)
 
     def in_domain(self, pose: ArrayLike) -> np.ndarray:
         """Every finite pose has an IK."""
@@ -135,7 +128,8 @@ class Stewart36(Mechanism):
     def on_assembly(self, pose: ArrayLike, joints: ArrayLike) -> np.ndarray:
         """The assembly above the base, ``Z > 0``, as :meth:`fk` and the paper take it (the mirror
         image below the base has the same leg lengths)."""
-        return np.asarray(pose, dtype=float)[..., 5] > 0
+        x, q = np.asarray(pose, dtype=float), np.asarray(joints, dtype=float)
+        return evaluate(self._kernel, "on_assembly", x, q)
 
     def objective(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """The paper's fitness, eq. (4): ``F = sum_i f_i^2`` (the text's "eq. (5)" is a slip, docs/li2017_stewart36.md#g5)."""
@@ -146,20 +140,10 @@ class Stewart36(Mechanism):
         """Analytic ``d f / d pose`` (..., 6, 6): ``2 v_i`` for X, Y, Z and, for the angles,
         ``2 v_i . (dT/dq a_i) = 2 u_q . (w_i x v_i)`` with ``w_i = T a_i`` and ``u_q`` the joint axis
         of angle q in the fixed frame (``dT a = u_q x T a`` for the z-y'-x'' chain): ``u_alpha = z``,
-        ``u_beta = Rz(alpha) y``, ``u_gamma = T x``. One cross product, no 3x3 products."""
+        ``u_beta = Rz(alpha) y``, ``u_gamma = T x``. One cross product, no 3x3 products.
+        ``joints`` is not needed."""
         x = as_batch(pose, 6, "pose")
-        r = euler_zyx(x[..., 0], x[..., 1], x[..., 2])
-        w = self.top_points[LEG_TOP] @ np.swapaxes(
-            r, -1, -2
-        )  # T a_i, (..., 6, 3) (matmul: 4x einsum's speed)
-        v = x[..., None, 3:] + w - self.base_points  # leg vectors
-        c0 = w[..., 1] * v[..., 2] - w[..., 2] * v[..., 1]  # w x v
-        c1 = w[..., 2] * v[..., 0] - w[..., 0] * v[..., 2]
-        c2 = w[..., 0] * v[..., 1] - w[..., 1] * v[..., 0]
-        ca, sa = np.cos(x[..., 0])[..., None], np.sin(x[..., 0])[..., None]
-        tx = r[..., :, 0, None]  # T x, (..., 3, 1)
-        cols = (c2, ca * c1 - sa * c0, tx[..., 0, :] * c0 + tx[..., 1, :] * c1 + tx[..., 2, :] * c2)
-        return 2 * np.concatenate([np.stack(cols, axis=-1), v], axis=-1)
+        return evaluate(self._kernel, "jacobian", x, np.zeros(6))  # the kernel reads no joints
 
     def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """``d f / d L = -2 diag(L)``."""
@@ -293,11 +277,29 @@ class Stewart36(Mechanism):
         ``n_complex`` (roots of the polynomial), ``n_real``, ``n_above`` (Z > 0), ``ik_error``
         (max over the real solutions), ``tail`` (relative size of the interpolated coefficients
         above degree 16: the certificate that the degree is 16).
+
+        Where the compiled kernels are on (:func:`parakin.kernels.enabled`), the same steps run
+        compiled, in parallel for large batches (:mod:`parakin.kernels.stewart36_all`; the roots
+        there come from Aberth-Ehrlich iterations on the polynomial, which is even, in t1^2).
+        Results agree to rounding except on badly conditioned inputs near singular configurations
+        (see ``tests/test_kernels_all.py``).
         """
         q = as_batch(joints, 6, "joints")
         batch = q.shape[:-1]
         qf = q.reshape(-1, 6)
         n = len(qf)
+        from parakin import kernels
+
+        if type(self) is Stewart36 and kernels.enabled():  # compiled: parakin.kernels.stewart36_all
+            from parakin.kernels import stewart36_all
+
+            p = stewart36_all.params(
+                self.top_points[LEG_TOP], self.base_points, self.a, self.home()
+            )
+            par = kernels.use_parallel(n, None)
+            out, info = stewart36_all.fk_all(p, qf, int(newton_steps), parallel=par)
+            out = out.reshape(*batch, 16, 6)
+            return (out, {k: v.reshape(batch) for k, v in info.items()}) if return_info else out
         c, r, u = self.circles(qf)
         ok = np.all(np.isfinite(r), axis=-1)
         out = np.full((n, 16, 6), np.nan)
@@ -396,18 +398,11 @@ class Stewart36(Mechanism):
         return np.take_along_axis(sols, best[..., None, None], axis=-2)[..., 0, :]
 
     def kernel(self) -> Kernel | None:
-        """Compiled kernels (:mod:`parakin.kernels.stewart36`); None for a subclass."""
+        """The kernels (:mod:`parakin.kernels.stewart36`) for the compiled and torch paths; None
+        for a subclass (it may change the kinematics; its numpy methods still run them)."""
         if type(self) is not Stewart36:
             return None
         return self._kernel
-
-    def torch_residual(self) -> TorchResidual | None:
-        """Torch port of :meth:`residual` (:mod:`parakin.mechanisms.stewart36_torch`); None for a subclass."""
-        if type(self) is not Stewart36:
-            return None
-        from parakin.mechanisms.stewart36_torch import torch_residual
-
-        return torch_residual(self.top_points[LEG_TOP], self.base_points)
 
     @cached_property
     def _kernel(self) -> Kernel:

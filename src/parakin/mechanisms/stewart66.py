@@ -86,6 +86,24 @@ TRACK_OPTIONS: dict[str, float] = {
 }
 
 
+def _compiled_tracker(q0: np.ndarray):
+    """:mod:`parakin.kernels.stewart66_track` where the compiled path is on and the geometry's
+    quadrics are real; None otherwise (the numpy tracker)."""
+    from parakin import kernels
+
+    if not kernels.enabled() or np.any(np.imag(q0) != 0):
+        return None
+    from parakin.kernels import stewart66_track
+
+    return stewart66_track
+
+
+def _use_parallel(n_paths: int) -> bool:
+    from parakin import kernels
+
+    return kernels.use_parallel(n_paths, None)
+
+
 def load_start() -> dict[str, np.ndarray]:
     """The stored generic start system (``base``, ``platform``, ``c``, ``patch``, ``solutions``)."""
     with (
@@ -394,15 +412,25 @@ class Stewart66(Mechanism):
             )
             patch = (rng.normal(size=8) + 1j * rng.normal(size=8)) / 4
             x0 = x0 / (x0 @ patch)[:, None]
-        hom = hc.FiberHomotopy(st["q0"], patch, c0, cc, bend)
-        x, ok, steps = hc.track(hom, x0, **TRACK_OPTIONS)
+        ck = _compiled_tracker(st["q0"])
+        par = ck is not None and _use_parallel(len(x0))
+        if ck is not None:  # parakin.kernels.stewart66_track: the same tracker, compiled
+            x, ok, steps = ck.track(st["q0"].real, patch, c0, cc, bend, x0, TRACK_OPTIONS, par)
+        else:
+            hom = hc.FiberHomotopy(st["q0"], patch, c0, cc, bend)
+            x, ok, steps = hc.track(hom, x0, **TRACK_OPTIONS)
         if bend_seed is not None:
             with np.errstate(all="ignore"):
                 x = x / (x @ st["patch"])[:, None]  # back to the common patch
             x = np.where(np.isfinite(x), x, 0)
-        q = np.broadcast_to(self._quadrics_for(c1)[:, None], (n, m, 7, 8, 8)).reshape(-1, 7, 8, 8)
-        x, beta, jn = hc.newton_refine(q, st["patch"], x, iters=3)
-        alpha = hc.certify(q, beta, jn)
+        if ck is not None:
+            cq = np.repeat(np.asarray(c1, dtype=complex), m, axis=0)
+            x, beta, jn, alpha = ck.refine(st["q0"].real, cq, st["patch"], x, 3, par)
+        else:
+            q = np.broadcast_to(self._quadrics_for(c1)[:, None], (n, m, 7, 8, 8))
+            q = q.reshape(-1, 7, 8, 8)
+            x, beta, jn = hc.newton_refine(q, st["patch"], x, iters=3)
+            alpha = hc.certify(q, beta, jn)
         return (
             x.reshape(n, m, 8),
             beta.reshape(n, m),

@@ -36,15 +36,8 @@ from numpy.typing import ArrayLike
 
 from parakin.errors import UnreachableError
 from parakin.geometry import rot_x, rot_y
-from parakin.kernels import Kernel
-from parakin.mechanisms.base import (
-    Array,
-    Mechanism,
-    Skeleton,
-    TorchResidual,
-    as_batch,
-    describe_first,
-)
+from parakin.kernels import Kernel, evaluate
+from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
 __all__ = ["UPS2"]
 
@@ -184,8 +177,9 @@ class UPS2(Mechanism):
     def lengths_closed_form(self, pose: ArrayLike) -> Array:
         """|l_j| from the scalar closed forms (docs/li2020_2ups.md#s1.7; equal to the vector form (9)-(11)):
         ``l1^2 = 4c^2/9 + 3a^2/4 - (2/sqrt3) a Y``, ``l2,3^2 = Q -/+ a (rho + k sin g) sin b`` with
-        ``Q = (rho + k sin g)^2 + k^2 + a^2/4 + (k cos g + Y - h)^2 - a k cos b``. Cheaper: used by
-        :meth:`residual`."""
+        ``Q = (rho + k sin g)^2 + k^2 + a^2/4 + (k cos g + Y - h)^2 - a k cos b``. Cheaper: the
+        forms :meth:`residual`, :meth:`ik` and :meth:`jacobian_pose` evaluate (in the kernels of
+        :mod:`parakin.kernels.ups2`)."""
         x = as_batch(pose, 3, "pose")
         beta, gamma, y = x[..., 0], x[..., 1], x[..., 2]
         a, k = self.a, self.k
@@ -201,21 +195,24 @@ class UPS2(Mechanism):
         l1 = 4 * self.c**2 / 9 + 0.75 * a * a - (2 / _SQ3) * a * y
         return np.sqrt(np.maximum(np.stack([l1, q - s, q + s], axis=-1), 0.0))
 
+    # residual, jacobian_pose, ik, in_domain and on_assembly are the kernels of
+    # parakin.kernels.ups2 (one source for numpy, numba and torch; docs/kernels.md)
     def ik(self, pose: ArrayLike, check_limits: bool = False) -> Array:
-        """Strokes ``q = l(pose) - l(home)`` (m) of ``pose`` = (beta, gamma, Y) (rad, rad, m).
+        """Strokes ``q = l(pose) - l(home)`` (m) of ``pose`` = (beta, gamma, Y) (rad, rad, m), from
+        the closed forms of :meth:`lengths_closed_form`.
 
         Raises UnreachableError where ``|Y| >= c`` (eq 14 has no real rho), and, with
         ``check_limits=True``, where a stroke exceeds eq (19)'s limits.
         """
         x = as_batch(pose, 3, "pose")
-        bad = np.abs(x[..., 2]) >= self.c
+        q, ok = evaluate(self._kernel, "ik", x)
+        bad = ~ok
         if np.any(bad):
             idx = tuple(np.argwhere(bad)[0])
             raise UnreachableError(
                 f"pose Y = {x[idx][2]:.6g} m is unreachable: |Y| must be < c = {self.c} m "
                 f"(eq. 14, rho = sqrt(c^2 - Y^2)){describe_first(bad, x.shape[:-1])}"
             )
-        q = self.lengths(x) - self.home_lengths
         if check_limits:
             self._check_limits(q)
         return q
@@ -223,14 +220,13 @@ class UPS2(Mechanism):
     def in_domain(self, pose: ArrayLike) -> np.ndarray:
         """Finite, with ``|Y| < c`` (eq. 14 has a real rho)."""
         x = np.asarray(pose, dtype=float)
-        return np.all(np.isfinite(x), axis=-1) & (np.abs(x[..., 2]) < self.c)
+        return np.all(np.isfinite(x), axis=-1) & evaluate(self._kernel, "in_domain", x)
 
     def on_assembly(self, pose: ArrayLike, joints: ArrayLike) -> np.ndarray:
         """The working assembly of :meth:`fk`: ``|beta|, |gamma| < 90 deg`` (angles modulo 2 pi), on
         this instance's ``branch`` of eq. (14) (which the pose coordinates cannot leave)."""
-        x = np.asarray(pose, dtype=float)
-        wrapped = (x[..., :2] + np.pi) % (2 * np.pi) - np.pi
-        return np.all(np.abs(wrapped) < np.pi / 2, axis=-1)
+        x, q = np.asarray(pose, dtype=float), np.asarray(joints, dtype=float)
+        return evaluate(self._kernel, "on_assembly", x, q)
 
     def _check_limits(self, q: Array) -> None:
         lim = np.asarray(self.stroke_limits)
@@ -245,44 +241,16 @@ class UPS2(Mechanism):
 
     def residual(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """``f_j = l_j(pose) - l_j(home) - q_j`` (m): eq (18) with strokes as inputs."""
-        x = as_batch(pose, 3, "pose")
-        q = as_batch(joints, 3, "joints")
-        return self.lengths_closed_form(x) - self.home_lengths - q
+        return evaluate(
+            self._kernel, "residual", as_batch(pose, 3, "pose"), as_batch(joints, 3, "joints")
+        )
 
     def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
-        """Analytic ``d l / d (beta, gamma, Y)`` (..., 3, 3): row j is ``(l_j / |l_j|) . d l_j``."""
+        """Analytic ``d l / d (beta, gamma, Y)`` (..., 3, 3), differentiated from the closed forms
+        of :meth:`lengths_closed_form`: ``d(l_j^2) / (2 l_j)`` (equal to the vector form
+        ``(l_j / |l_j|) . d l_j`` of eqs (9)-(11) to rounding). ``joints`` is not needed."""
         x = as_batch(pose, 3, "pose")
-        beta, gamma, y = x[..., 0], x[..., 1], x[..., 2]
-        rho = self._rho(y)
-        sb, cb = np.sin(beta), np.cos(beta)
-        zero, one = np.zeros_like(beta), np.ones_like(beta)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            drho = -y / rho
-        dp = np.stack(
-            [
-                np.stack([rho * cb, zero, -rho * sb], axis=-1),  # d P / d beta
-                np.stack([zero, zero, zero], axis=-1),  # d P / d gamma
-                np.stack([drho * sb, one, drho * cb], axis=-1),  # d P / d Y
-            ],
-            axis=-1,
-        )  # (..., 3 coords, 3 pose)
-        ry, rx = rot_y(beta), rot_x(gamma)
-        ey = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])  # skew(e_y)
-        ex = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # skew(e_x)
-        dr_b = ry @ ey @ rx
-        dr_g = ry @ rx @ ex
-        loc = self.platform_points_local[1:]  # B2', B3'
-        d_b = np.einsum("...ij,kj->...ki", dr_b, loc)  # (..., 2, 3)
-        d_g = np.einsum("...ij,kj->...ki", dr_g, loc)
-        dleg = np.empty(x.shape[:-1] + (3, 3, 3))  # (..., leg, coord, pose)
-        dleg[..., 0, :, :] = self.link_ratio * dp
-        for j in (1, 2):
-            dleg[..., j, :, :] = dp
-            dleg[..., j, :, 0] += d_b[..., j - 1, :]
-            dleg[..., j, :, 1] += d_g[..., j - 1, :]
-        v = self.leg_vectors(x)
-        n = v / np.sqrt(np.einsum("...ij,...ij->...i", v, v))[..., None]
-        return np.einsum("...jc,...jcp->...jp", n, dleg)
+        return evaluate(self._kernel, "jacobian", x, np.zeros(3))  # the kernel reads no joints
 
     def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
         """``d residual / d q = -I``."""
@@ -417,20 +385,11 @@ class UPS2(Mechanism):
         return {b: dataclasses.replace(self, branch=b).fk_all(joints) for b in (1, -1)}
 
     def kernel(self) -> Kernel | None:
-        """Compiled kernels (:mod:`parakin.kernels.ups2`); None for a subclass."""
+        """The kernels (:mod:`parakin.kernels.ups2`) for the compiled and torch paths; None for a
+        subclass (it may change the kinematics; its numpy methods still run them)."""
         if type(self) is not UPS2:
             return None
         return self._kernel
-
-    def torch_residual(self) -> TorchResidual | None:
-        """Torch port of :meth:`residual` (:mod:`parakin.mechanisms.ups2_torch`); None for a subclass."""
-        if type(self) is not UPS2:
-            return None
-        from parakin.mechanisms.ups2_torch import torch_residual
-
-        return torch_residual(
-            self.home_lengths, self.a, self.c, self.h, self.k, self.link_ratio, self.branch
-        )
 
     @cached_property
     def _kernel(self) -> Kernel:

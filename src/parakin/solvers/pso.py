@@ -256,44 +256,75 @@ def pso(
     rand = np.empty((n_runs, _BLOCK, 2, swarm, n))
     if callback is not None:
         callback(0, gbest.copy(), gf.copy())
-    for k in range(1, maxiter + 1):
-        rows = np.flatnonzero(running)
-        if rows.size == 0:
-            history[:, k:] = gf[:, None]
-            break
-        slot = (k - 1) % _BLOCK
-        if slot == 0:
-            for i in rows:
-                rand[i] = gens[i].random((_BLOCK, 2, swarm, n))
-        wk = schedule(k, maxiter, rows)
-        weights[k] = float(np.mean(wk))
-        wk = np.asarray(wk, dtype=float)
-        wk = wk[:, None, None] if wk.ndim == 1 else wk
-        full = rows.size == n_runs
-        idx = slice(None) if full else rows
-        xr, vr, pr = x[idx], v[idx], pbest[idx]
-        r = rand[idx, slot]
-        vr = wk * vr + c1 * r[:, 0] * (pr - xr) + c2 * r[:, 1] * (gbest[idx][:, None, :] - xr)
-        if vmax is not None:
-            vr = np.clip(vr, -vmax, vmax)
-        xr = np.clip(xr + vr, lo, hi)
-        with np.errstate(all="ignore"):
-            fr = rowwise(fit, xr, joints[idx], tail=(len(xr[0]),), fill=np.inf)
-        fr = np.where(np.isfinite(fr), fr, np.inf)
-        better = fr < pf[idx]
-        pr = np.where(better[..., None], xr, pr)
-        pfr = np.where(better, fr, pf[idx])
-        gi = np.argmin(pfr, axis=1)
-        sel = np.arange(len(pfr))
-        x[idx], v[idx], pbest[idx], pf[idx] = xr, vr, pr, pfr
-        gbest[idx] = pr[sel, gi]
-        gf[idx] = pfr[sel, gi]
-        nfev[idx] += swarm
-        nit[idx] += 1
-        history[:, k] = gf
-        running[idx] = gf[idx] > ftol
-        if callback is not None:
-            callback(k, gbest.copy(), gf.copy())
+    fast = (
+        None if callback is not None or fitness is not None else _compiled(mech, inertia, x, joints)
+    )
+    if fast is not None:  # the same iterations, compiled (parakin.kernels: pso_block)
+        kernel, loops = fast
+        _compiled_loop(
+            kernel,
+            loops,
+            joints,
+            x,
+            v,
+            pbest,
+            pf,
+            gbest,
+            gf,
+            nfev,
+            nit,
+            history,
+            weights,
+            running,
+            gens,
+            schedule,
+            maxiter,
+            lo,
+            hi,
+            vmax,
+            c1,
+            c2,
+            ftol,
+        )
+    else:
+        for k in range(1, maxiter + 1):
+            rows = np.flatnonzero(running)
+            if rows.size == 0:
+                history[:, k:] = gf[:, None]
+                break
+            slot = (k - 1) % _BLOCK
+            if slot == 0:
+                for i in rows:
+                    rand[i] = gens[i].random((_BLOCK, 2, swarm, n))
+            wk = schedule(k, maxiter, rows)
+            weights[k] = float(np.mean(wk))
+            wk = np.asarray(wk, dtype=float)
+            wk = wk[:, None, None] if wk.ndim == 1 else wk
+            full = rows.size == n_runs
+            idx = slice(None) if full else rows
+            xr, vr, pr = x[idx], v[idx], pbest[idx]
+            r = rand[idx, slot]
+            vr = wk * vr + c1 * r[:, 0] * (pr - xr) + c2 * r[:, 1] * (gbest[idx][:, None, :] - xr)
+            if vmax is not None:
+                vr = np.clip(vr, -vmax, vmax)
+            xr = np.clip(xr + vr, lo, hi)
+            with np.errstate(all="ignore"):
+                fr = rowwise(fit, xr, joints[idx], tail=(len(xr[0]),), fill=np.inf)
+            fr = np.where(np.isfinite(fr), fr, np.inf)
+            better = fr < pf[idx]
+            pr = np.where(better[..., None], xr, pr)
+            pfr = np.where(better, fr, pf[idx])
+            gi = np.argmin(pfr, axis=1)
+            sel = np.arange(len(pfr))
+            x[idx], v[idx], pbest[idx], pf[idx] = xr, vr, pr, pfr
+            gbest[idx] = pr[sel, gi]
+            gf[idx] = pfr[sel, gi]
+            nfev[idx] += swarm
+            nit[idx] += 1
+            history[:, k] = gf
+            running[idx] = gf[idx] > ftol
+            if callback is not None:
+                callback(k, gbest.copy(), gf.copy())
     res = inf_norm(rowwise(mech.residual, gbest, joints, tail=(joints.shape[-1],)))
     status = np.where(gf <= ftol, Status.CONVERGED, Status.MAXITER).astype(np.int64)
     return PSOResult(
@@ -311,3 +342,100 @@ def pso(
         history=history,
         inertia=weights,
     )
+
+
+def _compiled(mech: Mechanism, inertia: Any, x: Array, joints: Array):
+    """``(kernel, loops)`` where the compiled PSO loop applies: a mechanism with kernels, the
+    default fitness (eq. 20), no callback, and a schedule whose weights do not depend on which
+    runs are still going ("constant", "linear", :class:`ChaoticLogistic`); else None."""
+    if not (isinstance(inertia, ChaoticLogistic) or inertia in ("constant", "linear")):
+        return None
+    from parakin.kernels import kernel_of, loops_of
+
+    kernel = kernel_of(mech)
+    if kernel is None or kernel.n_pose != x.shape[-1] or kernel.n_joints != joints.shape[-1]:
+        return None
+    return kernel, loops_of(kernel)
+
+
+def _compiled_loop(
+    kernel,
+    loops,
+    joints,
+    x,
+    v,
+    pbest,
+    pf,
+    gbest,
+    gf,
+    nfev,
+    nit,
+    history,
+    weights,
+    running,
+    gens,
+    schedule,
+    maxiter,
+    lo,
+    hi,
+    vmax,
+    c1,
+    c2,
+    ftol,
+) -> None:
+    """The iterations of :func:`pso` by ``loops.pso_block``, block by block of :data:`_BLOCK`
+    iterations: the random numbers are drawn here exactly as in the numpy loop (one block per
+    running run at iterations 1, 1 + _BLOCK, ...), the weights of a block asked of the schedule for
+    every run, then every run advances independently (in parallel). Fills the arrays in place."""
+    n_runs, swarm, n = x.shape
+    state = np.zeros((n_runs, 3), dtype=np.int64)  # running, fitness evaluations, iterations
+    state[:, 0] = running
+    q = np.ascontiguousarray(joints, dtype=float)
+    best = np.ascontiguousarray(gf[:, None], dtype=float)
+    rand = np.empty((n_runs, _BLOCK, 2, swarm, n))
+    every = np.arange(n_runs)
+    coef = np.array([c1, c2, ftol, 0.0 if vmax is None else 1.0], dtype=float)
+    vm = np.zeros(n) if vmax is None else np.asarray(vmax, dtype=float)
+    from parakin.kernels import use_parallel
+
+    # several runs: every core (main thread only, see use_parallel); one run: no thread start-up
+    run_block = loops.pso_block if use_parallel(n_runs, n_runs > 1) else loops.pso_block_serial
+    k = 1
+    while k <= maxiter:
+        rows = np.flatnonzero(state[:, 0])
+        if rows.size == 0:
+            history[:, k:] = best
+            break
+        nk = min(_BLOCK, maxiter - k + 1)
+        for i in rows:
+            rand[i] = gens[i].random((_BLOCK, 2, swarm, n))
+        w = np.empty((n_runs, nk))
+        for s in range(nk):
+            w[:, s] = np.broadcast_to(np.asarray(schedule(k + s, maxiter, every), float), n_runs)
+        run_block(
+            kernel.params,
+            q,
+            x,
+            v,
+            pbest,
+            pf,
+            gbest,
+            best,
+            rand,
+            w,
+            k,
+            lo,
+            hi,
+            vm,
+            coef,
+            state,
+            history,
+        )
+        for s in range(nk):  # the mean weight over the runs going at each iteration
+            going = history[:, k + s - 1] > ftol
+            if going.any():
+                weights[k + s] = float(np.mean(w[going, s]))
+        k += nk
+    gf[:] = best[:, 0]
+    nfev += state[:, 1]
+    nit += state[:, 2]

@@ -5,14 +5,17 @@
 iteration on a torch device. It takes and returns numpy (an :class:`FKResult` with the fields,
 status codes and counters of the numpy solvers) so a benchmark can put it beside ``solve_fk``.
 
-The residual is the mechanism's own torch port of ``mech.residual``
-(:meth:`~parakin.mechanisms.base.Mechanism.torch_residual`, kept beside the mechanism in
-``parakin/mechanisms/<mechanism>_torch.py``; this module imports no concrete mechanism); the
-Jacobian comes from ``torch.func`` (exact to rounding: by default one vjp of the batched residual
-vmapped over the output directions, or ``vmap(jacrev)`` / ``vmap(jacfwd)`` per row), the step from
-``torch.linalg.solve_ex``. Ported today: P3P4S, UPS2 (either ``branch``), Stewart36, and ActiveLegs
-of a Stewart12 in the default ``"euler_parameters"`` convention. A mechanism without a port raises
-NotImplementedError.
+The residual and the analytic Jacobian are the mechanism's own kernels
+(:meth:`~parakin.mechanisms.base.Mechanism.kernel`, :func:`parakin.kernels.torch_kernel`): the
+very functions the numpy methods and the compiled loops run, written once beside the mechanism in
+``parakin/kernels/<mechanism>.py`` and evaluated here on torch tensors (this module imports no
+concrete mechanism). A mechanism without a kernel may give a torch residual of its own
+(:meth:`~parakin.mechanisms.base.Mechanism.torch_residual`); its Jacobian then comes from
+``torch.func`` (exact to rounding: one vjp of the batched residual vmapped over the output
+directions, or ``vmap(jacrev)`` / ``vmap(jacfwd)`` per row), as it may for a kernel too
+(``jacobian=``). The step comes from ``torch.linalg.solve_ex``. Kernels today: P3P4S, UPS2
+(either ``branch``), Stewart36, Stewart12 and its ActiveLegs in the default
+``"euler_parameters"`` convention. A mechanism with neither raises NotImplementedError.
 
 Device behaviour: one device-to-host sync per iteration, two integers (how many rows take an LU
 step and how many a pinv step: the stop test and the sizes of the gather); the rows still running
@@ -26,12 +29,11 @@ its last finite iterate.
 torch is an optional dependency (``pip install parakin[nn]``): without it this module still
 imports, :func:`gpu_available` is False and the solver raises ImportError.
 
-Why the torch ports stay beside the compiled kernels (:mod:`parakin.kernels`, numba): they are the
-GPU path of the solver atlas (``torch.func`` Jacobians, ``solve_ex`` on CUDA). On the CPU the
-numba loops are faster (issue 17: the Stewart36 Newton kernel solves a pose in about 2 us, the
-batched numpy/torch paths need 5-25 us), but numba's CUDA target needs a CUDA toolkit and
-kernels written for it, which no machine of this project could build or test; the ports are
-checked against the numpy mechanisms by ``tests/test_torch_newton.py``.
+Why torch beside numba (:mod:`parakin.kernels`): torch runs the kernels on a GPU (the GPU column of
+the solver atlas); numba's CUDA target needs a CUDA toolkit and kernels written for it. On the
+CPU the compiled loops are faster (issue 17: about 2 us per Stewart36 Newton solve, 5-25 us on
+the batched numpy/torch paths). The torch path is checked against the numpy methods and the
+numba kernels by ``tests/test_torch_newton.py`` and ``tests/test_kernels.py``.
 """
 
 from __future__ import annotations
@@ -44,6 +46,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from parakin.errors import ShapeError
+from parakin.kernels import one_source, torch_kernel
 from parakin.mechanisms.base import Mechanism
 from parakin.solvers.result import FKResult, Status, summarize
 
@@ -55,7 +58,7 @@ except ImportError:  # pragma: no cover - exercised only without torch
 if TYPE_CHECKING:  # pragma: no cover
     from torch import Tensor
 
-__all__ = ["default_device", "gpu_available", "newton_torch", "torch_residual"]
+__all__ = ["default_device", "gpu_available", "newton_torch", "torch_jacobian", "torch_residual"]
 
 ResidualFn = Callable[["Tensor", "Tensor"], "Tensor"]
 
@@ -77,25 +80,37 @@ def default_device() -> str:
     return "cuda" if gpu_available() else "cpu"
 
 
-# ============================================================================ residual ports
+# ============================================================================ residual, Jacobian
 def torch_residual(mech: Mechanism) -> ResidualFn:
-    """A torch port of ``mech.residual``: ``f(pose (..., n), joints (..., m)) -> (..., m)``.
+    """``mech.residual`` on torch tensors: ``f(pose (..., n), joints (..., m)) -> (..., m)``.
 
-    The port is the mechanism's own (:meth:`Mechanism.torch_residual`, written beside the
-    mechanism in ``parakin/mechanisms/<mechanism>_torch.py``). It works in the dtype and on the
-    device of ``pose`` (float64 matches numpy to rounding), is batched over any leading axes and
-    composes with ``torch.func`` (vmap, jacfwd, jacrev). Raises NotImplementedError where the
-    mechanism has no port (the hook returns ``None``, as it does for any subclass of a ported
-    type: a subclass may change the kinematics).
+    The mechanism's kernel (:meth:`Mechanism.kernel`, run by :func:`parakin.kernels.torch_kernel`)
+    where it has one written once for all paths (:func:`parakin.kernels.one_source`), else its
+    own :meth:`Mechanism.torch_residual`. It works in the dtype and on
+    the device of ``pose`` (float64 matches numpy to rounding), is batched over any leading axes
+    and composes with ``torch.func`` (vmap, jacfwd, jacrev). Raises NotImplementedError where the
+    mechanism has neither (``kernel()`` returns ``None`` for a subclass of a mechanism with
+    kernels: a subclass may change the kinematics).
     """
     _need_torch()
+    k = mech.kernel()
+    if k is not None and one_source(k.module):
+        return torch_kernel(k)[0]
     fun = mech.torch_residual()
     if fun is None:
         raise NotImplementedError(
             f"no torch residual for mechanism type {type(mech).__name__} "
-            "(its Mechanism.torch_residual() returns None)"
+            "(its Mechanism.kernel() and Mechanism.torch_residual() return None)"
         )
     return fun
+
+
+def torch_jacobian(mech: Mechanism) -> Callable[[Tensor, Tensor], Tensor] | None:
+    """The analytic ``mech.jacobian_pose`` on torch tensors, ``(..., m, n)``, from the
+    mechanism's kernel; ``None`` without one."""
+    _need_torch()
+    k = mech.kernel()
+    return torch_kernel(k)[1] if k is not None and one_source(k.module) else None
 
 
 # ============================================================================ the solver
@@ -108,7 +123,7 @@ def newton_torch(
     maxiter: int = 50,
     device: str | Any | None = None,
     dtype: Any = None,
-    jacobian: str = "vjp",
+    jacobian: str | None = None,
 ) -> FKResult:
     """Newton-Raphson forward kinematics on a torch device; numpy in, numpy out.
 
@@ -116,12 +131,14 @@ def newton_torch(
     in :func:`parakin.solvers.solve_fk`; the result has that batch shape. ``device`` defaults to
     :func:`default_device`, ``dtype`` to ``torch.float64``. A row converges when the inf-norm of its
     residual is ``<= tol``; ``maxiter`` bounds the iterations (Newton steps) per row. Needs a
-    square system (``m == n``) and a mechanism with a torch port (:func:`torch_residual`).
+    square system (``m == n``) and a mechanism with a kernel or a torch residual
+    (:func:`torch_residual`).
 
-    ``jacobian`` picks how ``torch.func`` differentiates the residual (all exact to rounding):
-    ``"vjp"`` (default) one reverse pass of the whole batch, vmapped over the ``m`` output
-    directions (what ``jacrev`` does per row, done for all rows at once: every ported residual
-    computes each row from that row alone; the fastest on CPU), ``"jacrev"``
+    ``jacobian`` picks the Jacobian (all exact to rounding): ``"analytic"`` (the default for a
+    mechanism with a kernel) the kernel's ``jacobian``, the one ``jacobian_pose`` computes; or
+    ``torch.func`` on the residual: ``"vjp"`` (the default without a kernel) one reverse pass of
+    the whole batch, vmapped over the ``m`` output directions (what ``jacrev`` does per row, done
+    for all rows at once: every residual computes each row from that row alone), ``"jacrev"``
     ``vmap(jacrev(residual))`` and ``"jacfwd"`` ``vmap(jacfwd(residual))`` per row.
 
     Counters as the numpy solvers: ``nit`` steps per row, ``nfev`` residual evaluations (one at
@@ -134,9 +151,23 @@ def newton_torch(
 
     batch, q_np, x_np = flatten_problem(mech, joints, x0, tol, maxiter)
     maxiter = int(maxiter)
-    if jacobian not in _JACOBIANS:
-        raise ValueError(f"jacobian = {jacobian!r} must be one of {', '.join(_JACOBIANS)}")
+    if jacobian is not None and jacobian not in ("analytic", *_JACOBIANS):
+        raise ValueError(
+            f"jacobian = {jacobian!r} must be one of analytic, {', '.join(_JACOBIANS)}"
+        )
     fun = torch_residual(mech)
+    analytic = torch_jacobian(mech)
+    if jacobian is None:
+        jacobian = "vjp" if analytic is None else "analytic"
+    if jacobian == "analytic":
+        if analytic is None:
+            raise ValueError(
+                f"jacobian='analytic' needs a kernel; {type(mech).__name__} has none "
+                "(use 'vjp', 'jacrev' or 'jacfwd')"
+            )
+        jac = analytic
+    else:
+        jac = _JACOBIANS[jacobian](fun)
     if mech.n_pose != mech.n_joints:
         raise ShapeError(
             f"newton_torch needs as many equations as unknowns; {type(mech).__name__} has "
@@ -145,7 +176,7 @@ def newton_torch(
 
     dev = torch.device(default_device() if device is None else device)
     dt = torch.float64 if dtype is None else dtype
-    x, nit, nfev, njev, res, status = _solve(fun, q_np, x_np, dev, dt, tol, maxiter, jacobian)
+    x, nit, nfev, njev, res, status = _solve(fun, jac, q_np, x_np, dev, dt, tol, maxiter)
 
     status = np.where(status == _RUNNING, Status.MAXITER, status).astype(np.int64)
     result = FKResult(
@@ -165,17 +196,16 @@ def newton_torch(
 
 def _solve(
     fun: ResidualFn,
+    jac: Callable[[Tensor, Tensor], Tensor],
     q_np: np.ndarray,
     x_np: np.ndarray,
     dev: Any,
     dt: Any,
     tol: float,
     maxiter: int,
-    jacobian: str,
 ) -> tuple[np.ndarray, ...]:
     """The iteration on flat ``(N, m)`` / ``(N, n)`` arrays; returns numpy arrays."""
     n_rows = len(q_np)
-    jac = _JACOBIANS[jacobian](fun)
     with torch.no_grad():
         q = torch.as_tensor(q_np, device=dev, dtype=dt)
         x = torch.as_tensor(x_np, device=dev, dtype=dt).clone()
@@ -250,7 +280,7 @@ def _solve(
 
 def _batched_vjp(fun: ResidualFn) -> Callable[[Tensor, Tensor], Tensor]:
     """``d fun / d pose`` (N, m, n) from one vjp of the batched residual, vmapped over the m
-    output directions: valid because every port computes each row from that row alone."""
+    output directions: valid because every residual computes each row from that row alone."""
 
     def jac(x: Tensor, q: Tensor) -> Tensor:
         _, pull = torch.func.vjp(lambda xx: fun(xx, q), x)

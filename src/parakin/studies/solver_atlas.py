@@ -388,8 +388,8 @@ def glance(df: pd.DataFrame) -> str:
 )
 def kernel_goals(config: dict, outdir: Path) -> list[Path]:
     """The compiled path's speed goals, measured in one run against ``scipy.optimize.root``
-    (:func:`parakin.bench.kernel_goals`): single calls, batched Newton/LM, the 3-6 all-solutions FK
-    and Li 2017's PSO experiment."""
+    (:func:`parakin.bench.kernel_goals`): single calls, batched Newton/LM, the 3-6 and 6-6
+    all-solutions FK (each also against its numpy path) and Li 2017's PSO experiment."""
     from parakin.bench import format_goals
     from parakin.bench import kernel_goals as measure
 
@@ -398,6 +398,7 @@ def kernel_goals(config: dict, outdir: Path) -> list[Path]:
         n_single=cfg["n_single"],
         n_batch=cfg["n_batch"],
         n_all=cfg["n_all"],
+        n_all_66=cfg["n_all_66"],
         repeats=cfg["repeats"],
         progress=lambda s: print(f"  kernel goals: {s}", file=sys.stderr),
     )
