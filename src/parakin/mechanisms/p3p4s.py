@@ -170,13 +170,14 @@ class P3P4S(Mechanism):
         q, ok = evaluate(self._kernel, "ik", x)
         if not np.all(ok):
             _, disc = self._discriminant(x)
-            bad = ~(disc >= 0)
-            idx = tuple(np.argwhere(bad)[0])
-            raise UnreachableError(
-                f"pose (x, y, z) = {tuple(np.round(x[idx[:-1]], 6).tolist())} m is unreachable: limb "
-                f"{idx[-1] + 1} needs L^2 - x_u^2 - z_u^2 = {disc[idx]:.6g} m^2 >= 0 (eq. 5, "
-                f"L = {self.L} m){describe_first(np.any(bad, axis=-1), x.shape[:-1])}"
-            )
+            bad = disc < 0  # a non-finite pose gives NaN strokes: its callers name it not finite
+            if np.any(bad):
+                idx = tuple(np.argwhere(bad)[0])
+                raise UnreachableError(
+                    f"pose (x, y, z) = {tuple(np.round(x[idx[:-1]], 6).tolist())} m is unreachable: "
+                    f"limb {idx[-1] + 1} needs L^2 - x_u^2 - z_u^2 = {disc[idx]:.6g} m^2 >= 0 (eq. 5, "
+                    f"L = {self.L} m){describe_first(np.any(bad, axis=-1), x.shape[:-1])}"
+                )
         return q
 
     def residual(self, pose: ArrayLike, joints: ArrayLike) -> Array:
