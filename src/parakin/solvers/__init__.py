@@ -27,6 +27,7 @@ numpy solver.
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from typing import Any
 
@@ -90,7 +91,7 @@ def _rows(values: ArrayLike, size: int, what: str) -> Array:
 
 
 def _check_settings(tol: float, maxiter: int, joint_tol: float | None) -> None:
-    if not (isinstance(tol, (int, float, np.number)) and np.isfinite(tol) and tol >= 0):
+    if not (isinstance(tol, (int, float, np.number)) and math.isfinite(tol) and tol >= 0):
         raise ValueError(f"tol = {tol!r} must be a finite number >= 0")
     if isinstance(maxiter, bool) or int(maxiter) != maxiter or not 0 <= maxiter <= MAXITER_LIMIT:
         raise ValueError(f"maxiter = {maxiter!r} must be an integer in [0, {MAXITER_LIMIT}]")

@@ -150,16 +150,17 @@ def solve_one(
     jtol = default_joint_tol(tol, options) if joint_tol is None else float(joint_tol)
     status = judge_one(int(info[0]), bool(info[4]), bool(info[5]), float(out[1]), jtol)
     message = "converged" if status >= 0 else summarize(np.array([status]), maxiter)
+    # 0-d views of this call's own work arrays (nothing else holds them): no copies needed
     return FKResult(
         x=x,
         success=np.array(status >= 0),
         status=np.array(status, dtype=np.int64),
-        nit=info[1, ...].copy(),
-        nfev=info[2, ...].copy(),
-        njev=info[3, ...].copy(),
-        residual=out[0, ...].copy(),
+        nit=info[1, ...],
+        nfev=info[2, ...],
+        njev=info[3, ...],
+        residual=out[0, ...],
         wall_time=time.perf_counter() - start,
         method=method,
         message=message,
-        joint_error=out[1, ...].copy(),
+        joint_error=out[1, ...],
     )

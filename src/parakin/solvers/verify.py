@@ -37,6 +37,8 @@ JOINT_TOL_FLOOR = 1e-8
 def default_joint_tol(tol: float, options: dict[str, Any]) -> float:
     """100 x the accuracy the call asked for (``tol``, or the step / fitness tolerance ``xtol``,
     ``eps``, ``ftol`` of a method that stops on it), at least :data:`JOINT_TOL_FLOOR`."""
+    if not options:  # the common single call: tol alone
+        return max(JOINT_TOL_FLOOR, 100.0 * tol)
     asked = [tol] + [
         float(options[k]) for k in ("xtol", "eps", "ftol") if options.get(k) is not None
     ]
