@@ -86,7 +86,7 @@ def test_bad_options():
 
 @pytest.mark.parametrize("inertia", ["linear", "constant", "chaotic"])
 def test_compiled_loop_same_as_numpy(inertia, monkeypatch):
-    """With kernels (parakin.kernels: pso_block) the same random stream, the same updates in the
+    """With kernels (parakin.kernels: pso_row) the same random stream, the same updates in the
     same order: the same swarms to the bit, for every schedule whose weights do not depend on
     which runs are still going."""
     pytest.importorskip("numba")

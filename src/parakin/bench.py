@@ -277,7 +277,7 @@ def kernel_goals(
             higher=False,
         )
         # one run per call as the atlas's PSO rows (40 particles, 300 iterations, eq. 20 fitness):
-        # the compiled loop (parakin.kernels: pso_block) against the numpy loop, same results
+        # the compiled loop (parakin.kernels: pso_row) against the numpy loop, same results
         _, qp = _sample(mech, 10, seed=21)
         kw = dict(method="pso", tol=1e-9, maxiter=300, swarm=40, vclamp=0.2, inertia="linear")
 

@@ -335,15 +335,25 @@ def _generated(module: str, n_joints: int, n_pose: int, numba_version: str) -> t
     """The name and text of the loops module generated for ``module``: the name ends in a hash of
     the text, the kernel sources and the numba version."""
     template = (Path(__file__).parent / "_loops.py").read_text()
+    # name -> (driver arguments, body for row i): a serial and a prange-parallel driver each
+    pso = "p, Q, X, V, PB, PF, GB, GF, RND, W, k0, lo, hi, vmax, coef, STATE, HIST"
+    drivers = {
+        **{
+            name: (
+                "p, Q, X0, opts, X, info, res",
+                f"res[i] = {name}_row(p, Q[i], X0[i], opts, X[i], info[i])",
+            )
+            for name in METHODS
+        },
+        "verify": ("p, Q, X, flags, err", "err[i] = verify_row(p, Q[i], X[i], flags[i])"),
+        "pso": (
+            pso,
+            "pso_row(" + ", ".join(a + "[i]" if a.isupper() else a for a in pso.split(", ")) + ")",
+        ),
+    }
     batch = []
-    for name in (*METHODS, "verify"):
-        args = "p, Q, X, flags, err" if name == "verify" else "p, Q, X0, opts, X, info, res"
-        body = (
-            "err[i] = verify_row(p, Q[i], X[i], flags[i])"
-            if name == "verify"
-            else f"res[i] = {name}_row(p, Q[i], X0[i], opts, X[i], info[i])"
-        )
-        if name != "verify":  # one pose, solved and checked in one call (the single-call path)
+    for name, (args, body) in drivers.items():
+        if name in METHODS:  # one pose, solved and checked in one call (the single-call path)
             batch.append(
                 f"@njit(**_O)\ndef {name}_one(p, q, x0, opts, x, info, out):\n"
                 "    if not (_finite(q) and _finite(x0)):\n        info[0] = 999\n        return\n"

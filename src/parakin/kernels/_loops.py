@@ -541,55 +541,6 @@ def pso_row(p, q, x, v, pb, pf, gb, gf, rnd, w, k0, lo, hi, vmax, coef, state, h
             state[0] = 0
 
 
-@njit(parallel=True, **_O)
-def pso_block(p, Q, X, V, PB, PF, GB, GF, RND, W, k0, lo, hi, vmax, coef, STATE, HIST):
-    """:func:`pso_row` for every run (rows independent: their own random numbers and weights)."""
-    for i in prange(Q.shape[0]):
-        pso_row(
-            p,
-            Q[i],
-            X[i],
-            V[i],
-            PB[i],
-            PF[i],
-            GB[i],
-            GF[i],
-            RND[i],
-            W[i],
-            k0,
-            lo,
-            hi,
-            vmax,
-            coef,
-            STATE[i],
-            HIST[i],
-        )
-
-
-@njit(**_O)
-def pso_block_serial(p, Q, X, V, PB, PF, GB, GF, RND, W, k0, lo, hi, vmax, coef, STATE, HIST):
-    """:func:`pso_block` on one thread (the same rows, the same results)."""
-    for i in range(Q.shape[0]):
-        pso_row(
-            p,
-            Q[i],
-            X[i],
-            V[i],
-            PB[i],
-            PF[i],
-            GB[i],
-            GF[i],
-            RND[i],
-            W[i],
-            k0,
-            lo,
-            hi,
-            vmax,
-            coef,
-            STATE[i],
-            HIST[i],
-        )
-
-
 # ---------------------------------------------------------------------------- batches
-# __BATCH__ (build() appends a serial and a prange-parallel driver per solver here)
+# __BATCH__ (build() appends a serial and a prange-parallel driver per solver, for verify_row and
+# for pso_row (pso_serial, pso_parallel: rows independent, own random numbers and weights) here)

@@ -259,7 +259,7 @@ def pso(
     fast = (
         None if callback is not None or fitness is not None else _compiled(mech, inertia, x, joints)
     )
-    if fast is not None:  # the same iterations, compiled (parakin.kernels: pso_block)
+    if fast is not None:  # the same iterations, compiled (parakin.kernels: pso_row)
         kernel, loops = fast
         _compiled_loop(
             kernel,
@@ -383,7 +383,7 @@ def _compiled_loop(
     c2,
     ftol,
 ) -> None:
-    """The iterations of :func:`pso` by ``loops.pso_block``, block by block of :data:`_BLOCK`
+    """The iterations of :func:`pso` by ``loops.pso_parallel``, block by block of :data:`_BLOCK`
     iterations: the random numbers are drawn here exactly as in the numpy loop (one block per
     running run at iterations 1, 1 + _BLOCK, ...), the weights of a block asked of the schedule for
     every run, then every run advances independently (in parallel). Fills the arrays in place."""
@@ -399,7 +399,7 @@ def _compiled_loop(
     from parakin.kernels import use_parallel
 
     # several runs: every core (main thread only, see use_parallel); one run: no thread start-up
-    run_block = loops.pso_block if use_parallel(n_runs, n_runs > 1) else loops.pso_block_serial
+    run_block = loops.pso_parallel if use_parallel(n_runs, n_runs > 1) else loops.pso_serial
     k = 1
     while k <= maxiter:
         rows = np.flatnonzero(state[:, 0])
