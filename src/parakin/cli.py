@@ -1,10 +1,12 @@
-"""The ``parakin`` command line: ``ik``, ``fk``, ``bench``, ``reproduce``, ``report`` and ``readme``.
+"""The ``parakin`` command line (``parakin --help`` lists every command; ``parakin CMD --help``
+its options).
 
-Bad input (a wrong number of values, an unreachable pose, an unknown solver, a malformed config)
-exits with status 2 and one line on stderr, never a traceback. SI units by default; ``--units
-paper`` reads and prints the units the paper uses. ``ik`` and ``fk`` take many poses or joint
-vectors from a file (``--input``, CSV or .npy, one per row) and write them to one (``--output``);
-``fk --all`` lists every real solution where the mechanism has an all-solutions method.
+Bad input (a wrong number of values, an unreachable pose, an unknown solver, a malformed config or
+file) exits with status 2 and one line on stderr, never a traceback. SI units by default;
+``--units paper`` reads and prints the units the paper uses. ``ik`` and ``fk`` take many poses or
+joint vectors from a file (``--input``, CSV or .npy, one per row) and write them to one
+(``--output``, atomically: :func:`parakin.io.atomic_writer`); each reads what the other writes.
+An ``fk`` answer near a singularity (another solution close by) gets a one-line warning.
 """
 
 from __future__ import annotations
@@ -22,7 +24,8 @@ import numpy as np
 
 from parakin import mechanisms
 from parakin.errors import ParakinError
-from parakin.units import from_si, parse_quantity, to_si
+from parakin.io import read_rows, read_text, write_rows
+from parakin.units import TO_SI, from_si, parse_quantity, to_si
 
 EXIT_BAD_INPUT = 2
 EXIT_NOT_CONVERGED = 1
@@ -32,6 +35,10 @@ EXIT_NOT_CONVERGED = 1
 MAXITER_LIMIT = 100_000
 #: largest magnitude of a --param value in SI units (m, rad): far beyond any real mechanism
 PARAM_LIMIT = 1e6
+#: largest |angle| of a pose, a start or a joint (rad, about 159 turns). The spacing of doubles
+#: at 1e3 is 1.1e-13 rad, below every accuracy the solvers promise; near 4.5e3 rad it reaches
+#: 1e-12 rad and at 1e308 it is larger than a turn: such an angle names no orientation at all.
+ANGLE_LIMIT = 1e3
 #: what argparse must read as a (negative) number, not an option: -1, -1.5, -.5, -1e-3, -1.5E+02, -inf, -nan
 _NEGATIVE_NUMBER = re.compile(
     r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE
@@ -57,6 +64,13 @@ def finite_float(text: str) -> float:
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
     return value
+
+
+def nonempty(text: str) -> str:
+    """A non-empty string (``--output ''`` is a mistake, not a request for the default)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"{text!r} is empty")
+    return text
 
 
 def nonnegative_float(text: str) -> float:
@@ -117,6 +131,21 @@ def _finite(values: np.ndarray, what: str, inputs: np.ndarray) -> np.ndarray:
     return values
 
 
+def _angles(values: np.ndarray, names, units, option: str) -> np.ndarray:
+    """``values`` if every angle among them (unit ``rad`` or ``deg``) is within
+    :data:`ANGLE_LIMIT`; else a ValueError naming the value and the limit in its unit."""
+    for k, unit in enumerate(units):
+        if unit in ("rad", "deg"):
+            limit = ANGLE_LIMIT / TO_SI[unit]
+            worst = float(np.max(np.abs(np.atleast_2d(values)[..., k])))
+            if not worst <= limit:
+                raise ValueError(
+                    f"{option}: {names[k]} = {worst:.6g} {unit} is beyond the limit |angle| <= "
+                    f"{limit:.6g} {unit} ({ANGLE_LIMIT:g} rad; a pose angle is a few turns at most)"
+                )
+    return values
+
+
 def _dumps(obj) -> str:
     """Strict JSON (no NaN or Infinity)."""
     return json.dumps(obj, allow_nan=False)
@@ -164,180 +193,33 @@ def _units_note(mech, command: str, paper: bool) -> None:
         )
 
 
-#: file formats of --input and --output
-FILE_FORMATS = (".csv", ".npy")
-#: most rows one --input file may hold
-MAX_ROWS = 10_000_000
-
-
-def _format_of(path: str, option: str) -> str:
-    suffix = Path(path).suffix.lower()
-    if suffix not in FILE_FORMATS:
-        raise ValueError(f"{option} {path}: the file name must end in {' or '.join(FILE_FORMATS)}")
-    return suffix
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
-def _header_name(token: str) -> tuple[str, str | None]:
-    """``"x [mm]"`` -> ``("x", "mm")``; ``"x"`` -> ``("x", None)``."""
-    m = re.fullmatch(r"\s*([^\[\]]*?)\s*(?:\[\s*([^\]]*?)\s*\])?\s*", token)
-    return (m.group(1), m.group(2)) if m else (token.strip(), None)
-
-
-def read_rows(
-    path: str, names: Sequence[str], units: Sequence[str], option: str = "--input"
-) -> np.ndarray:
-    """The ``(N, n)`` values of a CSV or .npy file, one pose or joint vector per row.
-
-    A CSV may start with a header; where it names every one of ``names`` (e.g. ``x [m]`` or ``x``,
-    in any order, other columns ignored: what ``--output`` writes reads back) those columns are
-    taken, and a unit in brackets must be the one ``--units`` reads. Without a header the file
-    has exactly ``n`` columns in the order of ``names``. Lines starting with ``#`` are comments.
-    """
-    n = len(names)
-    fmt = _format_of(path, option)
-    if fmt == ".npy":
-        try:
-            a = np.load(path, allow_pickle=False)
-        except ValueError as exc:
-            raise ValueError(
-                f"{option} {path}: not a numeric .npy array ({_one_line(exc)})"
-            ) from None
-        if a.dtype.kind not in "iuf" or a.ndim not in (1, 2) or a.shape[-1] != n:
-            raise ValueError(
-                f"{option} {path}: a .npy file must hold a numeric array of shape (N, {n}) "
-                f"({', '.join(names)}), got {a.dtype} {a.shape}"
-            )
-        a = np.atleast_2d(a.astype(float))
-    else:
-        with open(path, newline="") as fh:
-            lines = [
-                (k + 1, line.strip())
-                for k, line in enumerate(fh)
-                if line.strip() and not line.lstrip().startswith("#")
-            ]
-        if not lines:
-            raise ValueError(f"{option} {path}: the file holds no rows")
-        if len(lines) > MAX_ROWS + 1:
-            raise ValueError(f"{option} {path}: more than {MAX_ROWS} rows")
-        cells = [(k, [c.strip() for c in line.split(",")]) for k, line in lines]
-        columns = list(range(n))
-        if not any(_is_number(c) for c in cells[0][1]):  # a header (no cell of it is a number)
-            header = [_header_name(c) for c in cells[0][1]]
-            found = {name: (i, unit) for i, (name, unit) in enumerate(header)}
-            if all(name in found for name in names):
-                columns = [found[name][0] for name in names]
-                for name, want in zip(names, units):
-                    unit = found[name][1]
-                    if unit not in (None, "", want) and not (unit == "-" and want == "1"):
-                        raise ValueError(
-                            f"{option} {path}: column {name!r} is in {unit} but these --units read "
-                            f"{name} in {want}"
-                        )
-            elif len(header) != n:
-                raise ValueError(
-                    f"{option} {path}: the header {cells[0][1]} names neither the columns "
-                    f"{list(names)} nor {n} columns"
-                )
-            cells = cells[1:]
-            if not cells:
-                raise ValueError(f"{option} {path}: the file holds a header and no rows")
-        rows = []
-        for k, row in cells:
-            if len(row) < max(columns) + 1 or (columns == list(range(n)) and len(row) != n):
-                raise ValueError(
-                    f"{option} {path}, line {k}: {len(row)} values, expected {n} "
-                    f"({', '.join(names)})"
-                )
-            try:
-                rows.append([float(row[c]) for c in columns])
-            except ValueError:
-                raise ValueError(f"{option} {path}, line {k}: {row} are not all numbers") from None
-        a = np.asarray(rows, dtype=float).reshape(-1, n)
-    if len(a) == 0:
-        raise ValueError(f"{option} {path}: the file holds no rows")
-    bad = ~np.all(np.isfinite(a), axis=-1)
-    if np.any(bad):
-        raise ValueError(
-            f"{option} {path}: row {int(np.argmax(bad)) + 1} is not finite "
-            f"({np.array2string(a[int(np.argmax(bad))], precision=6)})"
-        )
-    return a
-
-
-def write_rows(
-    path: str,
-    names: Sequence[str],
-    units: Sequence[str],
-    values: np.ndarray,
-    extra: dict[str, Sequence] | None = None,
-    lead: dict[str, Sequence] | None = None,
-) -> None:
-    """Write ``values (N, n)`` to a CSV (header ``name [unit]``, then ``extra`` columns; ``lead``
-    columns first) or ``.npy`` (the values only, any shape). Written to a temporary file first."""
-    fmt = _format_of(path, "--output")
-    target = Path(path)
-    tmp = target.with_name(f".{target.name}.tmp")
-    try:
-        if fmt == ".npy":
-            with open(tmp, "wb") as fh:
-                np.save(fh, np.asarray(values, dtype=float))
-        else:
-            header = [
-                *(lead or {}),
-                *(f"{n} [{u}]" if u != "1" else n for n, u in zip(names, units)),
-                *(extra or {}),
-            ]
-            v = np.atleast_2d(values)
-            with open(tmp, "w", newline="") as fh:
-                fh.write(",".join(header) + "\n")
-                for i in range(len(v)):
-                    cells = [str(c[i]) for c in (lead or {}).values()]
-                    cells += ["" if not math.isfinite(x) else repr(float(x)) for x in v[i]]
-                    cells += [_cell(c[i]) for c in (extra or {}).values()]
-                    fh.write(",".join(cells) + "\n")
-        tmp.replace(target)
-    finally:
-        tmp.unlink(missing_ok=True)
-
-
-def _cell(value) -> str:
-    if isinstance(value, (bool, np.bool_)):
-        return "true" if value else "false"
-    if isinstance(value, (float, np.floating)):
-        return "" if not math.isfinite(value) else repr(float(value))
-    text = str(value)
-    return f'"{text}"' if "," in text else text
-
-
-def _inputs(args, what: str, names, units, n) -> np.ndarray:
-    """The values of ``--pose``/``--joints`` (one vector or a batch) or of ``--input FILE``."""
-    given = getattr(args, what)
+def _inputs(args, mech, what: str, paper: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The values of ``--pose``/``--joints`` (one vector or a batch) or of ``--input FILE``, as
+    given (in ``--units``) and in SI, every one finite and every angle within :data:`ANGLE_LIMIT`."""
+    kind = "pose" if what == "pose" else "joint"
+    names, units = getattr(mech, f"{kind}_names"), _units(mech, kind, paper)
+    values = getattr(args, what)
     if args.input is not None:
-        if given is not None:
+        if values is not None:
             raise ValueError(f"give --{what} or --input, not both")
-        return read_rows(args.input, names, units)
-    if given is None:
+        given = read_rows(args.input, names, units)
+    elif values is None:
         raise ValueError(f"give --{what} VALUES or --input FILE (CSV or .npy, one row each)")
-    return _batch(given, n, f"--{what}", names)
+    else:
+        given = _batch(values, len(names), f"--{what}", names)
+    option = f"--{what}" if args.input is None else f"--input {args.input}"
+    _angles(given, names, units, option)
+    return given, _finite(to_si(given, units), f"{option} in SI units", given)
 
 
 def cmd_ik(args) -> int:
     mech = _mechanism(args.mechanism, args.param)
     paper = args.units == "paper"
     pu, ju = _units(mech, "pose", paper), _units(mech, "joint", paper)
-    given = _inputs(args, "pose", mech.pose_names, pu, mech.n_pose)
-    pose = _finite(to_si(given, pu), "--pose in SI units", given)
+    given, pose = _inputs(args, mech, "pose", paper)
     with np.errstate(all="ignore"):
         joints = _finite(from_si(mech.ik(pose), ju), "the inverse kinematics", given)
-    if args.output:
+    if args.output is not None:
         write_rows(args.output, mech.joint_names, ju, np.atleast_2d(joints))
         print(
             f"parakin ik: {len(np.atleast_2d(joints))} joint vector(s) written to {args.output}",
@@ -356,7 +238,7 @@ def cmd_ik(args) -> int:
                 }
             )
         )
-    elif not args.output:
+    elif args.output is None:
         for q in np.atleast_2d(joints):
             print(_fmt_vector(mech.joint_names, q, ju))
     _units_note(mech, "ik", paper)
@@ -364,33 +246,61 @@ def cmd_ik(args) -> int:
 
 
 def cmd_fk(args) -> int:
-    from parakin.solvers import METHODS, solve_fk
-
     mech = _mechanism(args.mechanism, args.param)
     paper = args.units == "paper"
     pu, ju = _units(mech, "pose", paper), _units(mech, "joint", paper)
-    given = _inputs(args, "joints", mech.joint_names, ju, mech.n_joints)
-    joints = _finite(to_si(given, ju), "--joints in SI units", given)
+    given, joints = _inputs(args, mech, "joints", paper)
     if args.all:
         if args.solver is not None or args.x0 is not None:
             raise ValueError(
                 "--all lists every solution of the all-solutions method: it takes no --solver or --x0"
             )
         return _fk_all(args, mech, given, joints, pu, ju)
+    res = _solve(args, mech, joints, pu)
     with np.errstate(all="ignore"):
-        mech.check_joints(
-            joints
-        )  # unreachable joints: the mechanism's own error, whatever the solver
-    method = args.solver or ("closed-form" if mech.fk is not None else "newton")
+        pose = _finite(from_si(res.x, pu), "the solution in --units " + args.units, given)
+    near = res.success & res.near_singular
+    if args.output is not None:
+        _write_fk(args.output, mech, pu, pose, res, near)
+    if args.json:
+        out = {
+            "mechanism": mech.name,
+            "parameters": mech.parameters(),
+            "joints": given.tolist(),
+            "joint_units": ju,
+            "pose_units": pu,
+            **res.to_dict(),
+            **_conditioning_fields(res, pu),
+        }
+        out["x"] = pose.tolist()
+        print(_dumps(out))
+    elif args.output is None:
+        for x in np.atleast_2d(pose):
+            print(_fmt_vector(mech.pose_names, x, pu))
+    if not np.all(res.success):
+        print(f"parakin fk: error: {res.message} ({_why(res, args.tol)})", file=sys.stderr)
+        return EXIT_NOT_CONVERGED
+    if np.any(near):
+        print(f"parakin fk: warning: {_near_warning(mech, res, near, pu)}", file=sys.stderr)
+    _units_note(mech, "fk", paper)
+    return 0
+
+
+def _solve(args, mech, joints: np.ndarray, pu):
+    """``solve_fk`` with the command's solver, start and tolerances (joints checked first)."""
+    from parakin.solvers import METHODS, solve_fk
+
+    with np.errstate(all="ignore"):  # unreachable joints: the mechanism's own error, any solver
+        mech.check_joints(joints)
+    method = args.solver if args.solver is not None else _default_solver(mech)
     if method not in METHODS:
         raise ValueError(f"unknown solver {method!r}; known: {', '.join(sorted(METHODS))}")
-    x0 = (
-        None
-        if args.x0 is None
-        else to_si(_batch(args.x0, mech.n_pose, "--x0", mech.pose_names), pu)
-    )
+    x0 = None
+    if args.x0 is not None:
+        x0 = _batch(args.x0, mech.n_pose, "--x0", mech.pose_names)
+        x0 = to_si(_angles(x0, mech.pose_names, pu, "--x0"), pu)
     options = {"network": _network(mech, args.network)} if method == "hybrid" else {}
-    res = solve_fk(
+    return solve_fk(
         mech,
         joints,
         x0=x0,
@@ -400,41 +310,60 @@ def cmd_fk(args) -> int:
         joint_tol=args.joint_tol,
         **options,
     )
-    with np.errstate(all="ignore"):
-        pose = _finite(from_si(res.x, pu), "the solution in --units " + args.units, given)
-    if args.output:
-        flat = np.atleast_2d(pose)
-        extra = {
-            "success": np.atleast_1d(res.success),
-            "status": [_status_name(v) for v in np.atleast_1d(res.status)],
-            "nit": np.atleast_1d(res.nit),
-            "residual": np.atleast_1d(res.residual).astype(float),
-            "joint_error_m": np.atleast_1d(res.joint_error).astype(float),
-        }
-        write_rows(args.output, mech.pose_names, pu, flat, extra=extra)
-        print(
-            f"parakin fk: {len(flat)} pose(s) written to {args.output} ({int(np.sum(res.success))} converged)",
-            file=sys.stderr,
-        )
-    if args.json:
-        out = {
-            "mechanism": mech.name,
-            "parameters": mech.parameters(),
-            "joints": given.tolist(),
-            "joint_units": ju,
-            "pose_units": pu,
-            **res.to_dict(),
-        }
-        out["x"] = pose.tolist()
-        print(_dumps(out))
-    elif not args.output:
-        for x in np.atleast_2d(pose):
-            print(_fmt_vector(mech.pose_names, x, pu))
-    if not np.all(res.success):
-        print(f"parakin fk: error: {res.message} ({_why(res, args.tol)})", file=sys.stderr)
-        return EXIT_NOT_CONVERGED
-    _units_note(mech, "fk", paper)
-    return 0
+
+
+def _default_solver(mech) -> str:
+    return "closed-form" if mech.fk is not None else "newton"
+
+
+def _write_fk(path: str, mech, pu, pose: np.ndarray, res, near: np.ndarray) -> None:
+    flat = np.atleast_2d(pose)
+    extra = {
+        "success": np.atleast_1d(res.success),
+        "status": [_status_name(v) for v in np.atleast_1d(res.status)],
+        "nit": np.atleast_1d(res.nit),
+        "residual": np.atleast_1d(res.residual).astype(float),
+        "joint_error_m": np.atleast_1d(res.joint_error).astype(float),
+        "near_singular": np.atleast_1d(near),
+    }
+    write_rows(path, mech.pose_names, pu, flat, extra=extra)
+    print(
+        f"parakin fk: {len(flat)} pose(s) written to {path} ({int(np.sum(res.success))} converged)",
+        file=sys.stderr,
+    )
+
+
+def _conditioning_fields(res, pu) -> dict:
+    """The JSON fields of ``res.conditioning`` (offsets in the printed units)."""
+    c = res.conditioning
+    return {
+        "near_singular": (res.success & c.near_singular).tolist(),
+        "condition": _finite_or_none(c.condition),
+        "nearest_other_solution_offset": _finite_or_none(from_si(c.neighbour, pu)),
+    }
+
+
+def _finite_or_none(a: np.ndarray):
+    a = np.asarray(a, dtype=float)
+    return np.where(np.isfinite(a), a, None).tolist()
+
+
+def _near_warning(mech, res, near: np.ndarray, pu) -> str:
+    """One line: the (first) answer near a singularity and how far its neighbour is estimated."""
+    c = res.conditioning
+    flat = np.atleast_1d(near)
+    i = int(np.argmax(flat))
+    offset = np.abs(from_si(np.reshape(c.neighbour, (-1, mech.n_pose))[i], pu))
+    size = ", ".join(
+        f"{np.max(offset[[k for k, v in enumerate(pu) if v == unit]]):.2g}{_unit(unit)}"
+        for unit in dict.fromkeys(pu)
+    )
+    which = f"{int(flat.sum())} of {flat.size} poses; row {i + 1} has" if flat.size > 1 else ""
+    return (
+        f"near a singularity: {which + ' ' if which else ''}another solution of the same joints "
+        f"about {size} away (condition number {float(np.reshape(c.condition, -1)[i]):.3g}); "
+        "the start decides which one is returned (see --x0)"
+    )
 
 
 def all_solutions_of(mech, joints: np.ndarray) -> list[list[tuple[str, np.ndarray, bool]]]:
@@ -496,7 +425,7 @@ def _fk_all(args, mech, given, joints, pu, ju) -> int:
         for _, x, _ in rows:
             _finite(from_si(x, pu), "a solution in --units " + args.units, given)
     counts = [len(rows) for rows in found]
-    if args.output:
+    if args.output is not None:
         if Path(args.output).suffix.lower() == ".npy":
             k = max(counts + [1])
             a = np.full((len(found), k, mech.n_pose), np.nan)
@@ -543,7 +472,7 @@ def _fk_all(args, mech, given, joints, pu, ju) -> int:
                 }
             )
         )
-    elif not args.output:
+    elif args.output is None:
         q = np.atleast_2d(given)
         for i, rows in enumerate(found):
             print(f"{_fmt_vector(mech.joint_names, q[i], ju)}: {len(rows)} real solution(s)")
@@ -608,11 +537,11 @@ def cmd_bench(args) -> int:
     the summary ``benchmarks.md`` (what the pipeline's ``extra_benchmarks`` rule writes)."""
     import pandas as pd
 
-    from parakin.config import DEFAULT_CONFIG, QUICK_CONFIG, load_config
+    from parakin.config import QUICK_CONFIG, load_run_config
     from parakin.papers import PAPERS
     from parakin.studies import solver_atlas as extras
 
-    config = load_config([DEFAULT_CONFIG, QUICK_CONFIG] if args.quick else [DEFAULT_CONFIG])
+    config = load_run_config([QUICK_CONFIG] if args.quick else [])
     root = Path(args.outdir) if args.outdir else Path(config["figures_dir"])
     names = args.name or ["atlas", "kernels", *BENCHES]
     tables = []
@@ -663,13 +592,20 @@ BENCHES = {
 def cmd_readme(args) -> int:
     """Copy the "at a glance" block of ``figures/benchmarks.md`` into README (``--check``: only compare)."""
     from parakin.config import ROOT
-    from parakin.studies.solver_atlas import readme_block, sync_readme
+    from parakin.glance import GLANCE_BEGIN, GLANCE_END
+    from parakin.report import STATUS_BEGIN, STATUS_END, readme_blocks_match, sync_status
+    from parakin.studies.solver_atlas import BEGIN, END, readme_block, sync_readme
 
-    readme = Path(args.readme) if args.readme else ROOT / "README.md"
-    bench = Path(args.benchmarks) if args.benchmarks else ROOT / "figures" / "benchmarks.md"
-    from parakin.report import readme_blocks_match, sync_status
-
+    readme = Path(args.readme) if args.readme is not None else ROOT / "README.md"
+    bench = (
+        Path(args.benchmarks) if args.benchmarks is not None else ROOT / "figures" / "benchmarks.md"
+    )
     report_csv = bench.with_name("report.csv")  # the status table: from report.csv and the registry
+    blocks = [(BEGIN, END)] + (
+        [(STATUS_BEGIN, STATUS_END), (GLANCE_BEGIN, GLANCE_END)] if report_csv.exists() else []
+    )
+    _marked(readme, "--readme", blocks)  # each file blamed for its own missing block
+    _marked(bench, "--benchmarks", blocks[:1])
     if args.check:
         same = readme_block(readme.read_text()) == readme_block(bench.read_text())
         print(f"{readme}: benchmark block {'matches' if same else 'differs from'} {bench}")
@@ -685,8 +621,18 @@ def cmd_readme(args) -> int:
     return 0
 
 
+def _marked(path: Path, option: str, blocks: list[tuple[str, str]]) -> None:
+    """Raise a ValueError naming ``path`` unless it holds every ``begin ... end`` block."""
+    text = read_text(path, option)
+    for begin, end in blocks:
+        if not 0 <= text.find(begin) < text.find(end):
+            raise ValueError(f"{option} {path} has no {begin} ... {end} block")
+
+
 def _config(args) -> dict:
-    from parakin.config import DEFAULT_CONFIG, load_config, validate_sections
+    """The config of ``--config-json`` (one rule's sections), or config/config.yaml with the
+    ``--config`` overlays merged on top (as the pipeline merges --configfile)."""
+    from parakin.config import load_run_config, validate_sections
 
     if args.config_json:  # one pipeline rule's sections (registry.prune_config)
         config = json.loads(args.config_json)
@@ -694,7 +640,7 @@ def _config(args) -> dict:
             raise ValueError(f"--config-json must be a JSON object, got {type(config).__name__}")
         # the pipeline validated the whole config once (workflow/rules/common.smk)
         return config if getattr(args, "validated", False) else validate_sections(config)
-    return load_config(args.config or [DEFAULT_CONFIG])
+    return load_run_config(args.config or [])
 
 
 def cmd_reproduce(args) -> int:
@@ -713,23 +659,23 @@ def cmd_reproduce(args) -> int:
 
 
 def cmd_check(args) -> int:
-    from parakin.config import load_config
+    from parakin.config import load_run_config
     from parakin.pipeline import check
 
-    config = load_config(args.config) if args.config else None
-    results = Path(args.results or (config or _default_config())["figures_dir"])
-    record = Path(args.record or (config or _default_config())["record_dir"] or "figures")
+    config = load_run_config(args.config or [])
+    results = Path(args.results or config["figures_dir"])
+    record = Path(args.record or config["record_dir"] or "figures")
     out = Path(args.out) if args.out else results.parent / "reproduction_check"
-    csv, md, line = check(results, record, out, args.studies or None)
+    csv, md, line = check(results, record, out, args.studies or config["studies"])
     print(f"{line}; see {md}")
     bad = line.count(" differs") + line.count(" missing")
     return EXIT_NOT_CONVERGED if args.strict and bad else 0
 
 
 def _default_config() -> dict:
-    from parakin.config import DEFAULT_CONFIG, load_config
+    from parakin.config import load_run_config
 
-    return load_config(DEFAULT_CONFIG)
+    return load_run_config()
 
 
 def cmd_which(args) -> int:
@@ -824,47 +770,108 @@ def _mechanism_help(what: str) -> str:
     return "\n".join(lines)
 
 
+class _CommandList(argparse.RawTextHelpFormatter):
+    """``parakin --help``: each command and its help on one line (argparse measures the commands
+    one indent short and would push a long name's help onto the next line)."""
+
+    def add_argument(self, action) -> None:
+        super().add_argument(action)
+        if isinstance(action, argparse._SubParsersAction):
+            widest = max(map(len, action.choices), default=0) + self._current_indent + 4
+            self._action_max_length = max(self._action_max_length, widest)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="parakin", description=__doc__.splitlines()[0])
+    """The ``parakin`` parser: one subcommand per ``_add_*`` function below; ``parakin --help``
+    lists them, one line each, from the parser itself."""
+    parser = _Parser(
+        prog="parakin",
+        formatter_class=_CommandList,
+        description="parakin: parallel-mechanism kinematics (IK/FK, solvers, benchmarks) and the "
+        "reproduction of four papers.",
+        epilog="parakin COMMAND --help shows a command's options. Bad input: exit status 2 and "
+        "one line on stderr.",
+    )
     parser.add_argument("--version", action="version", version=f"parakin {_version()}")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    names = sorted(mechanisms.REGISTRY)
+    sub = parser.add_subparsers(
+        title="commands", dest="command", required=True, metavar="COMMAND", parser_class=_Parser
+    )
+    for add in (
+        _add_ik,
+        _add_fk,
+        _add_bench,
+        _add_readme,
+        _add_reproduce,
+        _add_check,
+        _add_which,
+        _add_record,
+        _add_report,
+    ):
+        add(sub)
+    return parser
 
-    def mech_args(p):
-        p.add_argument("mechanism", choices=names, help="mechanism name")
-        p.add_argument(
-            "--param",
-            action="append",
-            default=[],
-            metavar="NAME=VALUE",
-            help="override a mechanism parameter (SI, or with a unit: phi=35deg, d=120mm)",
-        )
-        p.add_argument(
-            "--units", choices=["si", "paper"], default="si", help="units of input and output"
-        )
-        p.add_argument("--json", action="store_true", help="print a JSON object")
 
-    def file_args(p, what):
-        p.add_argument(
-            "--input",
-            default=None,
-            metavar="FILE",
-            help=f"read many {what}s from FILE (.csv, optional header 'name [unit]', or .npy), one per row",
-        )
-        p.add_argument(
-            "--output",
-            default=None,
-            metavar="FILE",
-            help="write the results to FILE (.csv with a header, or .npy) instead of printing them",
-        )
+def _mechanism_args(p) -> None:
+    p.add_argument("mechanism", choices=sorted(mechanisms.REGISTRY), help="mechanism name")
+    p.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override a mechanism parameter (SI, or with a unit: phi=35deg, d=120mm)",
+    )
+    p.add_argument(
+        "--units", choices=["si", "paper"], default="si", help="units of input and output"
+    )
+    p.add_argument("--json", action="store_true", help="print a JSON object")
 
+
+def _file_args(p, what: str) -> None:
+    p.add_argument(
+        "--input",
+        type=nonempty,
+        default=None,
+        metavar="FILE",
+        help=f"read many {what}s from FILE (.csv, optional header 'name [unit]', or .npy), one per row",
+    )
+    p.add_argument(
+        "--output",
+        type=nonempty,
+        default=None,
+        metavar="FILE",
+        help="write the results to FILE (.csv with a header, or .npy) instead of printing them",
+    )
+
+
+def _config_args(p) -> None:
+    p.add_argument(
+        "--config",
+        action="append",
+        type=nonempty,
+        default=None,
+        metavar="YAML",
+        help="config overlay(s) merged onto config/config.yaml in order, as snakemake "
+        "--configfile (e.g. config/quick.yaml)",
+    )
+    p.add_argument(
+        "--config-json", default=None, help="the whole config as JSON (what Snakemake passes)"
+    )
+    p.add_argument(
+        "--validated",
+        action="store_true",
+        help="the --config-json sections were validated by the pipeline (workflow/rules/common.smk "
+        "validates the whole config once); skip validating them again",
+    )
+
+
+def _add_ik(sub) -> None:
     p = sub.add_parser(
         "ik",
         help="inverse kinematics: joints of a pose",
         epilog=_mechanism_help("pose"),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    mech_args(p)
+    _mechanism_args(p)
     p.add_argument(
         "--pose",
         type=finite_float,
@@ -872,16 +879,18 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="pose value(s), n per pose (several poses: n values each, one after the other)",
     )
-    file_args(p, "pose")
+    _file_args(p, "pose")
     p.set_defaults(func=cmd_ik)
 
+
+def _add_fk(sub) -> None:
     p = sub.add_parser(
         "fk",
         help="forward kinematics: pose of joint values",
         epilog=_solver_help() + "\n\n" + _mechanism_help("joints"),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    mech_args(p)
+    _mechanism_args(p)
     p.add_argument(
         "--joints",
         type=finite_float,
@@ -889,7 +898,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="joint value(s), m per pose (several inputs: m values each, one after the other)",
     )
-    file_args(p, "joint vector")
+    _file_args(p, "joint vector")
     p.add_argument(
         "--all",
         action="store_true",
@@ -898,6 +907,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--solver",
+        type=nonempty,
         default=None,
         metavar="NAME",
         help="solver (default: closed-form where one exists, else newton); the list is below",
@@ -926,11 +936,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--network",
+        type=nonempty,
         default=None,
         help="trained network for --solver hybrid (default: the pipeline's)",
     )
     p.set_defaults(func=cmd_fk)
 
+
+def _add_bench(sub) -> None:
     p = sub.add_parser(
         "bench", help="run benchmarks (every solver, same inputs, ratios against scipy in one run)"
     )
@@ -941,39 +954,33 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--quick", action="store_true", help="small sizes (config/quick.yaml)")
     p.add_argument(
-        "--outdir", default=None, help="figures folder (default: figures_dir of the config)"
+        "--outdir",
+        type=nonempty,
+        default=None,
+        help="figures folder (default: figures_dir of the config)",
     )
     p.add_argument("--json", action="store_true", help="print the tables as JSON records")
     p.set_defaults(func=cmd_bench)
 
+
+def _add_readme(sub) -> None:
     p = sub.add_parser(
         "readme", help="copy the benchmark summary block of figures/benchmarks.md into README.md"
     )
-    p.add_argument("--readme", default=None, help="README file (default: the project's)")
     p.add_argument(
-        "--benchmarks", default=None, help="benchmarks.md (default: figures/benchmarks.md)"
+        "--readme", type=nonempty, default=None, help="README file (default: the project's)"
+    )
+    p.add_argument(
+        "--benchmarks",
+        type=nonempty,
+        default=None,
+        help="benchmarks.md (default: figures/benchmarks.md)",
     )
     p.add_argument("--check", action="store_true", help="only compare; exit 1 if they differ")
     p.set_defaults(func=cmd_readme)
 
-    def config_args(p):
-        p.add_argument(
-            "--config",
-            action="append",
-            default=None,
-            metavar="YAML",
-            help="config file(s), later ones override earlier ones (default config/config.yaml)",
-        )
-        p.add_argument(
-            "--config-json", default=None, help="the whole config as JSON (what Snakemake passes)"
-        )
-        p.add_argument(
-            "--validated",
-            action="store_true",
-            help="the --config-json sections were validated by the pipeline (workflow/rules/common.smk "
-            "validates the whole config once); skip validating them again",
-        )
 
+def _add_reproduce(sub) -> None:
     p = sub.add_parser(
         "reproduce", help="compute one artefact (table or figure) of a paper or study"
     )
@@ -982,35 +989,61 @@ def build_parser() -> argparse.ArgumentParser:
         help="study key, e.g. zhao2017_3p4s, or 'extra' (beyond the papers: solver atlas, benchmarks)",
     )
     p.add_argument("artefact", help="artefact name, e.g. table1, or 'all'")
-    p.add_argument("--outdir", default=None, help="output folder (default: <figures_dir>/<paper>)")
     p.add_argument(
-        "--module", default=None, help="the study's module (default: those the config lists)"
+        "--outdir",
+        type=nonempty,
+        default=None,
+        help="output folder (default: <figures_dir>/<paper>)",
     )
-    config_args(p)
+    p.add_argument(
+        "--module",
+        type=nonempty,
+        default=None,
+        help="the study's module (default: those the config lists)",
+    )
+    _config_args(p)
     p.set_defaults(func=cmd_reproduce)
 
+
+def _add_check(sub) -> None:
     p = sub.add_parser(
         "check",
         help="check a run's outputs against the committed record, within declared tolerances",
     )
     p.add_argument(
         "--results",
+        type=nonempty,
         default=None,
         help="the run's figures folder (default: figures_dir of the config)",
     )
     p.add_argument(
-        "--record", default=None, help="the record (default: record_dir of the config, figures/)"
+        "--record",
+        type=nonempty,
+        default=None,
+        help="the record (default: record_dir of the config, figures/)",
     )
     p.add_argument(
-        "--out", default=None, help="output stem (default: <results>/../reproduction_check)"
+        "--out",
+        type=nonempty,
+        default=None,
+        help="output stem (default: <results>/../reproduction_check)",
     )
     p.add_argument(
         "--studies", nargs="*", default=None, help="study modules (default: the config's)"
     )
-    p.add_argument("--config", action="append", default=None, metavar="YAML", help="config file(s)")
+    p.add_argument(
+        "--config",
+        action="append",
+        type=nonempty,
+        default=None,
+        metavar="YAML",
+        help="config overlay(s) merged onto config/config.yaml (e.g. config/quick.yaml)",
+    )
     p.add_argument("--strict", action="store_true", help="exit 1 if anything differs or is missing")
     p.set_defaults(func=cmd_check)
 
+
+def _add_which(sub) -> None:
     p = sub.add_parser("which", help="which function and rule make a committed figure or table")
     p.add_argument("path", nargs="*", help="file(s), e.g. figures/zhao2017_3p4s/table1.csv")
     p.add_argument(
@@ -1018,15 +1051,23 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_which)
 
+
+def _add_record(sub) -> None:
     p = sub.add_parser(
         "record", help="copy a finished run (results/) into the committed record (figures/)"
     )
     p.add_argument(
         "--results",
+        type=nonempty,
         default=None,
         help="the run's figures folder (default: figures_dir of the config)",
     )
-    p.add_argument("--record", default=None, help="the record (default: record_dir of the config)")
+    p.add_argument(
+        "--record",
+        type=nonempty,
+        default=None,
+        help="the record (default: record_dir of the config)",
+    )
     p.add_argument(
         "--no-readme",
         dest="readme",
@@ -1035,14 +1076,20 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_record)
 
+
+def _add_report(sub) -> None:
     p = sub.add_parser("report", help="write the claim-by-claim REPORT.md")
     p.add_argument(
-        "--figures", default=None, help="figures folder (default: figures_dir of the config)"
+        "--figures",
+        type=nonempty,
+        default=None,
+        help="figures folder (default: figures_dir of the config)",
     )
-    p.add_argument("--out", default=None, help="output file (default: <figures>/REPORT.md)")
-    config_args(p)
+    p.add_argument(
+        "--out", type=nonempty, default=None, help="output file (default: <figures>/REPORT.md)"
+    )
+    _config_args(p)
     p.set_defaults(func=cmd_report)
-    return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -1050,7 +1097,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         with np.errstate(all="ignore"):  # non-finite results are checked, not warned about
             return args.func(args)
-    except (ParakinError, ValueError, KeyError, ArithmeticError, OSError, MemoryError) as exc:
+    except (
+        ParakinError,
+        ValueError,
+        KeyError,
+        ArithmeticError,
+        OSError,
+        MemoryError,
+        RecursionError,  # e.g. --config-json nested thousands deep
+    ) as exc:
         print(f"parakin {args.command}: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
 
@@ -1061,6 +1116,8 @@ def _one_line(exc: BaseException) -> str:
         message = str(exc.args[0])
     elif isinstance(exc, MemoryError):
         message = f"out of memory ({exc or 'the request is too large'})"
+    elif isinstance(exc, RecursionError):
+        message = f"input nested too deeply ({exc})"
     elif isinstance(exc, OSError) and exc.filename is not None:
         message = f"{exc.strerror or exc}: {exc.filename}"
     else:

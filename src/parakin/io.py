@@ -1,25 +1,46 @@
 """Atomic, deterministic output: a pipeline interrupted mid-write never leaves a half file behind.
 
-Every file the pipeline produces goes through :func:`atomic_write_bytes` (write a temporary file in
-the destination folder, flush it to disk, then ``os.replace`` it over the target: the rename is
-atomic on POSIX, so readers see either the old file or the complete new one).
+Every file parakin writes (the pipeline's tables and figures, the CLI's ``--output``, the record)
+goes through :func:`atomic_writer`: the content is written to a fresh temporary file in the
+destination folder (``tempfile.mkstemp``: a unique name, created exclusively, so a planted symlink
+is never followed and concurrent writers never share it), flushed to disk, then ``os.replace``-d
+over the target. The rename is atomic on POSIX: readers see either the old file or the complete
+new one, and of several concurrent writers of one file each succeeds and the last rename wins. A
+target that is a symlink is replaced by the new file; what it pointed to is left alone. Errors
+name the user's path, never the temporary one.
+
+:func:`read_text` is the matching reader: UTF-8 text, or a one-line error naming the file.
 """
 
 from __future__ import annotations
 
+import csv
+import errno
 import io
+import math
 import os
+import re
+import shutil
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import pandas as pd
+import numpy as np
+
+if TYPE_CHECKING:  # pandas is imported where a table is read (a cold `parakin fk` needs none)
+    import pandas as pd
 
 __all__ = [
     "is_timing_column",
+    "atomic_copy",
     "atomic_write_bytes",
     "atomic_write_text",
     "atomic_writer",
+    "read_rows",
+    "read_text",
+    "row_format",
+    "write_rows",
     "write_csv",
     "write_table",
     "markdown_table",
@@ -39,27 +60,67 @@ def is_timing_column(name: str) -> bool:
 
 
 def atomic_writer(path: str | os.PathLike, write: Callable[[Path], None]) -> Path:
-    """Call ``write(tmp_path)`` for a temporary path beside ``path``, then rename it onto ``path``.
+    """Call ``write(tmp_path)`` for a fresh temporary path beside ``path``, then rename it onto ``path``.
 
     The temporary file keeps ``path``'s suffix (matplotlib and pandas pick the format from it).
-    On any exception the temporary file is removed and ``path`` is left untouched.
+    On any exception the temporary file is removed and ``path`` is left untouched; an OSError of
+    the write names ``path`` (not the temporary file).
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(
-        prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent
-    )
-    os.close(fd)
     try:
-        write(Path(tmp))
+        if path.parent.exists() and not path.parent.is_dir():
+            raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), str(path.parent))
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, name = tempfile.mkstemp(
+            prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent
+        )
+    except OSError as exc:
+        raise _naming(exc, path) from None
+    os.close(fd)
+    tmp = Path(name)
+    try:
+        write(tmp)
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
         os.chmod(tmp, 0o644)
         os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
+    except BaseException as exc:
+        tmp.unlink(missing_ok=True)
+        if isinstance(exc, OSError) and exc.filename in (None, str(tmp), tmp):
+            raise _naming(exc, path) from None
         raise
     return path
+
+
+def _naming(exc: OSError, path: Path) -> OSError:
+    """``exc`` (same errno, hence same class) about ``path``, the file the user asked for; a folder
+    on the way that caused it (a file where a folder should be) is named too, the temporary file
+    never."""
+    reason = exc.strerror or str(exc)
+    culprit = exc.filename
+    if culprit is not None and Path(culprit) != path:
+        if not Path(culprit).name.startswith(f".{path.stem}."):
+            reason += f" ({culprit})"
+    return OSError(exc.errno, reason, str(path)) if exc.errno else OSError(f"{reason}: {path}")
+
+
+def atomic_copy(source: str | os.PathLike, path: str | os.PathLike) -> Path:
+    """Copy the file ``source`` to ``path`` atomically (contents only, see :func:`atomic_writer`)."""
+    return atomic_writer(path, lambda tmp: shutil.copyfile(source, tmp))
+
+
+def read_text(path: str | os.PathLike, what: str = "") -> str:
+    """The UTF-8 text of ``path`` (a leading byte-order mark dropped), or a one-line ValueError
+    that names the file and the first byte that is not UTF-8 (a binary or UTF-16 file)."""
+    data = Path(path).read_bytes()
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        where = f"{what} {path}" if what else str(path)
+        raise ValueError(
+            f"{where}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}; "
+            "a binary file, or text in another encoding such as UTF-16?)"
+        ) from None
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:
@@ -132,6 +193,8 @@ def draw_from_csv(
     """Draw ``png`` (default: beside ``csv``, same stem) with ``draw(frame, path)`` from the CSV as
     written and read back, never from numbers in memory, so the committed figure is what its
     committed CSV draws (an artefact declares the pair with ``draws=[...]``). Returns ``[png, csv]``."""
+    import pandas as pd
+
     csv = Path(csv)
     return [draw(pd.read_csv(csv), Path(png) if png is not None else csv.with_suffix(".png")), csv]
 
@@ -144,3 +207,197 @@ def write_and_draw(
 ) -> list[Path]:
     """Write ``frame`` to ``csv`` (atomically), then :func:`draw_from_csv`. Returns ``[png, csv]``."""
     return draw_from_csv(write_csv(frame, csv), draw, png)
+
+
+# ------------------------------------------------------------------ rows of poses or joint vectors
+#: file formats of the CLI's --input and --output (one pose or joint vector per row)
+ROW_FORMATS = (".csv", ".npy")
+#: most rows one input file may hold
+MAX_ROWS = 10_000_000
+_NPY_MAGIC = b"\x93NUMPY"
+
+
+def row_format(path: str | os.PathLike, option: str) -> str:
+    """``".csv"`` or ``".npy"`` from ``path``'s suffix, or a ValueError naming ``option``."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in ROW_FORMATS:
+        raise ValueError(f"{option} {path}: the file name must end in {' or '.join(ROW_FORMATS)}")
+    return suffix
+
+
+def read_rows(
+    path: str, names: Sequence[str], units: Sequence[str], option: str = "--input"
+) -> np.ndarray:
+    """The ``(N, n)`` finite values of a CSV or .npy file, one pose or joint vector per row.
+
+    A CSV may start with a header; where it names every one of ``names`` (``x [m]`` or ``x``, any
+    order, other columns ignored: every CSV that ``parakin ik``/``fk --output`` writes reads back)
+    those columns are read by name, and a unit in brackets must be the one ``units`` gives.
+    Without such a header the file has exactly ``n`` columns in the order of ``names``. Lines
+    starting with ``#`` are comments. A .npy holds an array of shape ``(..., n)``; rows that are
+    entirely NaN in an array of 3 or more axes are padding (``fk --all`` pads inputs with fewer
+    solutions) and are skipped. Anything else (empty, truncated, not numeric, not finite, not
+    UTF-8) is a one-line ValueError naming the file.
+    """
+    where = f"{option} {path}"
+    if row_format(path, option) == ".npy":
+        a = _read_npy(path, where, len(names), names)
+    else:
+        a = _read_csv(path, where, names, units)
+    if len(a) == 0:
+        raise ValueError(f"{where}: the file holds no rows")
+    bad = ~np.all(np.isfinite(a), axis=-1)
+    if np.any(bad):
+        row = int(np.argmax(bad))
+        raise ValueError(
+            f"{where}: row {row + 1} is not finite ({np.array2string(a[row], precision=6)})"
+        )
+    return a
+
+
+def _read_npy(path: str, where: str, n: int, names: Sequence[str]) -> np.ndarray:
+    with open(path, "rb") as fh:
+        magic = fh.read(len(_NPY_MAGIC))
+    if magic != _NPY_MAGIC:
+        raise ValueError(
+            f"{where}: not a .npy file ({'empty' if not magic else 'no .npy header'}; "
+            "np.save writes one, or give a .csv)"
+        )
+    try:
+        a = np.load(path, allow_pickle=False)
+    except (ValueError, EOFError) as exc:  # truncated, pickled objects, a corrupt header
+        raise ValueError(f"{where}: not a readable numeric .npy array ({_one_line(exc)})") from None
+    if a.dtype.kind not in "iuf" or a.ndim == 0 or a.shape[-1] != n:
+        raise ValueError(
+            f"{where}: a .npy file must hold a numeric array of shape (N, {n}) "
+            f"({', '.join(names)}), got {a.dtype} {a.shape}"
+        )
+    if a.size > MAX_ROWS * n:
+        raise ValueError(f"{where}: more than {MAX_ROWS} rows")
+    rows = a.reshape(-1, n).astype(float)
+    if a.ndim >= 3:  # fk --all: inputs with fewer real solutions are padded with NaN rows
+        rows = rows[~np.all(np.isnan(rows), axis=-1)]
+    return rows
+
+
+def _header_name(token: str) -> tuple[str, str | None]:
+    """``"x [mm]"`` -> ``("x", "mm")``; ``"x"`` -> ``("x", None)``."""
+    m = re.fullmatch(r"\s*([^\[\]]*?)\s*(?:\[\s*([^\]]*?)\s*\])?\s*", token)
+    return (m.group(1), m.group(2)) if m else (token.strip(), None)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _csv_lines(path: str, where: str) -> list[tuple[int, list[str]]]:
+    """``(line number, stripped cells)`` of each data line (blank and ``#`` lines skipped)."""
+    text = read_text(path, where.split(" ", 1)[0])
+    lines = [
+        (k + 1, line)
+        for k, line in enumerate(text.splitlines())
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
+    if len(lines) > MAX_ROWS + 1:
+        raise ValueError(f"{where}: more than {MAX_ROWS} rows")
+    try:
+        return [(k, [c.strip() for c in next(csv.reader([line]))]) for k, line in lines]
+    except csv.Error as exc:  # e.g. a NUL byte
+        raise ValueError(f"{where}: not a CSV file ({exc})") from None
+
+
+def _columns(
+    header: list[str], where: str, names: Sequence[str], units: Sequence[str]
+) -> list[int] | None:
+    """The column of each of ``names`` in ``header`` (None: read by position), units checked."""
+    found = {}
+    for i, cell in enumerate(header):
+        found.setdefault(_header_name(cell)[0], (i, _header_name(cell)[1]))
+    if not all(name in found for name in names):
+        if len(header) != len(names):
+            raise ValueError(
+                f"{where}: the header {header} names neither the columns {list(names)} nor "
+                f"{len(names)} columns"
+            )
+        return None
+    for name, want in zip(names, units):
+        unit = found[name][1]
+        if unit not in (None, "", want) and not (unit == "-" and want == "1"):
+            raise ValueError(
+                f"{where}: column {name!r} is in {unit} but these --units read {name} in {want}"
+            )
+    return [found[name][0] for name in names]
+
+
+def _read_csv(path: str, where: str, names: Sequence[str], units: Sequence[str]) -> np.ndarray:
+    n = len(names)
+    cells = _csv_lines(path, where)
+    if not cells:
+        raise ValueError(f"{where}: the file holds no rows")
+    columns, width = None, n
+    if not any(_is_number(c) for c in cells[0][1]):  # a header: no cell of it is a number
+        header = cells.pop(0)[1]
+        columns, width = _columns(header, where, names, units), len(header)
+        if not cells:
+            raise ValueError(f"{where}: the file holds a header and no rows")
+    rows = []
+    for k, row in cells:
+        if len(row) != width:
+            expected = f"{width} (the header's)" if columns else f"{n} ({', '.join(names)})"
+            raise ValueError(f"{where}, line {k}: {len(row)} values, expected {expected}")
+        picked = [row[c] for c in columns] if columns else row
+        try:
+            rows.append([float(c) for c in picked])
+        except ValueError:
+            raise ValueError(f"{where}, line {k}: {picked} are not all numbers") from None
+    return np.asarray(rows, dtype=float).reshape(-1, n)
+
+
+def write_rows(
+    path: str,
+    names: Sequence[str],
+    units: Sequence[str],
+    values: np.ndarray,
+    extra: dict[str, Sequence] | None = None,
+    lead: dict[str, Sequence] | None = None,
+) -> Path:
+    """Write ``values (N, n)`` atomically to a CSV (header ``name [unit]``, ``lead`` columns first,
+    ``extra`` columns last; what :func:`read_rows` reads back by name) or a ``.npy`` (the values
+    only, any shape)."""
+    if row_format(path, "--output") == ".npy":
+
+        def write(tmp: Path) -> None:
+            with open(tmp, "wb") as fh:
+                np.save(fh, np.asarray(values, dtype=float))
+
+        return atomic_writer(path, write)
+    lead, extra = lead or {}, extra or {}
+    header = [*lead, *(f"{n} [{u}]" if u != "1" else n for n, u in zip(names, units)), *extra]
+    v = np.atleast_2d(values)
+    buf = io.StringIO()
+    out = csv.writer(buf, lineterminator="\n")
+    out.writerow(header)
+    for i in range(len(v)):
+        out.writerow(
+            [_cell(c[i]) for c in lead.values()]
+            + [_cell(x) for x in v[i]]
+            + [_cell(c[i]) for c in extra.values()]
+        )
+    return atomic_write_text(path, buf.getvalue())
+
+
+def _cell(value) -> str:
+    """A CSV cell: ``true``/``false``, a float that reads back exactly, empty where not finite."""
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, (float, np.floating)):
+        return repr(float(value)) if math.isfinite(value) else ""
+    return str(value)
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join((str(exc) or type(exc).__name__).split())

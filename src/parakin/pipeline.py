@@ -6,14 +6,29 @@ artefact writes which file, and where the results and the committed record live.
 
 from __future__ import annotations
 
-import shutil
+import importlib
+import importlib.util
+import pkgutil
 import sys
 from pathlib import Path
 
-from parakin import registry
+from parakin import papers, registry
+from parakin import studies as extra_studies
 from parakin.config import DEFAULT_CONFIG, ROOT, load_config
+from parakin.errors import ConfigError
+from parakin.io import atomic_copy
 
-__all__ = ["studies", "artefacts", "reproduce", "check", "which", "record", "describe"]
+__all__ = [
+    "studies",
+    "known_studies",
+    "check_studies",
+    "artefacts",
+    "reproduce",
+    "check",
+    "which",
+    "record",
+    "describe",
+]
 
 
 def studies(config: dict | None = None) -> list[str]:
@@ -22,18 +37,59 @@ def studies(config: dict | None = None) -> list[str]:
     return list(config["studies"])
 
 
+def known_studies() -> list[str]:
+    """The study modules parakin ships: one per paper, and those beyond the papers."""
+    return [f"parakin.papers.{key}" for key in papers.KEYS] + [
+        f"parakin.studies.{m.name}" for m in pkgutil.iter_modules(extra_studies.__path__)
+    ]
+
+
+def check_studies(names: list[str]) -> None:
+    """Raise ConfigError (one line, the known studies listed) unless every one of ``names`` is an
+    importable module that declares at least one ``@artefact`` (a study of your own must be on
+    the Python path, as ``tests/test_registry.py``'s toy study is)."""
+    for name in names:
+        problem = _study_problem(name)
+        if problem:
+            raise ConfigError(
+                f"config key 'studies': {name!r} {problem} (parakin's studies: "
+                f"{', '.join(known_studies())}; a study of your own must be importable)"
+            )
+
+
+def _study_problem(name: str) -> str:
+    try:
+        found = importlib.util.find_spec(name) is not None
+    except (ImportError, ValueError):  # a parent package is missing
+        found = False
+    if not found:
+        return "is not a module"
+    try:
+        importlib.import_module(name)
+    except ImportError as exc:
+        return f"cannot be imported ({exc})"
+    if not any(
+        a.module == name or a.module.startswith(name + ".") for a in registry.REGISTRY.values()
+    ):
+        return "declares no @artefact"
+    return ""
+
+
 def artefacts(
     names: list[str] | None = None, *, complete: bool = True
 ) -> dict[str, registry.Artefact]:
-    """The registry restricted to the studies ``names`` (default: the full config's)."""
-    return registry.load(names or studies(), complete=complete)
+    """The registry restricted to the studies ``names`` (default: the full config's), each
+    checked (:func:`check_studies`)."""
+    names = list(names) if names else studies()
+    check_studies(names)
+    return registry.load(names, complete=complete)
 
 
 def reproduce(
     study: str, name: str, config: dict, outdir: Path | None, module: str | None = None
 ) -> list[Path]:
     """Run one artefact (``name == "all"``: every artefact of the study, upstream first) into ``outdir``."""
-    found = artefacts([module] if module else None, complete=not module)
+    found = artefacts([module] if module else config.get("studies"), complete=not module)
     if name == "all":
         items = [a for a in found.values() if a.study == study]
         if not items:
@@ -66,7 +122,6 @@ SPECIAL = {
 
 
 def _location(dotted: str) -> str:
-    import importlib
     import inspect
 
     module, _, attr = dotted.rpartition(".")
@@ -132,12 +187,7 @@ def record(results: Path, record_dir: Path, names: list[str] | None = None) -> l
             f"{missing[0]}): finish it with snakemake before recording"
         )
     for folder, name in files:
-        src, dst = Path(results) / folder / name, Path(record_dir) / folder / name
-        dst.parent.mkdir(parents=True, exist_ok=True)
-        tmp = dst.with_name(f".{dst.name}.tmp")
-        shutil.copyfile(src, tmp)
-        tmp.replace(dst)
-        copied.append(dst)
+        copied.append(atomic_copy(Path(results) / folder / name, Path(record_dir) / folder / name))
     print(
         f"parakin record: {len(copied)} files copied from {results} to {record_dir}",
         file=sys.stderr,

@@ -1,6 +1,6 @@
 # Shared set-up: validate the merged config (one place: parakin.config.validate, i.e. the schema
 # config/schema.yaml plus the orderings a schema cannot express; one short line per bad key), load
-# the artefact registry.
+# the artefact registry of the config's studies (each checked: parakin.pipeline.check_studies).
 import json
 import shlex
 import sys
@@ -8,10 +8,13 @@ import sys
 from parakin import registry
 from parakin.config import validate as validate_config
 from parakin.errors import ConfigError
+from parakin.pipeline import artefacts as load_studies
 
 try:
     validate_config(config)
-except ConfigError as error:
+    #: "study:name" -> Artefact, from the study modules the config names (config key `studies`)
+    ARTEFACTS = load_studies(config["studies"])
+except (ConfigError, ValueError) as error:  # a bad value, or studies that need missing ones
     sys.exit(f"config error: {error}")
 
 FIG = config["figures_dir"]
@@ -20,9 +23,6 @@ RESULTS = str(Path(FIG).parent)
 RECORD = config.get("record_dir")
 LOGS = f"{RESULTS}/logs"
 REFERENCE = "data/reference"
-
-#: "study:name" -> Artefact, from the study modules the config names (config key `studies`)
-ARTEFACTS = registry.load(config["studies"])
 
 
 def outputs(item):

@@ -20,6 +20,7 @@ and fails in the same way:
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
 from collections.abc import Callable
 from enum import IntEnum
@@ -32,6 +33,7 @@ from parakin.errors import ParakinError
 from parakin.mechanisms.base import Array, Mechanism
 
 __all__ = [
+    "Conditioning",
     "Evaluator",
     "FKResult",
     "ROW_ERRORS",
@@ -137,6 +139,42 @@ def _to_json(a: Any) -> Any:
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
+class Conditioning:
+    """How well the joints pin down an FK answer, per pose (the batch shape of the result).
+
+    Computed at the answer ``x`` from the IK alone (:func:`parakin.solvers.verify.conditioning`,
+    method and threshold in ``docs/near_singular.md``): near a forward singularity two solutions of
+    the same joints come together, and the answer returned depends on the start.
+    """
+
+    #: 2-norm condition number of ``d ik / d pose`` at ``x``, pose coordinates in box widths
+    condition: Array
+    #: estimated offset ``(..., n_pose)`` from ``x`` to the nearest other solution of the same
+    #: joints, across the nearest fold (pose units); NaN where no fold is predicted
+    neighbour: Array
+    #: that offset as a fraction of the pose box, ``max_k |neighbour_k| / width_k`` (inf: none)
+    distance: Array
+    #: True where ``distance <= threshold``: near a singularity, another solution close by
+    near_singular: NDArray[np.bool_]
+    #: the threshold on ``distance`` (:data:`parakin.solvers.verify.NEAR_SINGULAR`)
+    threshold: float
+
+    @property
+    def message(self) -> str:
+        """``""``, or one line: how many answers are near a singularity, the closest neighbour."""
+        near = np.asarray(self.near_singular)
+        if not near.any():
+            return ""
+        closest = float(np.min(np.asarray(self.distance)[near]))
+        count = f"{int(near.sum())} of {near.size} poses" if near.size > 1 else "the pose"
+        return (
+            f"near a singularity ({count}): another solution of the same joints within "
+            f"{closest:.2g} of the pose box (threshold {self.threshold:g}); the start decides "
+            "which one is returned"
+        )
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
 class FKResult:
     """Forward-kinematics solution of a (batch of) joint vector(s).
 
@@ -171,7 +209,30 @@ class FKResult:
         }
         if self.joint_error is not None:
             per_pose["joint_error"] = self.joint_error.reshape(shape)
-        return dataclasses.replace(self, x=self.x.reshape(*shape, self.x.shape[-1]), **per_pose)
+        out = dataclasses.replace(self, x=self.x.reshape(*shape, self.x.shape[-1]), **per_pose)
+        probe = self.__dict__.get("_probe")
+        return out if probe is None else out.bind(probe)
+
+    def bind(self, probe: Callable[[Array], Conditioning]) -> FKResult:
+        """This result, with ``probe(x) -> Conditioning`` remembered for :attr:`conditioning`
+        (what :func:`parakin.solvers.solve_fk` does; nothing is computed until it is asked for)."""
+        object.__setattr__(self, "_probe", probe)
+        return self
+
+    @functools.cached_property
+    def conditioning(self) -> Conditioning | None:
+        """The :class:`Conditioning` at the answer, computed on first use (a few IK evaluations
+        per pose, so a solve never pays for it unasked); None for a result that
+        :func:`~parakin.solvers.solve_fk` did not make."""
+        probe = self.__dict__.get("_probe")
+        return None if probe is None else probe(self.x)
+
+    @property
+    def near_singular(self) -> NDArray[np.bool_] | None:
+        """Per pose: near a singularity, another solution of the same joints close by (see
+        :attr:`conditioning`); None where the conditioning is unknown."""
+        c = self.conditioning
+        return None if c is None else c.near_singular
 
     def to_dict(self) -> dict[str, Any]:
         """Every field as JSON-serialisable python lists/scalars (non-finite floats -> None)."""
