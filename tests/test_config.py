@@ -157,3 +157,56 @@ def test_yaml_syntax_error_is_one_line(tmp_path):
     bad.write_text("seed: 1\nzhao2017_3p4s:\n\ttable1: {}\n")
     with pytest.raises(ConfigError, match=r"is not valid YAML \(line 3, column 1\)"):
         load_config(bad)
+
+
+# ---------------------------------------------------- bounded loading, overlays, studies (issue 26)
+def test_overlays_merge_onto_the_full_config(quick_config):
+    from parakin.config import load_run_config
+
+    assert load_run_config([QUICK_CONFIG]) == quick_config
+    assert load_run_config() == load_config(DEFAULT_CONFIG)
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        (
+            "x:\n  a0: &a0 [1, 1, 1, 1, 1, 1, 1, 1, 1]\n"
+            + "".join(f"  a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 9)}]\n" for i in range(1, 12)),
+            r"expands to 3.\d+e\+11 values, more than the limit 100000",
+        ),
+        ("a: &x {b: *x}\n", "refers to itself"),
+        ("a: " + "[" * 100 + "]" * 100 + "\n", "nests deeper than the limit 64"),
+    ],
+)
+def test_config_expansion_is_bounded_before_any_walk(tmp_path, text, message):
+    path = tmp_path / "c.yaml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=message):
+        load_config([DEFAULT_CONFIG, path])
+
+
+def test_validate_bounds_a_config_loaded_elsewhere(quick_config):
+    """What Snakemake loads itself reaches validate(): the bound holds there too."""
+    node = [1] * 10
+    for _ in range(6):
+        node = [node] * 10
+    with pytest.raises(ConfigError, match="config expands to .* more than the limit"):
+        validate({**quick_config, "bomb": node})
+
+
+@pytest.mark.parametrize(
+    "names, message",
+    [
+        (["os"], "'os' declares no @artefact"),
+        (["parakin.papers.zhao2017"], "'parakin.papers.zhao2017' is not a module"),
+        (["parakin.papers.zhao2017_3p4s", "nope.nope"], "'nope.nope' is not a module"),
+    ],
+)
+def test_studies_are_checked_against_what_is_registered(names, message):
+    from parakin.pipeline import check_studies, known_studies
+
+    with pytest.raises(ConfigError, match=message) as err:
+        check_studies(names)
+    assert all(s in str(err.value) for s in known_studies())
+    check_studies(known_studies())  # every shipped study passes

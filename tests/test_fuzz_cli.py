@@ -14,8 +14,12 @@ import contextlib
 import io
 import json
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -388,6 +392,8 @@ def file_argv(draw):
 @given(argv=file_argv())
 def test_input_files_survive_hostile_content(argv):
     _check(argv)
+    folder = Path(argv[3]).parent  # nothing but the input and the output: no debris, no other file
+    assert {p.name for p in folder.iterdir()} <= {Path(argv[3]).name, "out.csv", "out.npy"}
     if "--output" in argv:
         out = argv[argv.index("--output") + 1]
         code, _, _ = run(argv)
@@ -428,3 +434,295 @@ def test_fk_all_every_listed_solution_is_right(name, values):
         assert np.max(np.abs(mech.ik(np.asarray(s["x"])) - q)) <= 1e-7 * max(
             1.0, np.max(np.abs(q))
         ), (argv, s)
+
+
+# ------------------------------------- hostile files, configs and near-singular poses (issue 26)
+ROOT = Path(__file__).resolve().parents[1]
+#: a 700-byte YAML alias bomb under an unknown key: 9^12 values once expanded
+ALIAS_BOMB = "bomb:\n  a0: &a0 [1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5]\n" + "".join(
+    f"  a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 9)}]\n" for i in range(1, 12)
+)
+
+
+def _one_error_line(code: int, stderr: str, *needles: str) -> str:
+    lines = stderr.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and "Traceback" not in stderr, stderr
+    assert ".tmp" not in lines[0], lines[0]  # never the hidden temporary file
+    assert all(n in lines[0] for n in needles), (needles, lines[0])
+    return lines[0]
+
+
+def test_output_never_follows_a_planted_symlink(tmp_path):
+    """Finding 1: symlinks at the old fixed temporary name and at the target itself are never
+    followed; the file they point to keeps its bytes; the target becomes our file."""
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep\n")
+    out = tmp_path / "d"
+    out.mkdir()
+    (out / ".out.csv.tmp").symlink_to(victim)
+    (out / "linked.csv").symlink_to(victim)
+    for target in ("out.csv", "linked.csv"):
+        code, _, stderr = run(
+            ["ik", "3p4s", "--pose", "0", "0", "0.592", "--output", str(out / target)]
+        )
+        assert code == 0, stderr
+        assert not (out / target).is_symlink() and "l1 [m]" in (out / target).read_text()
+    assert victim.read_text() == "keep\n"
+    assert sorted(p.name for p in out.iterdir()) == [".out.csv.tmp", "linked.csv", "out.csv"]
+
+
+def test_concurrent_writers_of_one_output_each_succeed(tmp_path):
+    """Finding 1: concurrent `parakin ik --output same.csv` all succeed; the file is one of theirs."""
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-m", "parakin.cli", "ik", "3p4s", "--pose", "0", "0", f"0.59{k}"]
+            + ["--output", str(tmp_path / "same.csv")],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for k in range(4)
+    ]
+    results = [p.communicate(timeout=120) for p in procs]
+    assert [p.returncode for p in procs] == [0] * 4, [err for _, err in results]
+    lines = (tmp_path / "same.csv").read_text().splitlines()
+    assert lines[0] == "l1 [m],l2 [m],l3 [m]" and len(lines) == 2
+    assert [p.name for p in tmp_path.iterdir()] == ["same.csv"]  # no debris
+
+
+@pytest.mark.parametrize("name", sorted(mechanisms.REGISTRY))
+@pytest.mark.parametrize("fmt", [".csv", ".npy"])
+def test_what_ik_and_fk_write_reads_back_as_the_others_input(tmp_path, name, fmt):
+    """Finding 2: ik --output -> fk --input and fk --output -> ik --input, both formats, right answers."""
+    mech = mechanisms.REGISTRY[name]()
+    lo, hi = mech.pose_bounds()
+    pose = mech.home() + 0.05 * (hi - lo) * np.array(
+        [[0.3, -0.2, 0.1, 0.2, -0.1, 0.3][: mech.n_pose]]
+    )
+    pose = np.vstack([mech.home(), pose])
+    np.save(tmp_path / "pose.npy", pose)
+    joints, back = tmp_path / f"joints{fmt}", tmp_path / f"pose{fmt}"
+    code, _, err = run(["ik", name, "--input", str(tmp_path / "pose.npy"), "--output", str(joints)])
+    assert code == 0, err
+    code, _, err = run(
+        ["fk", name, "--input", str(joints), "--output", str(back), "--solver", "newton"]
+    )
+    assert code == 0, err
+    again = tmp_path / f"again{fmt}"
+    code, _, err = run(["ik", name, "--input", str(back), "--output", str(again)])
+    assert code == 0, err
+    q = np.load(again) if fmt == ".npy" else np.loadtxt(again, delimiter=",", skiprows=1, ndmin=2)
+    np.testing.assert_allclose(q, mech.ik(pose), atol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["2ups", "stewart36"])
+@pytest.mark.parametrize("fmt", [".csv", ".npy"])
+def test_fk_all_output_reads_back_as_ik_input(tmp_path, name, fmt):
+    """Every real solution that fk --all lists (quoted assembly labels, NaN-padded .npy) goes back
+    into ik: the rows read are the solutions written, and the working ones give the joints again."""
+    mech = mechanisms.REGISTRY[name]()
+    q = mech.ik(np.vstack([mech.home(), mech.home()]))
+    np.save(tmp_path / "q.npy", q)
+    out = tmp_path / f"all{fmt}"
+    code, _, err = run(
+        ["fk", name, "--input", str(tmp_path / "q.npy"), "--all", "--output", str(out)]
+    )
+    assert code == 0, err
+    code, stdout, err = run(["ik", name, "--input", str(out), "--json"])
+    assert code == 0, err
+    read = np.asarray(json.loads(stdout)["pose"])
+    if fmt == ".npy":
+        written = np.load(out).reshape(-1, mech.n_pose)
+        written = written[~np.isnan(written).all(-1)]
+    else:
+        table = pd.read_csv(out)
+        written = table.iloc[:, 2 : 2 + mech.n_pose].to_numpy()
+        working = table["working"].to_numpy()
+        joints = np.asarray(json.loads(stdout)["joints"])[working]
+        np.testing.assert_allclose(joints, q[: working.sum()], atol=1e-9)
+    np.testing.assert_array_equal(read, written)
+    assert len(read) >= 4
+
+
+def _npy_bytes(kind: str) -> bytes:
+    buf = io.BytesIO()
+    arrays = {
+        "strings": np.array([["a", "b", "c"]]),
+        "complex": np.ones((1, 3), dtype=complex),
+        "bool": np.ones((1, 3), dtype=bool),
+        "0-d": np.array(0.5),
+        "rows0": np.zeros((0, 3)),
+    }
+    if kind == "objects":
+        np.save(buf, np.array([[1, "x", None]], dtype=object), allow_pickle=True)
+    elif kind == "npz":
+        np.savez(buf, a=np.zeros((1, 3)))
+    else:
+        np.save(buf, arrays.get(kind, np.full((4, 3), 0.43)))
+    data = buf.getvalue()
+    return {
+        "empty": b"",
+        "magic-only": data[:6],
+        "header-cut": data[:40],
+        "data-cut": data[:-9],
+    }.get(kind, data)
+
+
+@pytest.mark.parametrize(
+    "kind",
+    ["empty", "magic-only", "header-cut", "data-cut", "strings", "complex", "bool", "0-d", "rows0"]
+    + ["objects", "npz"],
+)
+def test_broken_npy_inputs_are_one_line(tmp_path, kind):
+    """Finding 3: empty, truncated and wrongly-typed .npy files: one line naming the file."""
+    path = tmp_path / f"{kind}.npy"
+    path.write_bytes(_npy_bytes(kind))
+    code, _, stderr = run(["fk", "3p4s", "--input", str(path)])
+    _one_error_line(code, stderr, str(path))
+
+
+@pytest.mark.parametrize(
+    "content, needle",
+    [
+        (b"", "no rows"),
+        (b"x [m],y [m],z [m]\n", "a header and no rows"),
+        (b"\xff\xfe0\x000\x00", "not UTF-8"),
+        ("x,y,z\n0,0,0.59\n".encode("utf-16"), "not UTF-8"),
+        (b"0,0,0.5\x00\n", "are not all numbers"),
+        (b"x [m],y [m],z [m],s\n0,0,0.59\n", "3 values, expected 4"),
+        (b'x,y,z,label\n0,0,0.592,"a, b"\n', None),  # quoted comma: read by name, a right answer
+    ],
+)
+def test_broken_csv_inputs_are_one_line(tmp_path, content, needle):
+    path = tmp_path / "in.csv"
+    path.write_bytes(content)
+    code, stdout, stderr = run(["ik", "3p4s", "--input", str(path)])
+    if needle is None:
+        assert code == 0 and "l1 = 0.4315827775 m" in stdout, stderr
+    else:
+        _one_error_line(code, stderr, str(path), needle)
+
+
+def test_alias_bomb_is_refused_at_once(tmp_path):
+    """Finding 4: the 700-byte alias bomb: one line from parakin and from snakemake -n, no hang."""
+    bomb = tmp_path / "bomb.yaml"
+    bomb.write_text(ALIAS_BOMB)
+    assert len(ALIAS_BOMB) < 800
+    cli = subprocess.run(
+        [sys.executable, "-m", "parakin.cli", "reproduce", "zhao2017_3p4s", "table1"]
+        + ["--config", str(bomb)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    _one_error_line(cli.returncode, cli.stderr, "bomb.yaml", "more than the limit 100000")
+    smk = subprocess.run(
+        [sys.executable, "-m", "snakemake", "-n", "--cores", "1", "--configfile", str(bomb)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert smk.returncode != 0 and "Traceback" not in smk.stdout + smk.stderr
+    assert "config error: config expands to" in smk.stdout + smk.stderr
+
+
+@pytest.mark.parametrize(
+    "text, needles",
+    [
+        ("studies: [os]\n", ["'os' declares no @artefact", "parakin.papers.zhao2017_3p4s"]),
+        ("studies: [parakin.papers.zhao2017]\n", ["'parakin.papers.zhao2017' is not a module"]),
+        ("studies: [no_such_pkg.study]\n", ["is not a module"]),
+        ("seeed: 1\n", ["'seeed' was unexpected"]),
+        ("seed: [1\n", ["is not valid YAML"]),
+        ("a: &x [1, *x]\n", ["refers to itself"]),
+        ("a: " + "[" * 200 + "]" * 200 + "\n", ["nests deeper than the limit 64"]),
+        ("- 1\n", ["must hold a mapping"]),
+    ],
+)
+def test_config_typos_are_one_line(tmp_path, text, needles):
+    """Finding 4: typos in `studies` and elsewhere: one line naming the key, the known studies."""
+    path = tmp_path / "typo.yaml"
+    path.write_text(text)
+    code, _, stderr = run(["reproduce", "zhao2017_3p4s", "table1", "--config", str(path)])
+    _one_error_line(code, stderr, *needles)
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "binary"])
+def test_non_utf8_config_is_one_line(tmp_path, encoding):
+    path = tmp_path / "cfg.yaml"
+    path.write_bytes("seed: 1\n".encode("utf-16") if encoding == "utf-16" else bytes(range(256)))
+    code, _, stderr = run(["report", "--config", str(path)])
+    _one_error_line(code, stderr, str(path), "not UTF-8 text")
+
+
+def test_check_merges_an_overlay_as_the_pipeline_does(tmp_path):
+    """Finding 5: `parakin check --config config/quick.yaml` reads quick as an overlay of config.yaml."""
+    code, stdout, stderr = run(
+        ["check", "--config", str(ROOT / "config" / "quick.yaml")]
+        + ["--results", str(tmp_path / "figures"), "--out", str(tmp_path / "check")]
+    )
+    assert code == 0 and "reproduction check:" in stdout and not stderr, stderr
+    assert (tmp_path / "check.csv").is_file()
+
+
+@pytest.mark.parametrize(
+    "argv, needles",
+    [
+        (["fk", "3p4s", "--joints", "0.43", "0.43", "0.43", "--solver", ""], ["--solver", "empty"]),
+        (["ik", "3p4s", "--pose", "0", "0", "0.59", "--output", ""], ["--output", "empty"]),
+        (["ik", "3p4s", "--input", ""], ["--input", "empty"]),
+        (["reproduce", "zhao2017_3p4s", "table1", "--config", " "], ["--config", "empty"]),
+        (
+            ["ik", "stewart36", "--pose", "1e308", "0", "0", "0", "0", "1"],
+            ["alpha = 1e+308 rad", "1000 rad"],
+        ),
+        (
+            ["ik", "2ups", "--pose", "0", "-1e9", "0", "--units", "paper"],
+            ["gamma = 1e+09 deg", "57295.8 deg"],
+        ),
+        (
+            ["fk", "stewart36", "--joints", *["3"] * 6, "--x0", "0", "0", "1e5", "0", "0", "1"],
+            ["--x0: gamma"],
+        ),
+    ],
+)
+def test_messages_name_the_value_and_the_limit(argv, needles):
+    """Finding 6: an empty option is an error, not the default; an absurd angle names the limit."""
+    code, _, stderr = run(argv)
+    _one_error_line(code, stderr, *needles)
+
+
+def test_write_errors_name_the_users_file(tmp_path):
+    """Finding 6: never the hidden temporary file."""
+    (tmp_path / "taken.csv").mkdir()
+    (tmp_path / "file").write_text("")
+    for target, needle in [("taken.csv", "Is a directory"), ("file/out.csv", "Not a directory")]:
+        code, _, stderr = run(
+            ["ik", "3p4s", "--pose", "0", "0", "0.59", "--output", str(tmp_path / target)]
+        )
+        _one_error_line(code, stderr, needle, str(tmp_path / target))
+
+
+def test_readme_blames_the_file_without_markers(tmp_path):
+    """Finding 6: `parakin readme --readme X.md` without markers names X.md, not the benchmarks."""
+    readme = tmp_path / "X.md"
+    readme.write_text("# no markers\n")
+    for extra in ([], ["--check"]):
+        code, _, stderr = run(["readme", "--readme", str(readme), *extra])
+        _one_error_line(code, stderr, f"--readme {readme} has no <!-- benchmarks:begin -->")
+    assert readme.read_text() == "# no markers\n"
+
+
+def test_help_lists_every_command_on_one_line():
+    """Finding 6: `parakin --help` comes from the parser: every subcommand, one line each."""
+    from parakin.cli import build_parser
+
+    code, stdout, _ = run(["--help"])
+    assert code == 0 and "``" not in stdout
+    parser = build_parser()
+    commands = next(a for a in parser._actions if a.choices and a.dest == "command").choices
+    assert len(commands) >= 9
+    for name in commands:
+        line = next(row for row in stdout.splitlines() if row.split()[:1] == [name])
+        assert len(line.split()) > 2, line  # the name and its help on the same line

@@ -61,3 +61,85 @@ def test_parse_quantity_units():
     assert parse_quantity("35deg") == pytest.approx(0.6108652381980153)
     with pytest.raises(ValueError, match="cannot read 'abc'"):
         parse_quantity("abc")
+
+
+# --------------------------------------------------------- hostile targets (issue 26, finding 1)
+def test_a_symlinked_target_is_replaced_not_followed(tmp_path):
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep\n")
+    (tmp_path / "out.csv").symlink_to(victim)
+    (tmp_path / ".out.csv.tmp").symlink_to(victim)  # the old fixed temporary name
+    atomic_write_text(tmp_path / "out.csv", "ours\n")
+    assert victim.read_text() == "keep\n"
+    assert (
+        not (tmp_path / "out.csv").is_symlink() and (tmp_path / "out.csv").read_text() == "ours\n"
+    )
+
+
+def test_concurrent_writers_each_succeed(tmp_path):
+    """Eight threads write one file at once: each succeeds, the file is one whole version."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    target = tmp_path / "same.csv"
+    texts = [f"writer {k}\n" * 2000 for k in range(8)]
+    with ThreadPoolExecutor(8) as pool:
+        done = list(pool.map(lambda t: atomic_write_text(target, t), texts))
+    assert done == [target] * 8
+    assert target.read_text() in texts
+    assert [p.name for p in tmp_path.iterdir()] == ["same.csv"]
+
+
+@pytest.mark.parametrize("case", ["directory", "file-as-folder", "disk-full"])
+def test_write_errors_name_the_target_never_the_temporary_file(tmp_path, case):
+    import errno
+
+    target = tmp_path / "out.csv"
+    write = lambda tmp: tmp.write_text("x")  # noqa: E731
+    if case == "directory":
+        target.mkdir()
+    elif case == "file-as-folder":
+        (tmp_path / "f").write_text("")
+        target = tmp_path / "f" / "out.csv"
+    else:
+
+        def write(tmp):
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+    with pytest.raises(OSError) as err:
+        atomic_writer(target, write)
+    assert err.value.filename == str(target) and ".tmp" not in str(err.value)
+    assert [p.name for p in tmp_path.iterdir() if ".tmp" in p.name] == []
+
+
+def test_read_text_names_a_file_that_is_not_utf8(tmp_path):
+    from parakin.io import read_text
+
+    path = tmp_path / "cfg.yaml"
+    path.write_bytes("seed: 1\n".encode("utf-16"))
+    with pytest.raises(ValueError, match=r"cfg.yaml: not UTF-8 text \(byte 0xff at offset 0"):
+        read_text(path)
+    path.write_bytes(b"\xef\xbb\xbfseed: 1\n")  # a UTF-8 byte-order mark is dropped
+    assert read_text(path) == "seed: 1\n"
+
+
+def test_rows_round_trip_by_name(tmp_path):
+    """What write_rows writes (lead and extra columns, quoted labels) read_rows reads by name."""
+    import numpy as np
+
+    from parakin.io import read_rows, write_rows
+
+    values = np.array([[0.1, -2.5e-17, 3.0], [4.0, 5.0, 6.0]])
+    path = tmp_path / "rows.csv"
+    write_rows(
+        path,
+        ("x", "y", "z"),
+        ("m", "m", "rad"),
+        values,
+        lead={"input": [1, 2]},
+        extra={"ok": [True, False], "label": ["a, b", 'say "c"']},
+    )
+    np.testing.assert_array_equal(
+        read_rows(path, ("z", "x", "y"), ("rad", "m", "m")), values[:, [2, 0, 1]]
+    )
+    with pytest.raises(ValueError, match="column 'z' is in rad but these --units read z in deg"):
+        read_rows(path, ("x", "y", "z"), ("m", "m", "deg"))

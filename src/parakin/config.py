@@ -12,6 +12,7 @@ without expanding anything; a file that breaks a bound is one ConfigError line, 
 from __future__ import annotations
 
 import copy
+import functools
 import json
 import math
 import zlib
@@ -227,7 +228,7 @@ def validate(config: dict, schema_path: Path = SCHEMA_PATH, *, partial: bool = F
     :func:`parakin.registry.prune_config`); the keys it has obey the same rules, the sections it
     lacks are not required."""
     check_bounds(config)
-    schema = yaml.safe_load(Path(schema_path).read_text())
+    schema = _schema(str(schema_path), Path(schema_path).stat().st_mtime_ns)
     if partial:
         schema = _relax_required(schema, config)
     import jsonschema  # here: its import costs ~1 s (format checkers), paid only when validating
@@ -240,6 +241,17 @@ def validate(config: dict, schema_path: Path = SCHEMA_PATH, *, partial: bool = F
     if problems:
         raise ConfigError("; ".join(problems))
     return config
+
+
+@functools.lru_cache(maxsize=4)
+def _schema(path: str, mtime_ns: int) -> dict:
+    """The parsed schema (read again when the file changes); callers never modify it."""
+    return _yaml(Path(path).read_text())
+
+
+def _yaml(text: str) -> Any:
+    """``yaml.safe_load`` with libyaml's parser where installed (5-10x faster, same result)."""
+    return yaml.load(text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
 
 
 def load_config(paths: str | Path | Iterable[str | Path] = DEFAULT_CONFIG) -> dict[str, Any]:
@@ -272,7 +284,7 @@ def _load_yaml(path: Path) -> dict[str, Any]:
             f"{MAX_CONFIG_BYTES}"
         )
     try:
-        loaded = yaml.safe_load(read_text(path, "config file")) or {}
+        loaded = _yaml(read_text(path, "config file")) or {}
     except ValueError as exc:  # not UTF-8 (read_text names the file)
         raise ConfigError(str(exc)) from None
     except yaml.YAMLError as exc:  # e.g. a tab in the indentation: where, in one line

@@ -132,32 +132,19 @@ def conditioning(mech: Mechanism, x: Array) -> Conditioning:
     joints change as ``s t + a t^2 / 2`` with ``a = u . F''[v, v]``, so (fold normal form) another
     solution of the same joints lies near ``t = -2 s / a``; its offset is ``t v`` (box widths).
     Square systems only (a redundant system, more joints than pose coordinates, has no such fold
-    in general: offset NaN, never flagged). Rows whose IK fails near ``x`` give NaN, not flagged.
+    in general: offset NaN, never flagged). Rows that are not finite, or whose IK fails near
+    ``x``, give NaN and are not flagged.
     """
     x = np.asarray(x, dtype=float)
     shape, n = x.shape[:-1], x.shape[-1]
     flat = x.reshape(-1, n)
-    lo, hi = (np.asarray(b, dtype=float) for b in mech.pose_bounds())
-    width = hi - lo
-    steps = np.concatenate([np.eye(n), -np.eye(n)]) * (_H_JACOBIAN * width)  # (2n, n)
-    f = _ik_at(mech, flat[:, None, :] + np.concatenate([steps, np.zeros((1, n))])[None])
-    m = f.shape[-1]
-    jac = np.swapaxes(f[:, :n] - f[:, n : 2 * n], 1, 2) / (2 * _H_JACOBIAN)  # (N, m, n)
-    with np.errstate(all="ignore"):
-        ok = np.all(np.isfinite(jac), axis=(1, 2))
-        u, sv, vt = np.linalg.svd(np.where(ok[:, None, None], jac, 0.0), full_matrices=False)
-        condition = np.where(ok, sv[:, 0] / sv[:, -1], np.nan)
-        weak, left = vt[:, -1, :], u[:, :, -1]  # (N, n), (N, m)
-        ends = flat[:, None, :] + np.stack([weak, -weak], 1) * (_H_CURVATURE * width)
-        g = _ik_at(mech, ends)
-        curvature = np.einsum(
-            "nm,nm->n", left, (g[:, 0] - 2 * f[:, -1] + g[:, 1]) / _H_CURVATURE**2
-        )
-        t = -2 * sv[:, -1] / curvature
-        offset = t[:, None] * weak * width
-        if m != n:
-            offset[:] = np.nan
-        distance = np.max(np.abs(offset) / width, axis=-1)
+    width = np.subtract(*(np.asarray(b, dtype=float) for b in mech.pose_bounds()[::-1]))
+    condition, offset = np.full(len(flat), np.nan), np.full(flat.shape, np.nan)
+    fin = np.all(np.isfinite(flat), axis=-1)
+    if fin.any():
+        condition[fin], offset[fin] = _fold(mech, flat[fin], width)
+    with np.errstate(invalid="ignore"):
+        distance = np.max(np.abs(offset) / width, axis=-1, initial=0.0)
     distance = np.where(np.isfinite(distance), distance, np.inf)
     return Conditioning(
         condition=condition.reshape(shape),
@@ -166,6 +153,26 @@ def conditioning(mech: Mechanism, x: Array) -> Conditioning:
         near_singular=(distance <= NEAR_SINGULAR).reshape(shape),
         threshold=NEAR_SINGULAR,
     )
+
+
+def _fold(mech: Mechanism, x: Array, width: Array) -> tuple[Array, Array]:
+    """Condition number and fold offset (see :func:`conditioning`) of finite poses ``x (N, n)``."""
+    n = x.shape[-1]
+    steps = np.concatenate([np.eye(n), -np.eye(n), np.zeros((1, n))]) * (_H_JACOBIAN * width)
+    f = _ik_at(mech, x[:, None, :] + steps[None])  # (N, 2n + 1, m): x +- h e_k, then x
+    jac = np.swapaxes(f[:, :n] - f[:, n : 2 * n], 1, 2) / (2 * _H_JACOBIAN)  # (N, m, n)
+    with np.errstate(all="ignore"):
+        ok = np.all(np.isfinite(jac), axis=(1, 2))
+        u, sv, vt = np.linalg.svd(np.where(ok[:, None, None], jac, 0.0), full_matrices=False)
+        condition = np.where(ok, sv[:, 0] / sv[:, -1], np.nan)
+        weak, left = vt[:, -1, :], u[:, :, -1]  # (N, n), (N, m)
+        g = _ik_at(mech, x[:, None, :] + np.stack([weak, -weak], 1) * (_H_CURVATURE * width))
+        second = (g[:, 0] - 2 * f[:, -1] + g[:, 1]) / _H_CURVATURE**2
+        t = -2 * sv[:, -1] / np.einsum("nm,nm->n", left, second)
+        offset = t[:, None] * weak * width
+    if f.shape[-1] != n:  # redundant: no fold normal form
+        offset[:] = np.nan
+    return condition, np.where(ok[:, None], offset, np.nan)
 
 
 def _ik_at(mech: Mechanism, points: Array) -> Array:
