@@ -10,7 +10,9 @@ is a right answer (its pose's IK gives back the joints). More than 1,000 argumen
 
 from __future__ import annotations
 
+import collections
 import contextlib
+import functools
 import io
 import json
 import math
@@ -27,6 +29,7 @@ from hypothesis import strategies as st
 from parakin import mechanisms
 from parakin.cli import main, parameters_of
 from parakin.units import to_si
+from parakin.workspace import sample_reachable
 
 EXAMPLES = 350
 FUZZ = settings(
@@ -90,6 +93,10 @@ ITERS = ["0", "1", "5", "50", "1e2", "-1", "2.5", "1e6", "abc", "nan"]
 TOLS = ["1e-10", "0", "-1e-3", "1e-300", "inf", "nan", "1", "abc"]
 
 
+#: exit status -> how many argument vectors of this module's tests ended so (printed with -s)
+TALLY: collections.Counter = collections.Counter()
+
+
 def run(argv: list[str]) -> tuple[int, str, str]:
     """``main(argv)`` in process: exit status, stdout, stderr (argparse's exits included)."""
     out, err = io.StringIO(), io.StringIO()
@@ -98,7 +105,20 @@ def run(argv: list[str]) -> tuple[int, str, str]:
             code = main(argv)
         except SystemExit as exc:
             code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
+    TALLY[code] += 1
     return code, out.getvalue(), err.getvalue()
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _report_tally():
+    """The counts the issue asks for: vectors tried, answers (exit 0), reported failures (1),
+    one-line errors (2); every exit-0 fk --json answer is checked right by _check."""
+    yield
+    print(
+        f"\nCLI fuzz: {sum(TALLY.values())} vectors: {TALLY[0]} answers (exit 0), "
+        f"{TALLY[1]} solver failures reported (exit 1), {TALLY[2]} one-line errors (exit 2), "
+        f"other {sum(v for k, v in TALLY.items() if k not in (0, 1, 2))}"
+    )
 
 
 def _strict_json(text: str):
@@ -726,3 +746,37 @@ def test_help_lists_every_command_on_one_line():
     for name in commands:
         line = next(row for row in stdout.splitlines() if row.split()[:1] == [name])
         assert len(line.split()) > 2, line  # the name and its help on the same line
+
+
+@functools.cache
+def _worst_poses(name: str) -> tuple[np.ndarray, np.ndarray]:
+    """The 40 worst-conditioned of 3,000 random poses of ``name`` and their joints (seeded)."""
+    mech = mechanisms.REGISTRY[name]()
+    pool = sample_reachable(mech, 3000, np.random.default_rng(0))
+    joints = mech.ik(pool)
+    worst = np.argsort(-np.linalg.cond(mech.jacobian_pose(pool, joints)), kind="stable")[:40]
+    return pool[worst], joints[worst]
+
+
+@settings(max_examples=40, derandomize=True, deadline=None, database=None)
+@given(
+    name=st.sampled_from(["stewart36", "stewart66"]),
+    row=st.integers(0, 39),
+    offset=st.lists(st.floats(-1e-3, 1e-3), min_size=6, max_size=6),
+)
+def test_near_singular_poses_through_the_cli(name, row, offset):
+    """Near-singular joints, Newton from 1e-3 off the true pose: a right answer (exit 0, checked
+    by _check) that, where it is not the pose we started near, says so in one warning line."""
+    truth, joints = _worst_poses(name)
+    x0 = truth[row] + np.asarray(offset)
+    argv = ["fk", name, "--joints", *map(repr, joints[row].tolist()), "--solver", "newton"]
+    argv += ["--x0", *map(repr, x0.tolist()), "--json"]
+    _check(argv)
+    code, stdout, stderr = run(argv)
+    if code == 0:
+        out = _strict_json(stdout)
+        mech = mechanisms.REGISTRY[name]()
+        moved = np.max(np.abs(mech.pose_difference(np.asarray(out["x"]), truth[row]))) > 1e-6
+        assert not moved or out["near_singular"], (argv, out["x"])
+        warned = [line for line in stderr.splitlines() if "warning: near a singularity" in line]
+        assert len(warned) == int(out["near_singular"]), stderr

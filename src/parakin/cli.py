@@ -854,7 +854,10 @@ def _config_args(p) -> None:
         "--configfile (e.g. config/quick.yaml)",
     )
     p.add_argument(
-        "--config-json", default=None, help="the whole config as JSON (what Snakemake passes)"
+        "--config-json",
+        type=nonempty,
+        default=None,
+        help="the whole config as JSON (what Snakemake passes)",
     )
     p.add_argument(
         "--validated",
