@@ -143,3 +143,26 @@ def test_rows_round_trip_by_name(tmp_path):
     )
     with pytest.raises(ValueError, match="column 'z' is in rad but these --units read z in deg"):
         read_rows(path, ("x", "y", "z"), ("m", "m", "deg"))
+
+
+def test_record_copies_atomically_and_follows_no_symlink(tmp_path, monkeypatch):
+    """`parakin record` (pipeline.record) writes the record through the same atomic writer."""
+    from pathlib import Path
+
+    from parakin.pipeline import artefacts, record
+
+    monkeypatch.syspath_prepend(str(Path(__file__).parent / "data"))
+    found = artefacts(["toy_study"])
+    results, committed = tmp_path / "results", tmp_path / "record"
+    files = [Path(a.study_folder) / f for a in found.values() for f in a.outputs]
+    for name in [*files, Path("REPORT.md"), Path("report.csv")]:
+        (results / name).parent.mkdir(parents=True, exist_ok=True)
+        (results / name).write_text(f"new {name}\n")
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep\n")
+    (committed / files[0]).parent.mkdir(parents=True)
+    (committed / files[0]).symlink_to(victim)
+    copied = record(results, committed, ["toy_study"])
+    assert len(copied) == len(files) + 2 and victim.read_text() == "keep\n"
+    assert (committed / files[0]).read_text() == f"new {files[0]}\n"
+    assert not list(committed.rglob("*.tmp*"))
