@@ -17,7 +17,7 @@ import pytest
 from parakin import mechanisms
 from parakin.cli import main
 from parakin.solvers import solve_fk
-from parakin.solvers.verify import NEAR_SINGULAR, conditioning
+from parakin.solvers.result import NEAR_SINGULAR, conditioning
 from parakin.workspace import sample_reachable
 
 SEEDS = (0, 1, 2)

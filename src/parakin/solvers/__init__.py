@@ -27,7 +27,6 @@ numpy solver.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 import time
 from typing import Any
@@ -48,7 +47,7 @@ from parakin.solvers.pso import pso as _pso
 from parakin.solvers.quasi_newton import bfgs, broyden
 from parakin.solvers.registry import METHODS, Method, register
 from parakin.solvers.result import FKResult, Status, summarize
-from parakin.solvers.verify import conditioning, default_joint_tol, verify
+from parakin.solvers.verify import default_joint_tol, verify
 
 __all__ = [
     "MAXITER_LIMIT",
@@ -187,7 +186,7 @@ def solve_fk(
             mech, method, joints, x0, tol, int(maxiter), options, joint_tol, start
         )
         if one is not None:
-            return one.bind(functools.partial(conditioning, mech))
+            return one.bind(mech)
     batch, flat_q, flat_x = flatten_problem(mech, joints, x0, tol, maxiter)
     jtol = default_joint_tol(tol, options) if joint_tol is None else float(joint_tol)
     bad = ~(np.all(np.isfinite(flat_q), axis=-1) & np.all(np.isfinite(flat_x), axis=-1))
@@ -213,7 +212,7 @@ def solve_fk(
             result = _mark_bad_rows(mech, result, bad, int(maxiter))
     return dataclasses.replace(
         result.reshape(batch), wall_time=time.perf_counter() - start, method=method
-    ).bind(functools.partial(conditioning, mech))  # FKResult.conditioning: computed when asked
+    ).bind(mech)  # FKResult.conditioning: computed when asked
 
 
 def _nothing(mech: Mechanism, joints: Array, x0: Array, method: str) -> FKResult:

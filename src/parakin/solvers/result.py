@@ -15,6 +15,11 @@ and fails in the same way:
   it, its step is ``<= xtol`` or its gradient ``<= gtol``);
 * a pose whose new iterate or residual is not finite stops with ``success = False`` and keeps its
   last finite iterate: no NaN ever leaves a solver.
+
+:func:`conditioning` measures how well the joints pin an answer down (``FKResult.conditioning``,
+computed on first use): near a singularity another solution of the same joints comes close and the
+start decides which one is returned; such an answer is flagged ``near_singular``
+(``docs/near_singular.md``).
 """
 
 from __future__ import annotations
@@ -36,10 +41,12 @@ __all__ = [
     "Conditioning",
     "Evaluator",
     "FKResult",
+    "NEAR_SINGULAR",
     "ROW_ERRORS",
     "Status",
     "StepInfo",
     "inf_norm",
+    "conditioning",
     "iterate",
     "rowwise",
     "summarize",
@@ -142,8 +149,8 @@ def _to_json(a: Any) -> Any:
 class Conditioning:
     """How well the joints pin down an FK answer, per pose (the batch shape of the result).
 
-    Computed at the answer ``x`` from the IK alone (:func:`parakin.solvers.verify.conditioning`,
-    method and threshold in ``docs/near_singular.md``): near a forward singularity two solutions of
+    Computed at the answer ``x`` from the IK alone (:func:`conditioning`, method and threshold
+    in ``docs/near_singular.md``): near a forward singularity two solutions of
     the same joints come together, and the answer returned depends on the start.
     """
 
@@ -156,7 +163,7 @@ class Conditioning:
     distance: Array
     #: True where ``distance <= threshold``: near a singularity, another solution close by
     near_singular: NDArray[np.bool_]
-    #: the threshold on ``distance`` (:data:`parakin.solvers.verify.NEAR_SINGULAR`)
+    #: the threshold on ``distance`` (:data:`NEAR_SINGULAR`)
     threshold: float
 
     @property
@@ -210,22 +217,23 @@ class FKResult:
         if self.joint_error is not None:
             per_pose["joint_error"] = self.joint_error.reshape(shape)
         out = dataclasses.replace(self, x=self.x.reshape(*shape, self.x.shape[-1]), **per_pose)
-        probe = self.__dict__.get("_probe")
-        return out if probe is None else out.bind(probe)
+        mech = self.__dict__.get("_mech")
+        return out if mech is None else out.bind(mech)
 
-    def bind(self, probe: Callable[[Array], Conditioning]) -> FKResult:
-        """This result, with ``probe(x) -> Conditioning`` remembered for :attr:`conditioning`
-        (what :func:`parakin.solvers.solve_fk` does; nothing is computed until it is asked for)."""
-        object.__setattr__(self, "_probe", probe)
+    def bind(self, mech: Mechanism) -> FKResult:
+        """This result, with the mechanism it solved remembered for :attr:`conditioning` (what
+        :func:`parakin.solvers.solve_fk` does; nothing is computed until it is asked for, and the
+        frozen fields are untouched)."""
+        self.__dict__["_mech"] = mech
         return self
 
     @functools.cached_property
     def conditioning(self) -> Conditioning | None:
-        """The :class:`Conditioning` at the answer, computed on first use (a few IK evaluations
-        per pose, so a solve never pays for it unasked); None for a result that
-        :func:`~parakin.solvers.solve_fk` did not make."""
-        probe = self.__dict__.get("_probe")
-        return None if probe is None else probe(self.x)
+        """The :class:`Conditioning` at the answer (:func:`conditioning`), computed on first use (a
+        few IK evaluations per pose, so a solve never pays for it unasked); None for a result
+        that :func:`~parakin.solvers.solve_fk` did not make."""
+        mech = self.__dict__.get("_mech")
+        return None if mech is None else conditioning(mech, self.x)
 
     @property
     def near_singular(self) -> NDArray[np.bool_] | None:
@@ -406,3 +414,71 @@ def iterate(
         method=method,
         message=summarize(status, maxiter),
     )
+
+
+# ------------------------------------------------------------ conditioning at the answer
+#: an answer is *near a singularity* when another solution of the same joints is estimated within
+#: this fraction of the pose box (largest |offset_k| / box width_k): a scale fixed beforehand, not
+#: fitted to any case (docs/near_singular.md: derivation, and how often it fires per mechanism)
+NEAR_SINGULAR = 0.01
+#: central-difference step of ``d ik / d pose`` and the second-difference step along the fold
+#: direction, in box widths (truncation ~h^2 and rounding ~eps/h of each stay below 1e-8)
+_H_JACOBIAN, _H_CURVATURE = 1e-6, 1e-4
+
+
+def conditioning(mech: Mechanism, x: Array) -> Conditioning:
+    """The :class:`~parakin.solvers.result.Conditioning` of the FK answers ``x (..., n_pose)``.
+
+    With ``F(x) = ik(x)`` in pose coordinates scaled by the box widths, ``J = dF/dx = U S V^T``:
+    along the weakest direction ``v`` (smallest singular value ``s``, left vector ``u``) the
+    joints change as ``s t + a t^2 / 2`` with ``a = u . F''[v, v]``, so (fold normal form) another
+    solution of the same joints lies near ``t = -2 s / a``; its offset is ``t v`` (box widths).
+    Square systems only (a redundant system, more joints than pose coordinates, has no such fold
+    in general: offset NaN, never flagged). Rows that are not finite, or whose IK fails near
+    ``x``, give NaN and are not flagged.
+    """
+    x = np.asarray(x, dtype=float)
+    shape, n = x.shape[:-1], x.shape[-1]
+    flat = x.reshape(-1, n)
+    width = np.subtract(*(np.asarray(b, dtype=float) for b in mech.pose_bounds()[::-1]))
+    condition, offset = np.full(len(flat), np.nan), np.full(flat.shape, np.nan)
+    fin = np.all(np.isfinite(flat), axis=-1)
+    if fin.any():
+        condition[fin], offset[fin] = _fold(mech, flat[fin], width)
+    with np.errstate(invalid="ignore"):
+        distance = np.max(np.abs(offset) / width, axis=-1, initial=0.0)
+    distance = np.where(np.isfinite(distance), distance, np.inf)
+    return Conditioning(
+        condition=condition.reshape(shape),
+        neighbour=offset.reshape(*shape, n),
+        distance=distance.reshape(shape),
+        near_singular=(distance <= NEAR_SINGULAR).reshape(shape),
+        threshold=NEAR_SINGULAR,
+    )
+
+
+def _fold(mech: Mechanism, x: Array, width: Array) -> tuple[Array, Array]:
+    """Condition number and fold offset (see :func:`conditioning`) of finite poses ``x (N, n)``."""
+    n = x.shape[-1]
+    steps = np.concatenate([np.eye(n), -np.eye(n), np.zeros((1, n))]) * (_H_JACOBIAN * width)
+    f = _ik_at(mech, x[:, None, :] + steps[None])  # (N, 2n + 1, m): x +- h e_k, then x
+    jac = np.swapaxes(f[:, :n] - f[:, n : 2 * n], 1, 2) / (2 * _H_JACOBIAN)  # (N, m, n)
+    with np.errstate(all="ignore"):
+        ok = np.all(np.isfinite(jac), axis=(1, 2))
+        u, sv, vt = np.linalg.svd(np.where(ok[:, None, None], jac, 0.0), full_matrices=False)
+        condition = np.where(ok, sv[:, 0] / sv[:, -1], np.nan)
+        weak, left = vt[:, -1, :], u[:, :, -1]  # (N, n), (N, m)
+        g = _ik_at(mech, x[:, None, :] + np.stack([weak, -weak], 1) * (_H_CURVATURE * width))
+        second = (g[:, 0] - 2 * f[:, -1] + g[:, 1]) / _H_CURVATURE**2
+        t = -2 * sv[:, -1] / np.einsum("nm,nm->n", left, second)
+        offset = t[:, None] * weak * width
+    if f.shape[-1] != n:  # redundant: no fold normal form
+        offset[:] = np.nan
+    return condition, np.where(ok[:, None], offset, np.nan)
+
+
+def _ik_at(mech: Mechanism, points: Array) -> Array:
+    """``mech.ik`` of ``points (N, k, n)`` in one call, ``(N, k, m)``; NaN where the IK fails."""
+    n_rows, k, n = points.shape
+    flat = points.reshape(-1, n)
+    return rowwise(mech.ik, flat, tail=(mech.n_joints,)).reshape(n_rows, k, mech.n_joints)

@@ -18,11 +18,11 @@ compiled kernels (``mech.kernel()``, :mod:`parakin.kernels`) the three hooks are
 
 A valid answer can still sit near a forward singularity, where another solution of the same
 joints (on the same assembly) comes close and the start decides which one a solver returns.
-:func:`conditioning` measures that at the answer (``FKResult.conditioning``, computed on first
-use): the condition number of ``d ik / d pose`` and, from the fold normal form, the offset to the
-nearest other solution; an answer whose neighbour lies within :data:`NEAR_SINGULAR` of the pose
-box is flagged ``near_singular`` (still a success: it is a right answer). See
-``docs/near_singular.md``.
+:func:`parakin.solvers.result.conditioning` measures that at the answer
+(``FKResult.conditioning``, computed on first use): the condition number of ``d ik / d pose`` and,
+from the fold normal form, the offset to the nearest other solution; an answer whose neighbour
+lies within ``NEAR_SINGULAR`` of the pose box is flagged ``near_singular`` (still a success: it is
+a right answer). See ``docs/near_singular.md``.
 """
 
 from __future__ import annotations
@@ -34,16 +34,9 @@ import numpy as np
 
 from parakin import kernels
 from parakin.mechanisms.base import Array, Mechanism
-from parakin.solvers.result import Conditioning, FKResult, Status, rowwise, summarize
+from parakin.solvers.result import FKResult, Status, rowwise, summarize
 
-__all__ = [
-    "JOINT_TOL_FLOOR",
-    "NEAR_SINGULAR",
-    "conditioning",
-    "default_joint_tol",
-    "judge_one",
-    "verify",
-]
+__all__ = ["JOINT_TOL_FLOOR", "default_joint_tol", "judge_one", "verify"]
 
 #: smallest default joint tolerance (joint units: m, or the dimensionless lengths of the 3-6 Stewart)
 JOINT_TOL_FLOOR = 1e-8
@@ -113,70 +106,3 @@ def verify(
     return dataclasses.replace(
         result, success=status >= 0, status=status, joint_error=err, message=message
     )
-
-
-#: an answer is *near a singularity* when another solution of the same joints is estimated within
-#: this fraction of the pose box (largest |offset_k| / box width_k): a scale fixed beforehand, not
-#: fitted to any case (docs/near_singular.md: derivation, and how often it fires per mechanism)
-NEAR_SINGULAR = 0.01
-#: central-difference step of ``d ik / d pose`` and the second-difference step along the fold
-#: direction, in box widths (truncation ~h^2 and rounding ~eps/h of each stay below 1e-8)
-_H_JACOBIAN, _H_CURVATURE = 1e-6, 1e-4
-
-
-def conditioning(mech: Mechanism, x: Array) -> Conditioning:
-    """The :class:`~parakin.solvers.result.Conditioning` of the FK answers ``x (..., n_pose)``.
-
-    With ``F(x) = ik(x)`` in pose coordinates scaled by the box widths, ``J = dF/dx = U S V^T``:
-    along the weakest direction ``v`` (smallest singular value ``s``, left vector ``u``) the
-    joints change as ``s t + a t^2 / 2`` with ``a = u . F''[v, v]``, so (fold normal form) another
-    solution of the same joints lies near ``t = -2 s / a``; its offset is ``t v`` (box widths).
-    Square systems only (a redundant system, more joints than pose coordinates, has no such fold
-    in general: offset NaN, never flagged). Rows that are not finite, or whose IK fails near
-    ``x``, give NaN and are not flagged.
-    """
-    x = np.asarray(x, dtype=float)
-    shape, n = x.shape[:-1], x.shape[-1]
-    flat = x.reshape(-1, n)
-    width = np.subtract(*(np.asarray(b, dtype=float) for b in mech.pose_bounds()[::-1]))
-    condition, offset = np.full(len(flat), np.nan), np.full(flat.shape, np.nan)
-    fin = np.all(np.isfinite(flat), axis=-1)
-    if fin.any():
-        condition[fin], offset[fin] = _fold(mech, flat[fin], width)
-    with np.errstate(invalid="ignore"):
-        distance = np.max(np.abs(offset) / width, axis=-1, initial=0.0)
-    distance = np.where(np.isfinite(distance), distance, np.inf)
-    return Conditioning(
-        condition=condition.reshape(shape),
-        neighbour=offset.reshape(*shape, n),
-        distance=distance.reshape(shape),
-        near_singular=(distance <= NEAR_SINGULAR).reshape(shape),
-        threshold=NEAR_SINGULAR,
-    )
-
-
-def _fold(mech: Mechanism, x: Array, width: Array) -> tuple[Array, Array]:
-    """Condition number and fold offset (see :func:`conditioning`) of finite poses ``x (N, n)``."""
-    n = x.shape[-1]
-    steps = np.concatenate([np.eye(n), -np.eye(n), np.zeros((1, n))]) * (_H_JACOBIAN * width)
-    f = _ik_at(mech, x[:, None, :] + steps[None])  # (N, 2n + 1, m): x +- h e_k, then x
-    jac = np.swapaxes(f[:, :n] - f[:, n : 2 * n], 1, 2) / (2 * _H_JACOBIAN)  # (N, m, n)
-    with np.errstate(all="ignore"):
-        ok = np.all(np.isfinite(jac), axis=(1, 2))
-        u, sv, vt = np.linalg.svd(np.where(ok[:, None, None], jac, 0.0), full_matrices=False)
-        condition = np.where(ok, sv[:, 0] / sv[:, -1], np.nan)
-        weak, left = vt[:, -1, :], u[:, :, -1]  # (N, n), (N, m)
-        g = _ik_at(mech, x[:, None, :] + np.stack([weak, -weak], 1) * (_H_CURVATURE * width))
-        second = (g[:, 0] - 2 * f[:, -1] + g[:, 1]) / _H_CURVATURE**2
-        t = -2 * sv[:, -1] / np.einsum("nm,nm->n", left, second)
-        offset = t[:, None] * weak * width
-    if f.shape[-1] != n:  # redundant: no fold normal form
-        offset[:] = np.nan
-    return condition, np.where(ok[:, None], offset, np.nan)
-
-
-def _ik_at(mech: Mechanism, points: Array) -> Array:
-    """``mech.ik`` of ``points (N, k, n)`` in one call, ``(N, k, m)``; NaN where the IK fails."""
-    n_rows, k, n = points.shape
-    flat = points.reshape(-1, n)
-    return rowwise(mech.ik, flat, tail=(mech.n_joints,)).reshape(n_rows, k, mech.n_joints)
