@@ -77,12 +77,11 @@ class State:
         name = self.bodies.platform
         for g, _, m in self.groups:
             if name in g.names:
-                k = g.names.index(name)
-                return BodyMotion(
-                    m.centre[..., k : k + 1, :],
-                    m.rotation[..., k : k + 1, :, :],
-                    jet.Spin(m.spin.tangents[..., k : k + 1, :], m.spin.bias[..., k : k + 1, :]),
-                )
+                k = slice(g.names.index(name), g.names.index(name) + 1)
+                spin = jet.Spin(m.spin.tangents[..., k, :], m.spin.bias[..., k, :])
+                frame = None if m.frame is None else m.frame[..., k, :, :]
+                axis = None if m.axis is None else m.axis[..., k, :]
+                return BodyMotion(m.centre[..., k, :], spin, frame, axis)
         raise KeyError(f"no body named {name!r} (the platform)")
 
 
@@ -120,10 +119,6 @@ def state(
     return State(bodies, mass, groups)
 
 
-def _world_inertia(rotation: Array, body: RigidBody) -> Array:
-    return rotation @ body.inertia_matrix @ np.swapaxes(rotation, -1, -2)
-
-
 def _loads(st: State, xddot: Array) -> list[tuple[jet.Jet, jet.Spin, Array, Array]]:
     """Per group: centre jet, spin, and the inertial-minus-gravity force and moment (..., c, 3)."""
     g = np.asarray(st.mass.gravity)
@@ -132,9 +127,7 @@ def _loads(st: State, xddot: Array) -> list[tuple[jet.Jet, jet.Spin, Array, Arra
         acc = m.centre.acceleration(xddot)
         alpha = m.spin.acceleration(xddot)
         omega = m.spin.rate
-        inertia = _world_inertia(m.rotation, body)
-        i_omega = np.sum(inertia * omega[..., None, :], axis=-1)
-        moment = np.sum(inertia * alpha[..., None, :], axis=-1) + np.cross(omega, i_omega)
+        moment = m.inertia_times(body, alpha) + jet.vcross(omega, m.inertia_times(body, omega))
         out.append((m.centre, m.spin, body.mass * (acc - g), moment))
     return out
 
@@ -161,7 +154,7 @@ def generalized_forces(st: State, xddot: ArrayLike, wrench: ArrayLike | None = N
 
 def _project(tangents: Array, load: Array) -> Array:
     """``sum over bodies and axes of tangents[k] . load`` -> (n, ...)."""
-    return np.sum(tangents * load, axis=(-1, -2))
+    return np.sum(jet.vdot(tangents, load), axis=-1)
 
 
 def mass_matrix(st: State) -> Array:
@@ -169,11 +162,12 @@ def mass_matrix(st: State) -> Array:
     n = st.joints.n
     out = 0.0
     for _, body, m in st.groups:
-        jc = np.moveaxis(m.centre.tangents[:n], 0, -1)  # (..., c, 3, n)
-        jw = np.moveaxis(m.spin.tangents[:n], 0, -1)
-        inertia = _world_inertia(m.rotation, body)
-        out = out + body.mass * np.sum(np.swapaxes(jc, -1, -2) @ jc, axis=-3)
-        out = out + np.sum(np.swapaxes(jw, -1, -2) @ inertia @ jw, axis=-3)
+        jc, jw = m.centre.tangents[:n], m.spin.tangents[:n]  # (n, ..., c, 3)
+        i_jw = m.inertia_times(body, jw)
+        for k in range(n):
+            row = body.mass * jet.vdot(jc[k], jc) + jet.vdot(jw[k], i_jw)  # (n, ..., c)
+            out = out + np.zeros(row.shape[1:-1] + (n, n)) if isinstance(out, float) else out
+            out[..., k, :] += np.moveaxis(np.sum(row, axis=-1), 0, -1)
     return out
 
 
@@ -183,10 +177,9 @@ def energy(st: State) -> tuple[Array, Array]:
     kinetic, potential = 0.0, 0.0
     for _, body, m in st.groups:
         v, omega = m.centre.rate, m.spin.rate
-        inertia = _world_inertia(m.rotation, body)
-        rot = np.einsum("...i,...ij,...j->...", omega, inertia, omega)
-        kinetic = kinetic + 0.5 * np.sum(body.mass * np.sum(v * v, -1) + rot, axis=-1)
-        potential = potential - body.mass * np.sum(m.centre.value @ g, axis=-1)
+        rot = jet.vdot(omega, m.inertia_times(body, omega))
+        kinetic = kinetic + 0.5 * np.sum(body.mass * jet.vdot(v, v) + rot, axis=-1)
+        potential = potential - body.mass * np.sum(jet.vdot(m.centre.value, g), axis=-1)
     return kinetic, potential
 
 

@@ -258,12 +258,31 @@ class Bodies:
 
 @dataclass(frozen=True, eq=False)
 class BodyMotion:
-    """The motion of one group's centres of mass: ``centre`` jet (..., c, 3), ``rotation`` of the
-    body frames (..., c, 3, 3) and their angular velocity ``spin``."""
+    """The motion of one group's centres of mass: ``centre`` jet (..., c, 3) and the angular
+    velocity ``spin`` of the body frames, which are either rotations ``frame`` (..., c, 3, 3) or,
+    for spin-free axisymmetric bodies, given by their unit ``axis`` (..., c, 3)."""
 
     centre: Jet
-    rotation: Array
     spin: Spin
+    frame: Array | None = None
+    axis: Array | None = None
+
+    @property
+    def rotation(self) -> Array:
+        """The body frames (..., c, 3, 3) (an arbitrary turn about the axis of spin-free bodies)."""
+        return self.frame if self.frame is not None else frame_with_z(self.axis)
+
+    def inertia_times(self, body: RigidBody, w: Array) -> Array:
+        """``I w`` with the inertia in world axes, for vectors ``w`` (..., c, 3) (a leading axis
+        of directions allowed): ``I_t w + (I_a - I_t)(n . w) n`` for an axisymmetric body on
+        ``n``, ``R I R^T w`` otherwise."""
+        i = body.inertia_matrix
+        if self.axis is not None:
+            n = self.axis
+            return i[0, 0] * w + (i[2, 2] - i[0, 0]) * jet.vdot(n, w)[..., None] * n
+        r = self.frame
+        local = jet.vmatvec(np.swapaxes(r, -1, -2), w)
+        return jet.vmatvec(r, jet.vmatvec(i, local))
 
 
 def frame_with_z(axis: Array) -> Array:
@@ -285,14 +304,14 @@ def axis_motion(group: BodyGroup, body: RigidBody) -> BodyMotion:
             f"inertia = {body.inertia})"
         )
     n = group.axis
-    return BodyMotion(group.origin + n * body.com[2], frame_with_z(n.value), jet.spin_of_axis(n))
+    return BodyMotion(group.origin + n * body.com[2], jet.spin_of_axis(n), axis=n.value)
 
 
 def rigid_motion(group: BodyGroup, body: RigidBody) -> BodyMotion:
     """Motion of bodies with a declared rotation: centre ``origin + R com``."""
     r = group.rotation
     return BodyMotion(
-        group.origin + jet.matvec(r, np.asarray(body.com)), r.value, jet.spin_of_rotation(r)
+        group.origin + jet.matvec(r, np.asarray(body.com)), jet.spin_of_rotation(r), frame=r.value
     )
 
 
