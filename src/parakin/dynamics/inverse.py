@@ -164,10 +164,11 @@ def mass_matrix(st: State) -> Array:
     for _, body, m in st.groups:
         jc, jw = m.centre.tangents[:n], m.spin.tangents[:n]  # (n, ..., c, 3)
         i_jw = m.inertia_times(body, jw)
-        for k in range(n):
-            row = body.mass * jet.vdot(jc[k], jc) + jet.vdot(jw[k], i_jw)  # (n, ..., c)
-            out = out + np.zeros(row.shape[1:-1] + (n, n)) if isinstance(out, float) else out
-            out[..., k, :] += np.moveaxis(np.sum(row, axis=-1), 0, -1)
+        rows = [
+            np.sum(body.mass * jet.vdot(jc[k], jc) + jet.vdot(jw[k], i_jw), axis=-1)
+            for k in range(n)
+        ]
+        out = out + np.moveaxis(np.stack(rows), (0, 1), (-2, -1))  # (n, n, ...) -> (..., n, n)
     return out
 
 

@@ -25,6 +25,7 @@ MuJoCo is imported lazily (``pip install mujoco``).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -37,7 +38,19 @@ from parakin.dynamics.model import MassModel
 from parakin.errors import ShapeError
 from parakin.mechanisms.base import Array, Mechanism, as_batch
 
-__all__ = ["MujocoModel", "MujocoResult", "mjcf", "build", "inverse_dynamics", "import_mujoco"]
+__all__ = [
+    "MujocoModel",
+    "MujocoResult",
+    "Tracking",
+    "mjcf",
+    "build",
+    "inverse_dynamics",
+    "import_mujoco",
+    "site_jacobians",
+    "open_loop",
+    "track",
+    "vector",
+]
 
 
 def import_mujoco():
@@ -51,8 +64,12 @@ def import_mujoco():
     return mujoco
 
 
-def _vec(v: ArrayLike) -> str:
+def vector(v: ArrayLike) -> str:
+    """An MJCF vector attribute: every value printed exactly (``repr``)."""
     return " ".join(repr(float(x)) for x in np.asarray(v, dtype=float).ravel())
+
+
+_vec = vector
 
 
 def _body_xml(ref: Assembly, k: int, sites: list[tuple[str, int, Array]], indent: str) -> list[str]:
@@ -205,20 +222,8 @@ def _rows(
     each) and of the platform's centre of mass and angular velocity (6 rows)."""
     mujoco = import_mujoco()
     model, nv = mm.model, mm.model.nv
-    rows, dots = [], []
-
-    def point(site: int, dot: bool) -> Array:
-        jp = np.zeros((3, nv))
-        body = int(model.site_bodyid[site])
-        if body > 0:
-            fn = mujoco.mj_jacDot if dot else mujoco.mj_jac
-            fn(model, data, jp, None, data.site_xpos[site], body)
-        return jp
-
-    for s1, s2 in pairs:
-        rows.append(point(s1, False) - point(s2, False))
-        if with_dot:
-            dots.append(point(s1, True) - point(s2, True))
+    loops, loop_dots = site_jacobians(model, data, pairs, with_dot)
+    rows, dots = [loops], [loop_dots]
     for dot in [False, True] if with_dot else [False]:
         jp, jr = np.zeros((3, nv)), np.zeros((3, nv))
         fn = mujoco.mj_jacDot if dot else mujoco.mj_jac
@@ -327,3 +332,96 @@ def _max_spin(mm: MujocoModel, data, qvel: Array) -> float:
             )
             spins.append(abs(float(axis @ omega)))
     return max(spins)
+
+
+# ---------------------------------------------------------------------------------------- shared
+def site_jacobians(model, data, pairs, with_dot: bool) -> tuple[Array, Array | None]:
+    """Jacobians (and time derivatives, ``mj_jacDot``) of ``site1 - site2`` for each pair of
+    site ids, stacked (3 rows a pair): the rows of ``connect`` loop closures."""
+    mujoco = import_mujoco()
+    nv = model.nv
+    rows, dots = [], []
+    for pair in pairs:
+        jp = [np.zeros((3, nv)), np.zeros((3, nv))]
+        jd = [np.zeros((3, nv)), np.zeros((3, nv))]
+        for side, site in enumerate(pair):
+            body = int(model.site_bodyid[site])
+            if body == 0:
+                continue
+            mujoco.mj_jac(model, data, jp[side], None, data.site_xpos[site], body)
+            if with_dot:
+                mujoco.mj_jacDot(model, data, jd[side], None, data.site_xpos[site], body)
+        rows.append(jp[0] - jp[1])
+        dots.append(jd[0] - jd[1])
+    return np.vstack(rows), (np.vstack(dots) if with_dot else None)
+
+
+def open_loop(
+    model, data, force: Callable[[float], ArrayLike], t_end: float, record: Callable
+) -> list:
+    """Step ``model`` from the state in ``data`` for ``t_end`` seconds, each step holding the
+    actuator forces ``force(t)`` of the step's midpoint; ``record(data)`` after every step (and
+    before the first) is collected in the returned list."""
+    mujoco = import_mujoco()
+    if not (np.isfinite(t_end) and t_end > 0):
+        raise ValueError(f"t_end = {t_end!r} s must be finite and > 0")
+    dt = float(model.opt.timestep)
+    out = [record(data)]
+    for _ in range(int(round(t_end / dt))):
+        f = np.asarray(force(data.time + 0.5 * dt), dtype=float)
+        if f.shape != (model.nu,) or not np.all(np.isfinite(f)):
+            raise ValueError(f"force(t) must return {model.nu} finite actuator forces, got {f!r}")
+        data.ctrl[:] = f
+        mujoco.mj_step(model, data)
+        out.append(record(data))
+    return out
+
+
+@dataclass(frozen=True)
+class Tracking:
+    """MuJoCo's forward simulation under given actuator forces: its platform's centre of mass
+    against the trajectory's, and its loop closures."""
+
+    t: Array  #: (k,) s
+    centre: Array  #: (k, 3) MuJoCo's platform centre of mass, m
+    target: Array  #: (k, 3) the trajectory's, m
+    loop_error: Array  #: (k,) largest distance between the two sites of a closure, m
+
+    @property
+    def error(self) -> Array:
+        """``max |centre - target|`` per sample (m)."""
+        return np.max(np.abs(self.centre - self.target), axis=-1)
+
+
+def track(
+    mm: MujocoModel, trajectory, t_end: float, force: Callable[[float], ArrayLike]
+) -> Tracking:
+    """Drive the MuJoCo model of any mechanism open loop with actuator forces ``force(t)`` from the
+    trajectory's exact state at t = 0 (positions from the bodies, velocities by the recipe's
+    minimum-norm solve) and record where its platform goes; the soft loop constraints and the
+    integrator make this a check to the stiffness of the constraints, not to rounding."""
+    mujoco = import_mujoco()
+    mech, model = mm.mech, mm.model
+    x0, v0, _ = (np.asarray(s, dtype=float) for s in trajectory.state(0.0))
+    data = mujoco.MjData(model)
+    data.qpos[:] = mm.qpos(assemble(mech, x0, mm.mass))
+    mujoco.mj_forward(model, data)
+    sid = lambda n: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, n)  # noqa: E731
+    pairs = [(sid(f"loop{c}a"), sid(f"loop{c}b")) for c in range(len(mm.reference.closures))]
+    platform = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, mm.reference.platform)
+    plat = state(mech, x0, v0, mm.mass).platform()
+    rows, _ = _rows(mm, data, pairs, platform, False)
+    target = np.concatenate([np.zeros(3 * len(pairs)), plat.centre.rate[0], plat.spin.rate[0]])
+    data.qvel[:] = _solve(rows, target)[0]
+    mujoco.mj_forward(model, data)
+
+    def record(d) -> tuple:
+        loop = max((np.linalg.norm(d.site_xpos[i] - d.site_xpos[j]) for i, j in pairs), default=0.0)
+        return d.time, d.xipos[platform].copy(), loop
+
+    rec = open_loop(model, data, force, t_end, record)
+    t = np.array([r[0] for r in rec])
+    expected = state(mech, trajectory.state(t)[0], trajectory.state(t)[1], mm.mass).platform()
+    return Tracking(
+        t, np.array([r[1] for r in rec]), expected.centre.value[:, 0], np.array([r[2] for r in rec])
+    )
