@@ -201,23 +201,25 @@ def _pad(a: Jet, ndim: int) -> Array:
     return t.reshape((t.shape[0],) + (1,) * extra + t.shape[1:]) if extra > 0 else t
 
 
-def _bilinear(f: Callable, a, b, ndim: Callable[[int, int], int] | None = None) -> Jet:
+def _bilinear(f: Callable, a, b, cores: tuple[int, int] = (0, 0)) -> Jet:
     """``f(a, b)`` for ``f`` bilinear (product, dot, cross, matrix product): value, tangents
-    ``f(a', b) + f(a, b')`` and bias ``f(a_b, b) + 2 f(a_dot, b_dot) + f(a, b_b)``."""
+    ``f(a', b) + f(a, b')`` and bias ``f(a_b, b) + 2 f(a_dot, b_dot) + f(a, b_b)``. ``cores``:
+    how many trailing axes of each operand ``f`` consumes as a vector or matrix (the others are
+    batch axes, aligned from the right when the tangents' direction axis is padded)."""
     ja, jb = isinstance(a, Jet), isinstance(b, Jet)
     if not (ja or jb):
         raise TypeError("a jet operation needs at least one Jet")
     av = a.value if ja else np.asarray(a, dtype=float)
     bv = b.value if jb else np.asarray(b, dtype=float)
     value = f(av, bv)
-    r = max(av.ndim, bv.ndim)
+    batch = max(av.ndim - cores[0], bv.ndim - cores[1])
     if ja and jb:
-        tangents = f(_pad(a, r), bv) + f(av, _pad(b, r))
+        tangents = f(_pad(a, batch + cores[0]), bv) + f(av, _pad(b, batch + cores[1]))
         bias = f(a.bias, bv) + f(av, b.bias) + 2.0 * f(a.rate, b.rate)
     elif ja:
-        tangents, bias = f(_pad(a, r), bv), f(a.bias, bv)
+        tangents, bias = f(_pad(a, batch + cores[0]), bv), f(a.bias, bv)
     else:
-        tangents, bias = f(av, _pad(b, r)), f(av, b.bias)
+        tangents, bias = f(av, _pad(b, batch + cores[1])), f(av, b.bias)
     return Jet(value, tangents, np.broadcast_to(bias, value.shape))
 
 
@@ -258,12 +260,12 @@ def _cross(u: Array, v: Array) -> Array:
 
 def dot(a, b) -> Jet:
     """``a . b`` over the last axis."""
-    return _bilinear(_dot, a, b)
+    return _bilinear(_dot, a, b, (1, 1))
 
 
 def cross(a, b) -> Jet:
     """``a x b`` over the last axis (3-vectors)."""
-    return _bilinear(_cross, a, b)
+    return _bilinear(_cross, a, b, (1, 1))
 
 
 def sqrt(a: Jet) -> Jet:
@@ -296,12 +298,12 @@ def _matvec(m: Array, v: Array) -> Array:
 
 def matvec(m, v) -> Jet:
     """``m @ v`` for matrices (..., 3, 3) and vectors (..., 3), either a jet or a constant."""
-    return _bilinear(_matvec, m, v)
+    return _bilinear(_matvec, m, v, (2, 1))
 
 
 def matmul(a, b) -> Jet:
     """``a @ b`` for stacks of matrices."""
-    return _bilinear(np.matmul, a, b)
+    return _bilinear(np.matmul, a, b, (2, 2))
 
 
 def transpose(a: Jet) -> Jet:
