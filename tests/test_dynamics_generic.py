@@ -339,7 +339,7 @@ def test_simulation_conserves_energy_and_holds_the_loops():
     mech = Stewart12()
     mass = mech.mass_model().replace(gravity=(0.0, 0.0, 0.0))
     x0, v0 = mech.home(), np.array([1e-3, -5e-4, 2e-4, 0.02, -0.01, 0.015])
-    zero = lambda t, x, v: np.zeros(12)  # noqa: E731
+    zero = lambda t, st: np.zeros(12)  # noqa: E731
     sim = simulate(mech, x0, v0, zero, 0.05, 1e-3, mass=mass)
     kinetic = [D.energy(D.state(mech, x, v, mass))[0] for x, v in zip(sim.pose, sim.rate)]
     assert np.max(np.abs(np.array(kinetic) / kinetic[0] - 1)) < 1e-9

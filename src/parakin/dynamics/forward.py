@@ -27,18 +27,22 @@ from numpy.typing import ArrayLike
 
 from parakin.dynamics.inverse import (
     SINGULAR_CONDITION,
+    State,
     generalized_forces,
     inverse_dynamics,
     mass_matrix,
+    solve_forces,
     state,
 )
 from parakin.dynamics.model import MassModel
 from parakin.errors import SingularityError
 from parakin.mechanisms.base import Array, Mechanism, as_batch, describe_first
 
-__all__ = ["forward_dynamics", "Simulation", "simulate", "feedforward"]
+__all__ = ["Force", "forward_dynamics", "Simulation", "simulate", "feedforward", "computed_torque"]
 
-Force = Callable[[float, Array, Array], ArrayLike]
+#: a force law ``force(t, state) -> (..., m)``: the actuator forces at time ``t`` given the
+#: :class:`~parakin.dynamics.inverse.State` (pose, rate, joints and every body) of the system
+Force = Callable[[float, State], ArrayLike]
 
 
 def _accelerations(mech, st, force, wrench, active) -> tuple[Array, Array]:
@@ -102,17 +106,18 @@ class Simulation:
 
 
 def _derivative(mech, mass, force, wrench, active) -> Callable:
-    def f(t: float, y: tuple[Array, Array, Array, Array]) -> tuple[Array, Array, Array, Array]:
+    def f(t: float, y: tuple[Array, Array, Array, Array], st: State | None = None) -> tuple:
         x, v, _, qd = y
-        st = state(mech, x, v, mass)
-        xdd, qdd = _accelerations(mech, st, force(t, x, v), wrench, active)
+        st = state(mech, x, v, mass) if st is None else st
+        xdd, qdd = _accelerations(mech, st, force(t, st), wrench, active)
         return v, xdd, qd, qdd
 
     return f
 
 
-def _rk4_step(f: Callable, t: float, y: tuple, dt: float) -> tuple:
-    k1 = f(t, y)
+def _rk4_step(f: Callable, t: float, y: tuple, dt: float, st: State) -> tuple:
+    """One classical Runge-Kutta step; ``st``: the state at ``y`` (already evaluated)."""
+    k1 = f(t, y, st)
     k2 = f(t + 0.5 * dt, tuple(a + 0.5 * dt * b for a, b in zip(y, k1)))
     k3 = f(t + 0.5 * dt, tuple(a + 0.5 * dt * b for a, b in zip(y, k2)))
     k4 = f(t + dt, tuple(a + dt * b for a, b in zip(y, k3)))
@@ -133,7 +138,7 @@ def simulate(
     stabilise: bool = True,
 ) -> Simulation:
     """Integrate ``mech`` from ``pose``, ``rate`` (each (..., n): a batch of motions at once)
-    under actuator forces ``force(t, pose, rate) -> (..., m)`` for ``t_end`` seconds in RK4 steps
+    under actuator forces ``force(t, state) -> (..., m)`` for ``t_end`` seconds in RK4 steps
     of ``dt`` (module docstring). Raises where a pose leaves the domain or the mass matrix
     degenerates."""
     if not (np.isfinite(t_end) and t_end > 0 and np.isfinite(dt) and 0 < dt <= t_end):
@@ -148,7 +153,7 @@ def simulate(
     out = {k: [a] for k, a in zip(("pose", "rate", "joints", "joint_rate"), y)}
     drift, rate_drift = [np.zeros(x.shape[:-1])], [np.zeros(x.shape[:-1])]
     for k in range(steps):
-        y = _rk4_step(f, k * dt, y, dt)
+        y = _rk4_step(f, k * dt, y, dt, st)
         st = state(mech, y[0], y[1], mass)
         drift.append(np.max(np.abs(y[2] - st.joints.value), axis=-1))
         rate_drift.append(np.max(np.abs(y[3] - st.joints.rate), axis=-1))
@@ -171,17 +176,40 @@ def feedforward(
 ) -> Force:
     """The inverse-dynamics forces of ``trajectory`` at every time an RK4 run of step ``dt`` asks
     for (the step times and their midpoints), computed in one batch; the returned
-    ``force(t, pose, rate)`` looks them up by time (open-loop feedforward)."""
+    ``force(t, state)`` looks them up by time (open-loop feedforward)."""
     half = 0.5 * dt
     grid = np.arange(int(round(t_end / half)) + 1) * half
     forces = inverse_dynamics(mech, *trajectory.state(grid), mass=mass).force
 
-    def force(t: float, pose: Array, rate: Array) -> Array:
+    def force(t: float, st: State) -> Array:
         k = int(round(t / half))
         if not (0 <= k < len(grid) and abs(grid[k] - t) <= 1e-9 * max(half, abs(t))):
             raise ValueError(
                 f"feedforward has no force at t = {t!r} s (step {dt} s, end {t_end} s)"
             )
         return forces[k]
+
+    return force
+
+
+def computed_torque(
+    trajectory, frequency: float, damping: float = 1.0, active: ArrayLike | None = None
+) -> Force:
+    """A computed-torque controller of the trajectory: the forces that give the pose the
+    acceleration ``xddot_d + w^2 (x_d - x) + 2 z w (xdot_d - xdot)`` (``w = 2 pi frequency``,
+    ``z = damping``) by the inverse dynamics of the current state, so that with an exact model the
+    pose error obeys ``e'' + 2 z w e' + w^2 e = 0`` (Craig, *Introduction to Robotics*, ch. 10)."""
+    w = 2 * np.pi * frequency
+    if not (np.isfinite(w) and w > 0 and np.isfinite(damping) and damping >= 0):
+        raise ValueError(f"frequency = {frequency!r} Hz must be > 0 and damping = {damping!r} >= 0")
+
+    def force(t: float, st: State) -> Array:
+        xd, vd, ad = trajectory.state(t)
+        command = ad + w * w * (xd - st.pose) + 2 * damping * w * (vd - st.rate)
+        jac = st.jacobian
+        picked = np.arange(jac.shape[-2]) if active is None else np.asarray(active, dtype=int)
+        f = np.zeros(jac.shape[:-1])
+        f[..., picked] = solve_forces(jac[..., picked, :], generalized_forces(st, command))[0]
+        return f
 
     return force

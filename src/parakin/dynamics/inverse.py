@@ -56,9 +56,12 @@ BALANCE_TOL = 1e-9
 
 @dataclass(frozen=True, eq=False)
 class State:
-    """Every body's motion at a batch of states: the mechanism's :class:`Bodies`, and per group
-    its rigid body (mass model) and :class:`BodyMotion`."""
+    """Every body's motion at a batch of states (``pose``, ``rate``, each (..., n)): the
+    mechanism's :class:`Bodies`, and per group its rigid body (mass model) and
+    :class:`BodyMotion`."""
 
+    pose: Array
+    rate: Array
     bodies: Bodies
     mass: MassModel
     groups: tuple[tuple[BodyGroup, RigidBody, BodyMotion], ...]
@@ -116,7 +119,7 @@ def state(
         )
     bodies = mech.bodies(jet.variable(x, v))
     groups = tuple((g, mass.body(g.kind), motion(g, mass.body(g.kind))) for g in bodies.groups)
-    return State(bodies, mass, groups)
+    return State(x, v, bodies, mass, groups)
 
 
 def _loads(st: State, xddot: Array) -> list[tuple[jet.Jet, jet.Spin, Array, Array]]:

@@ -51,6 +51,12 @@ __all__ = [
     "spin_of_rotation",
     "spin_of_axis",
     "contract",
+    "rotations",
+    "euler_zyx",
+    "rot_x",
+    "rot_y",
+    "rot_z",
+    "skew",
     "vdot",
     "vcross",
     "vmatvec",
@@ -333,10 +339,7 @@ def contract(tangents: Array, xddot: ArrayLike, ndim: int) -> Array:
     xdd = np.moveaxis(np.asarray(xddot, dtype=float), -1, 0)
     batch = xdd.ndim - 1
     xdd = xdd.reshape(xdd.shape + (1,) * (ndim - batch))
-    out = tangents[0] * xdd[0]
-    for k in range(1, len(xdd)):
-        out = out + tangents[k] * xdd[k]
-    return out
+    return np.einsum("k...,k...->...", tangents, xdd)
 
 
 # ---------------------------------------------------------------------------------------- spin
@@ -391,17 +394,41 @@ def rot_z(angle: Jet) -> Jet:
     return _elementary(angle, 0, 1)
 
 
+def _skew_times(w: Array, r: Array) -> Array:
+    """``[w]x r`` for vectors (..., 3) and matrices (..., 3, 3): each column crossed with ``w``."""
+    return np.swapaxes(_cross(w[..., None, :], np.swapaxes(r, -1, -2)), -1, -2)
+
+
+def rotations(angles: Sequence[Jet], axes: str) -> Jet:
+    """``R = R_{axes[0]}(angles[0]) R_{axes[1]}(angles[1]) ...`` (e.g. ``axes="zyx"``: Z-Y-X Euler
+    angles) as a jet, from the world axes ``u_k`` of the successive turns rather than by products
+    of matrix jets: ``dR = [sum_k u_k da_k]x R``, and ``Rddot = [alpha]x R + [omega]x [omega]x R``
+    with ``alpha = sum_k u_k a_k'' + (omega_{<k} x u_k) a_k'``."""
+    from parakin.geometry import rot_x, rot_y, rot_z
+
+    elementary = {"x": (rot_x, 0), "y": (rot_y, 1), "z": (rot_z, 2)}
+    like = angles[0]
+    shape = like.shape
+    partial = np.broadcast_to(np.eye(3), shape + (3, 3))
+    w = np.zeros((like.n + 1, *shape, 3))  # sum_k u_k (tangent of a_k)
+    bias_alpha = np.zeros(shape + (3,))
+    omega_before = np.zeros(shape + (3,))
+    for angle, name in zip(angles, axes):
+        rot, i = elementary[name]
+        u = partial[..., :, i]
+        rate = angle.rate[..., None]
+        w = w + u * angle.tangents[..., None]
+        bias_alpha = bias_alpha + u * angle.bias[..., None] + _cross(omega_before, u) * rate
+        omega_before = omega_before + u * rate
+        partial = partial @ rot(angle.value)
+    omega = w[-1]
+    bias = _skew_times(bias_alpha, partial) + _skew_times(omega, _skew_times(omega, partial))
+    return Jet(partial, _skew_times(w, partial), bias)
+
+
 def euler_zyx(a: Jet, b: Jet, c: Jet) -> Jet:
-    """``Rz(a) Ry(b) Rx(c)`` (the Z-Y-X Euler angles of :func:`parakin.geometry.euler_zyx`),
-    written entry by entry: products of scalar jets cost far less than 3x3 jet products."""
-    ca, sa, cb, sb, cc, sc = cos(a), sin(a), cos(b), sin(b), cos(c), sin(c)
-    sbsc, sbcc = sb * sc, sb * cc
-    rows = [
-        [ca * cb, ca * sbsc - sa * cc, ca * sbcc + sa * sc],
-        [sa * cb, sa * sbsc + ca * cc, sa * sbcc - ca * sc],
-        [-sb, cb * sc, cb * cc],
-    ]
-    return stack([stack(row, axis=-1) for row in rows], axis=-2)
+    """``Rz(a) Ry(b) Rx(c)`` (the Z-Y-X Euler angles of :func:`parakin.geometry.euler_zyx`)."""
+    return rotations([a, b, c], "zyx")
 
 
 def skew(v: Jet) -> Jet:

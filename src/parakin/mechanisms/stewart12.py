@@ -608,9 +608,7 @@ class Stewart12(Mechanism):
             k = 2.0 / (1.0 + dj.dot(lam, lam))
             rotation = k[..., None, None] * (s + dj.matmul(s, s)) + np.eye(3)
         else:
-            rotation = dj.matmul(
-                dj.matmul(dj.rot_x(lam[..., 0]), dj.rot_y(lam[..., 1])), dj.rot_z(lam[..., 2])
-            )
+            rotation = dj.rotations([lam[..., 0], lam[..., 1], lam[..., 2]], "xyz")
         top = self.platform_points_local[list(self.leg_joint)]
         return hexapod(pose[..., :3], rotation, self.base_points, top)
 

@@ -473,7 +473,7 @@ class UPS2(Mechanism):
         rho = self.branch * dj.sqrt(self.c**2 - y * y)
         sb, cb = dj.sin(beta), dj.cos(beta)
         b1 = dj.stack([rho * sb, y, rho * cb])  # eq 14
-        rotation = dj.matmul(dj.rot_y(beta), dj.rot_x(pose[..., 1]))  # eq 1, alpha = 0
+        rotation = dj.rotations([beta, pose[..., 1]], "yx")  # eq 1, alpha = 0
         r = dj.stack([cb, 0.0 * cb, -sb])  # Ry(beta) x: the R joints' axis
         z = b1 / self.c
         b0 = self.link_ratio * b1
