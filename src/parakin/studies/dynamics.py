@@ -108,7 +108,7 @@ def draw_forces(frame: pd.DataFrame, path: str | Path, mechanism: str) -> Path:
     top.legend(ncol=min(len(joints), 6), loc="upper right", fontsize=6)
     first = rows[rows["joint"] == joints[0]]
     bottom.semilogy(first["t_s"], first["condition"], color="0.3")
-    bottom.set_ylabel("cond(J)")
+    bottom.set_ylabel("cond(J), 1-norm")
     bottom.set_xlabel("time t (s)")
     fig.suptitle(f"Beyond the papers: actuator forces of {mechanism} along its test trajectory")
     return save_figure(fig, path)
