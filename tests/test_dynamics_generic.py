@@ -384,3 +384,53 @@ def test_dynamics_modules_name_no_mechanism():
                 continue
             bad = [n for n in names if n.startswith("parakin.dynamics") and n not in allowed]
             assert not bad, (path.name, bad)
+
+
+# ---------------------------------------------------------------------------------------- CLI, study
+def test_cli_dynamics(tmp_path, capsys):
+    """`parakin dynamics MECH --trajectory FILE`: forces per sample; a singular sample is one
+    line of error (status 2), or NaN forces with --flag-singular."""
+    import pandas as pd
+
+    from parakin.cli import main
+
+    mech = P3P4S.zhao2017()
+    t = np.linspace(0.0, 1.0, 11)
+    z_sing = mech.L + mech.delta * np.tan(mech.phi)
+    zero = 0.0 * t
+    frame = {"t": t, "x": zero, "y": zero, "z": np.linspace(0.57, z_sing, 11)}
+    frame.update({f"{p}_{c}": zero for p in ("d", "dd") for c in "xyz"})
+    path = tmp_path / "traj.csv"
+    pd.DataFrame(frame).to_csv(path, index=False)
+    assert main(["dynamics", "3p4s", "--trajectory", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cond(J)" in err and "(10,)" in err
+    out = tmp_path / "forces.csv"
+    assert (
+        main(
+            ["dynamics", "3p4s", "--trajectory", str(path), "--flag-singular", "--output", str(out)]
+        )
+        == 0
+    )
+    table = pd.read_csv(out)
+    assert (
+        table["singular"].tolist() == [False] * 10 + [True] and table["l1 [N]"].isna().tolist()[-1]
+    )
+    at_rest = D.inverse_dynamics(mech, [0.0, 0.0, 0.57], np.zeros(3), np.zeros(3)).force
+    assert np.allclose(table.iloc[0, 1:4].to_numpy(float), at_rest, rtol=1e-12)
+    assert main(["dynamics", "stewart66", "--trajectory", str(path)]) == 2
+    assert "missing column" in capsys.readouterr().err
+
+
+def test_study_on_the_quick_config(quick_config, tmp_path):
+    """The study's data: forces of every mechanism (one figure drawn) and a short simulation
+    (the pipeline's quick run, tests/test_pipeline.py, runs every artefact whole)."""
+    from parakin.studies import dynamics as study
+
+    table = study.forces_data(quick_config)
+    assert sorted(table["mechanism"].unique()) == sorted(IDS) and table["force"].notna().all()
+    assert study.draw_forces(table, tmp_path / "f.png", "stewart12").stat().st_size > 0
+    config = {**quick_config, "dynamics": {**quick_config["dynamics"]}}
+    config["dynamics"]["simulation"] = {**config["dynamics"]["simulation"], "t_end": 0.02}
+    sim = study.simulation_data(config, "2ups")
+    assert sim["step_drift"].max() < 1e-9 and sim["error_vs_analytic"].max() < 1e-6
