@@ -165,5 +165,5 @@ def test_bad_input():
         mc.inverse_dynamics(
             model, np.zeros((2, 3)) + [0, 0, 0.57], np.zeros((3, 3)), np.zeros((2, 3))
         )
-    with pytest.raises(ValueError, match="3 finite motor forces"):
+    with pytest.raises(ValueError, match="3 finite actuator forces"):
         mc.track(model, dyn.SineMotion(), 0.001, lambda t: [1.0, 2.0])

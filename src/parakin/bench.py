@@ -294,7 +294,13 @@ def kernel_goals(
         add(mech.name, "PSO single solve (40 x 300)", r, "solves/s", np.nan)
         add(mech.name, "PSO single solve (40 x 300), numpy loop", r_np, "solves/s", np.nan)
         add(mech.name, "PSO single solve vs numpy loop", r / r_np, "x", np.nan)
-    return pd.DataFrame(rows)
+    from parakin.dynamics.bench import dynamics_goals  # issue 27: the dynamics rows
+    from parakin.mechanisms import REGISTRY
+
+    dyn = dynamics_goals(
+        [c() for c in REGISTRY.values()], n_batch, max(10, min(200, n_batch // 500)), repeats
+    )
+    return pd.DataFrame(rows + dyn.to_dict("records"))
 
 
 def format_goals(df: pd.DataFrame) -> str:

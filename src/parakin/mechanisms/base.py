@@ -21,13 +21,17 @@ from __future__ import annotations
 import dataclasses
 from abc import ABC, abstractmethod
 from collections.abc import Callable
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from parakin.errors import ShapeError, SingularityError, UnreachableError
 from parakin.kernels import Kernel
+
+if TYPE_CHECKING:  # the types of the optional dynamics hooks (parakin.dynamics imports this module)
+    from parakin.dynamics.jet import Jet
+    from parakin.dynamics.model import Bodies, MassModel
 
 Array = NDArray[np.float64]
 #: a torch residual ``f(pose (..., n), joints (..., m)) -> (..., m)`` on tensors
@@ -240,6 +244,23 @@ class Mechanism(ABC):
     def parameters(self) -> dict[str, float]:
         """The mechanism's parameters as a plain dict (SI units)."""
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}  # type: ignore[arg-type]
+
+    # ------------------------------------------------------------------ dynamics (optional)
+    def mass_model(self) -> MassModel | None:
+        """Default masses, centres of mass and inertias of the moving bodies and gravity
+        (:class:`parakin.dynamics.model.MassModel`), or ``None`` (the default): the mechanism
+        declares no dynamics. A mechanism that returns one also implements :meth:`bodies`."""
+        return None
+
+    def bodies(self, pose: Jet) -> Bodies:
+        """Every moving body as a function of the pose, given as a jet
+        (:mod:`parakin.dynamics.jet`): frame origins and rotations (or spin-free axes), each body's
+        parent joint, the loop closures and the joints as jets
+        (:class:`parakin.dynamics.model.Bodies`). :mod:`parakin.dynamics` derives inverse and
+        forward dynamics and the physics-engine models from it; docs/dynamics.md."""
+        raise NotImplementedError(
+            f"{type(self).__name__} does not declare its bodies (no dynamics)"
+        )
 
 
 def _central_difference(f, x: Array, h: float = 1e-7) -> Array:

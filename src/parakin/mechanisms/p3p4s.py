@@ -27,6 +27,9 @@ from typing import ClassVar, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+import parakin.dynamics.jet as dj
+from parakin.dynamics.jet import Jet
+from parakin.dynamics.model import Bodies, BodyGroup, MassModel, RigidBody, rods
 from parakin.errors import SingularityError, UnreachableError
 from parakin.kernels import Kernel, evaluate
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
@@ -365,3 +368,69 @@ class P3P4S(Mechanism):
                     f"of eq. 5){describe_first(wrong, q.shape[:-1])}"
                 )
         return pose
+
+    # ------------------------------------------------------------------ dynamics (issue 27)
+    def mass_model(self) -> MassModel:
+        """Zhao 2017 §2.4's masses (:data:`ZHAO2017_MASSES`, before design) with
+        ``g = (0, 0, -9.81)``: platform, sliders and side rods (centroid at mid-length, axisymmetric
+        ``I_dio``). Not in the paper, and not entering the dynamics because those bodies only
+        translate: the platform's inertia (a thin disc of radius ``r_a``) and the sliders'
+        (``1e-3 kg m^2`` about each axis)."""
+        z = ZHAO2017_MASSES
+        return MassModel(
+            {
+                "platform": RigidBody.disc(z["m_platform"], self.r_a),
+                "slider": RigidBody(z["m_slider"], (1e-3, 1e-3, 1e-3)),
+                "rod": RigidBody(z["m_rod"], z["I_rod"], (0.0, 0.0, 0.5 * self.L)),
+            },
+            note="Zhao 2017 section 2.4",
+        )
+
+    def bodies(self, pose: Jet) -> Bodies:
+        """The platform (translating: a free body the parallelograms keep level), the three
+        sliders on their rails (the actuated slide joints, strokes by eq 5) and the two side rods
+        of each parallelogram, from ``c_i +- (d/2) t_i`` on the slider to ``d_i +- (d/2) t_i`` on
+        the platform (``t_i`` the horizontal edge direction): S-S links."""
+        w = pose[..., None, :] - self.delta * self.e
+        b = dj.dot(w, self.m)
+        strokes = b - dj.sqrt(self.L**2 - (dj.dot(w, w) - b * b))  # eq 5, working branch
+        sliders = strokes[..., :, None] * self.m + self.r_b * self.e  # c_i = u_i + l_i m_i
+        tops = pose[..., None, :] + self.a * self.e  # d_i
+        edge = 0.5 * self.d * np.cross(_E_Z, self.e)  # (d/2) t_i
+        batch = pose.shape[:-1]
+        bottom = dj.stack([sliders - edge, sliders + edge], axis=-2).reshape((*batch, 6, 3))
+        top = dj.stack([tops - edge, tops + edge], axis=-2).reshape((*batch, 6, 3))
+        names = ("slider1", "slider2", "slider3")
+        labels = tuple(f"{i}{s}" for i in (1, 2, 3) for s in "ab")
+        rod_group, closure = rods(
+            "rod", bottom, top, [n for n in names for _ in "ab"], ("platform",) * 6, labels
+        )
+        eye = lambda k: dj.constant_like(np.broadcast_to(np.eye(3), (*batch, k, 3, 3)), pose)  # noqa: E731
+        groups = (
+            BodyGroup(
+                "platform", ("platform",), ("world",), "free", pose[..., None, :], rotation=eye(1)
+            ),
+            BodyGroup(
+                "slider",
+                names,
+                ("world",) * 3,
+                "slide",
+                sliders,
+                rotation=eye(3),
+                joint_axis=np.broadcast_to(self.m, (*batch, 3, 3)),
+            ),
+            rod_group,
+        )
+        return Bodies(groups, strokes, names, (closure,))
+
+
+#: Zhao 2017 §2.4's masses (kg) and side-rod inertia ``I_dio`` (kg m^2, about the rod's centroid,
+#: z along the rod), before design: the defaults of :meth:`P3P4S.mass_model` and of
+#: :class:`parakin.mechanisms.p3p4s_dynamics.InertialParams` (tests compare them with
+#: data/reference/zhao2017_3p4s.csv)
+ZHAO2017_MASSES: dict = {
+    "m_platform": 4.16,
+    "m_slider": 2.57,
+    "m_rod": 1.59,
+    "I_rod": (0.0223, 0.0223, 1.276e-4),
+}

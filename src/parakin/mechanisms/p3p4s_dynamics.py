@@ -32,6 +32,13 @@ quantified: ``h_form="paper"`` (eq 13 without ``1/l``), ``gravity_moment=True`` 
 Independent checks: :func:`energy` (kinetic + potential of every body from positions and
 velocities only, no Newton-Euler map) and :func:`power_balance` (``f . qdot = dE/dt``);
 :func:`ik_finite_differences` (time derivatives of the IK along a trajectory).
+
+This module is the paper's method, kept to reproduce its equations and their slips. The dynamics
+of every mechanism, this one included, is :mod:`parakin.dynamics` (virtual work over the bodies
+that :meth:`P3P4S.bodies` declares, the masses of :meth:`InertialParams.mass_model`); Zhao's
+Newton-Euler here is its check (tests/test_dynamics_generic.py: equal to 1e-9 relative). The
+generic pieces it used to carry (the sixth-order time derivative, the power-balance record) are
+:mod:`parakin.dynamics.trajectory`'s.
 """
 
 from __future__ import annotations
@@ -42,10 +49,12 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from parakin.dynamics.model import MassModel, RigidBody
+from parakin.dynamics.trajectory import PowerBalance, time_derivative
 from parakin.errors import ShapeError, SingularityError
 from parakin.geometry import skew
 from parakin.mechanisms.base import Array, as_batch, describe_first
-from parakin.mechanisms.p3p4s import P3P4S
+from parakin.mechanisms.p3p4s import P3P4S, ZHAO2017_MASSES
 
 __all__ = [
     "HForm",
@@ -92,10 +101,10 @@ class InertialParams:
     (not stated in the paper; docs/zhao2017_3p4s.md#g14).
     """
 
-    m_platform: float = 4.16  #: moving platform mass m (kg)
-    m_slider: float = 2.57  #: slider (motor mover) mass m_e per limb (kg)
-    m_rod: float = 1.59  #: mass m_d of ONE parallelogram side rod (kg)
-    I_rod: tuple[float, float, float] = (0.0223, 0.0223, 1.276e-4)  #: I_dio diagonal (kg m^2)
+    m_platform: float = ZHAO2017_MASSES["m_platform"]  #: moving platform mass m (kg)
+    m_slider: float = ZHAO2017_MASSES["m_slider"]  #: slider (motor mover) mass m_e per limb (kg)
+    m_rod: float = ZHAO2017_MASSES["m_rod"]  #: mass m_d of ONE parallelogram side rod (kg)
+    I_rod: tuple[float, float, float] = ZHAO2017_MASSES["I_rod"]  #: I_dio diagonal (kg m^2)
     g: tuple[float, float, float] = (0.0, 0.0, -9.81)  #: gravity (m/s^2)
     rods_per_limb: int = 2  #: side rods per parallelogram (eq 20)
 
@@ -135,6 +144,25 @@ class InertialParams:
     def total_mass(self) -> float:
         """Moving mass: platform + 3 sliders + all side rods (kg)."""
         return self.m_platform + 3 * self.m_slider + 3 * self.rods_per_limb * self.m_rod
+
+    def mass_model(self, mech: P3P4S) -> MassModel:
+        """The same masses for :mod:`parakin.dynamics` (the bodies of :meth:`P3P4S.bodies`: a
+        parallelogram has two side rods, so ``rods_per_limb`` must be 2); the platform's and the
+        sliders' inertia, which cannot enter (they only translate), as :meth:`P3P4S.mass_model`."""
+        if self.rods_per_limb != 2:
+            raise ValueError(
+                f"rods_per_limb = {self.rods_per_limb}: the bodies of P3P4S are parallelograms (2 side rods)"
+            )
+        default = mech.mass_model()
+        return MassModel(
+            {
+                "platform": RigidBody(self.m_platform, default.body("platform").inertia),
+                "slider": RigidBody(self.m_slider, default.body("slider").inertia),
+                "rod": RigidBody(self.m_rod, self.I_rod, (0.0, 0.0, 0.5 * mech.L)),
+            },
+            self.g,
+            "Zhao 2017 InertialParams",
+        )
 
     def rod_inertia_world(self, n: Array) -> Array:
         """``I_di = 0R_i I_dio 0R_i^T`` for rod directions ``n`` (..., 3) -> (..., 3, 3).
@@ -609,43 +637,6 @@ def energy(mech: P3P4S, params: InertialParams, pose: ArrayLike, velocity: Array
 
 #: central-difference weights of the first derivative, O(h^6): offsets -3..3
 _D1_ORDER6 = np.array([-1.0, 9.0, -45.0, 0.0, 45.0, -9.0, 1.0]) / 60.0
-
-
-def time_derivative(f, t: ArrayLike, step: float) -> Array:
-    """``df/dt`` at ``t`` by the 6th-order central difference of ``f(t + k h)``, ``k = -3..3``.
-
-    ``f`` maps a time array (...,) to an array (..., *rest); truncation error
-    ``~ (omega h)^6 / 140`` relative for a harmonic signal of angular frequency omega.
-    """
-    if not (np.isfinite(step) and step > 0):
-        raise ValueError(f"step = {step!r} s must be finite and > 0")
-    t = np.asarray(t, dtype=float)
-    out = 0.0
-    for k, wk in zip(range(-3, 4), _D1_ORDER6):
-        if wk:
-            out = out + wk * f(t + k * step)
-    return out / step
-
-
-@dataclass(frozen=True)
-class PowerBalance:
-    """``sum_i f_i qdot_i`` against ``dE/dt`` along a trajectory (W)."""
-
-    t: Array
-    power: Array  #: actuator power sum_i f_i qdot_i (W)
-    dEdt: Array  #: time derivative of the total energy of every body (W)
-
-    @property
-    def residual(self) -> Array:
-        return self.power - self.dEdt
-
-    @property
-    def relative_error(self) -> float:
-        """``max |power - dE/dt| / max |dE/dt|``."""
-        scale = float(np.max(np.abs(self.dEdt)))
-        if scale == 0:
-            raise ValueError("dE/dt vanishes along the whole trajectory: relative error undefined")
-        return float(np.max(np.abs(self.residual)) / scale)
 
 
 def power_balance(

@@ -24,6 +24,13 @@ of a closed loop; ``mj_inverse`` with the loops on lets the soft constraints abs
 3. constraints disabled, ``mj_inverse`` gives the tree's generalised forces ``tau``;
 4. ``[S^T  J_c^T] [u; lambda] = tau`` in least squares: ``u`` = motor forces along ``+m_i``.
 
+This module keeps what is particular to Zhao's paper: the "equivalent" model (one rod per limb,
+the paper's eq 20) and the layout of its results for the paper's figures. The generic pieces (the
+MuJoCo import, MJCF vectors, the site Jacobians of the loop closures, the open-loop stepping) are
+:mod:`parakin.dynamics.mujoco_check`, which also builds the MJCF of *any* mechanism from its
+bodies; for the 3-P(4S) that generic model is this module's "parallelogram" model, and the tests
+check that both give the same forces.
+
 MuJoCo is imported lazily; the rest of parakin does not need it.
 """
 
@@ -36,6 +43,9 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from parakin.dynamics.mujoco_check import import_mujoco as _mujoco
+from parakin.dynamics.mujoco_check import open_loop, site_jacobians
+from parakin.dynamics.mujoco_check import vector as _vec
 from parakin.errors import ShapeError
 from parakin.mechanisms.base import Array, as_batch
 from parakin.mechanisms.p3p4s import P3P4S
@@ -55,16 +65,6 @@ __all__ = [
 RodModel = Literal["equivalent", "parallelogram"]
 
 _EZ = np.array([0.0, 0.0, 1.0])
-
-
-def _mujoco():
-    try:
-        import mujoco
-    except ImportError as exc:  # pragma: no cover - environment.txt installs it
-        raise ImportError(
-            "the MuJoCo check needs the 'mujoco' package (pip install mujoco)"
-        ) from exc
-    return mujoco
 
 
 def _quat_z_to(u: Array) -> Array:
@@ -87,10 +87,6 @@ def _quat_to_matrix(q: Array) -> Array:
             [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
         ]
     )
-
-
-def _vec(v: ArrayLike) -> str:
-    return " ".join(repr(float(x)) for x in np.asarray(v, dtype=float).ravel())
 
 
 def _rod_layout(mech: P3P4S, params: InertialParams, rods: str) -> list[tuple[int, float, float]]:
@@ -298,25 +294,7 @@ class MujocoResult:
 
 
 def _constraint_jacobians(mm: MujocoMechanism, data, with_dot: bool) -> tuple[Array, Array | None]:
-    mujoco = _mujoco()
-    model = mm.model
-    nv = model.nv
-    rows, dots = [], []
-    jp, jp2 = np.zeros((3, nv)), np.zeros((3, nv))
-    for s_rod, s_plat in mm.site_pairs:
-        mujoco.mj_jacSite(model, data, jp, None, s_rod)
-        mujoco.mj_jacSite(model, data, jp2, None, s_plat)
-        rows.append(jp - jp2)
-        if with_dot:
-            d1, d2 = np.zeros((3, nv)), np.zeros((3, nv))
-            mujoco.mj_jacDot(
-                model, data, d1, None, data.site_xpos[s_rod], int(model.site_bodyid[s_rod])
-            )
-            mujoco.mj_jacDot(
-                model, data, d2, None, data.site_xpos[s_plat], int(model.site_bodyid[s_plat])
-            )
-            dots.append(d1 - d2)
-    return np.vstack(rows), (np.vstack(dots) if with_dot else None)
+    return site_jacobians(mm.model, data, mm.site_pairs, with_dot)
 
 
 def _assemble(
@@ -445,24 +423,15 @@ def track(
     data = mujoco.MjData(model)
     p0 = np.asarray(motion.pose(0.0), dtype=float)
     _assemble(mm, data, p0, mm.mech.ik(p0), np.asarray(motion.velocity(0.0), dtype=float))
-    dt = float(model.opt.timestep)
-    n = int(round(t_end / dt))
     plat = list(mm.platform_qpos)[:3]
     n_loop_rows = 3 * len(mm.site_pairs)
-    ts, poses, loops = (
-        [0.0],
-        [data.qpos[plat].copy()],
-        [float(np.max(np.abs(data.efc_pos[:n_loop_rows])))],
-    )
-    for _ in range(n):
-        f = np.asarray(force(data.time + 0.5 * dt), dtype=float)
-        if f.shape != (3,) or not np.all(np.isfinite(f)):
-            raise ValueError(f"force(t) must return 3 finite motor forces, got {f!r}")
-        data.ctrl[:] = f
-        mujoco.mj_step(model, data)
-        ts.append(data.time)
-        poses.append(data.qpos[plat].copy())
-        loops.append(float(np.max(np.abs(data.efc_pos[:n_loop_rows]))) if data.nefc else 0.0)
+
+    def record(d) -> tuple:
+        loop = float(np.max(np.abs(d.efc_pos[:n_loop_rows]))) if d.nefc else 0.0
+        return d.time, d.qpos[plat].copy(), loop
+
+    rec = open_loop(model, data, force, t_end, record)
+    ts, poses, loops = (list(col) for col in zip(*rec))
     t = np.asarray(ts)
     return TrackingResult(
         t, np.asarray(poses), np.asarray(motion.pose(t), dtype=float), np.asarray(loops)

@@ -36,6 +36,9 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 
+import parakin.dynamics.jet as dj
+from parakin.dynamics.jet import Jet
+from parakin.dynamics.model import Bodies, MassModel, RigidBody, hexapod, hexapod_masses
 from parakin.errors import UnreachableError
 from parakin.kernels import Kernel, evaluate
 from parakin.mechanisms.base import (
@@ -572,6 +575,42 @@ class Stewart12(Mechanism):
             polygons=[],
             frames={"O": (np.zeros(3), np.eye(3)), "M": (x[:3].copy(), r)},
         )
+
+    # ------------------------------------------------------------------ dynamics (issue 27)
+    def mass_model(self) -> MassModel:
+        """Illustrative defaults (the paper has no dynamics): the moving cube a solid 0.2 kg cube
+        of side ``2n`` (``I = m (2n)^2 / 6``, centred), legs of a 20 g cylinder and a 10 g piston
+        shaped by :func:`parakin.dynamics.model.hexapod_masses` to the leg length ``L``."""
+        side, m = 2 * self.n, 0.2
+        masses = hexapod_masses(
+            self.platform_points_local,
+            self.L,
+            m,
+            0.02,
+            0.01,
+            note="stewart12 illustrative defaults",
+        )
+        return masses.replace(platform=RigidBody(m, (m * side**2 / 6,) * 3))
+
+    def bodies(self, pose: Jet) -> Bodies:
+        """The moving cube (origin ``M``, rotation of :attr:`convention`) and twelve S-P-S legs,
+        leg k from ``b_k`` to ``B_j(k)`` (:func:`parakin.dynamics.model.hexapod`); joints: the
+        twelve lengths (six more than the pose: a redundant drive)."""
+        lam = pose[..., 3:]
+        if self.convention == "euler_parameters":
+            l0sq = 1.0 - dj.dot(lam, lam)
+            outer = lam[..., :, None] * lam[..., None, :]
+            rotation = (2.0 * l0sq - 1.0)[..., None, None] * np.eye(3) + 2.0 * (
+                outer + dj.sqrt(l0sq)[..., None, None] * dj.skew(lam)
+            )
+        elif self.convention == "cayley":
+            s = dj.skew(lam)
+            k = 2.0 / (1.0 + dj.dot(lam, lam))
+            rotation = k[..., None, None] * (s + dj.matmul(s, s)) + np.eye(3)
+        else:
+            rotation = dj.rotations([lam[..., 0], lam[..., 1], lam[..., 2]], "xyz")
+        top = self.platform_points_local[list(self.leg_joint)]
+        return hexapod(pose[..., :3], rotation, self.base_points, top)
 
 
 @dataclass(frozen=True)

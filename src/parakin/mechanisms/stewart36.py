@@ -29,6 +29,9 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 
+import parakin.dynamics.jet as dj
+from parakin.dynamics.jet import Jet
+from parakin.dynamics.model import Bodies, MassModel, hexapod, hexapod_masses
 from parakin.errors import UnreachableError
 from parakin.geometry import euler_zyx, euler_zyx_from_matrix
 from parakin.kernels import Kernel, evaluate
@@ -416,6 +419,22 @@ class Stewart36(Mechanism):
         x = as_batch(pose, 6, "pose").copy()
         x[..., [1, 2, 5]] *= -1
         return x
+
+    # ------------------------------------------------------------------ dynamics (issue 27)
+    def mass_model(self) -> MassModel:
+        """Illustrative defaults (the paper has no dynamics; lengths in units of the top side ``a``
+        are read as metres): a 5 kg platform and legs of a 1 kg cylinder and a 0.5 kg piston, shaped
+        by :func:`parakin.dynamics.model.hexapod_masses` to the mean leg length at :meth:`home`."""
+        leg = float(np.mean(self.ik(self.home())))
+        return hexapod_masses(
+            self.top_points, leg, 5.0, 1.0, 0.5, note="stewart36 illustrative defaults"
+        )
+
+    def bodies(self, pose: Jet) -> Bodies:
+        """The platform (``T = Rz Ry Rx``, origin ``O_A``) and six S-P-S legs, leg i from ``B_i``
+        to ``A_p(i)`` (two legs share each top point; :func:`parakin.dynamics.model.hexapod`)."""
+        rotation = dj.euler_zyx(pose[..., 0], pose[..., 1], pose[..., 2])
+        return hexapod(pose[..., 3:], rotation, self.base_points, self.top_points[LEG_TOP])
 
 
 # ---------------------------------------------------------------------------------------- helpers

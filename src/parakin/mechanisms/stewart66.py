@@ -35,7 +35,10 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 
+import parakin.dynamics.jet as dj
 import parakin.mechanisms.stewart66_homotopy as hc
+from parakin.dynamics.jet import Jet
+from parakin.dynamics.model import Bodies, MassModel, hexapod, hexapod_masses
 from parakin.errors import UnreachableError
 from parakin.geometry import euler_zyx, euler_zyx_from_matrix
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
@@ -579,3 +582,19 @@ class Stewart66(Mechanism):
             )
         best = np.argmin(np.where(ok, dist, np.inf), -1)
         return np.take_along_axis(sols, best[..., None, None], -2)[..., 0, :]
+
+    # ------------------------------------------------------------------ dynamics (issue 27)
+    def mass_model(self) -> MassModel:
+        """Illustrative defaults (no source gives masses for a general 6-6): a 10 kg platform and
+        legs of a 1.5 kg cylinder and a 1 kg piston, shaped by
+        :func:`parakin.dynamics.model.hexapod_masses` to the mean leg length at :meth:`home`."""
+        leg = float(np.mean(self.ik(self.home())))
+        return hexapod_masses(
+            self.platform_points, leg, 10.0, 1.5, 1.0, note="stewart66 illustrative defaults"
+        )
+
+    def bodies(self, pose: Jet) -> Bodies:
+        """The platform (Z-Y-X Euler rotation, origin ``(X, Y, Z)``) and six S-P-S legs
+        :func:`parakin.dynamics.model.hexapod`; joints: the leg lengths."""
+        rotation = dj.euler_zyx(pose[..., 0], pose[..., 1], pose[..., 2])
+        return hexapod(pose[..., 3:], rotation, self.base_points, self.platform_points)

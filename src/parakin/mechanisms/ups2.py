@@ -34,6 +34,9 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 
+import parakin.dynamics.jet as dj
+from parakin.dynamics.jet import Jet
+from parakin.dynamics.model import Bodies, BodyGroup, Closure, MassModel, RigidBody, strut
 from parakin.errors import UnreachableError
 from parakin.geometry import rot_x, rot_y
 from parakin.kernels import Kernel, evaluate
@@ -438,6 +441,93 @@ class UPS2(Mechanism):
         """Boolean mask: strokes inside eq (19)'s limits."""
         q = as_batch(joints, 3, "joints")
         return np.all(np.abs(q) <= np.asarray(self.stroke_limits) * (1 + 1e-12), axis=-1)
+
+    # ------------------------------------------------------------------ dynamics (issue 27)
+    def mass_model(self) -> MassModel:
+        """Illustrative defaults (the paper has no dynamics): a 1 kg platform (a thin disc of
+        radius ``b / 2`` at the triangle's centroid), the SR link a 0.5 kg rod of length ``c``, and
+        each leg a 0.3 kg cylinder and a 0.2 kg piston (10 cm rods of 1 cm radius, centres 5 cm
+        from their joints)."""
+        centroid = self.platform_points_local.mean(axis=0)
+        cylinder, piston = RigidBody.rod(0.3, 0.1, 0.01, 0.05), RigidBody.rod(0.2, 0.1, 0.01, -0.05)
+        return MassModel(
+            {
+                "platform": RigidBody.disc(1.0, 0.5 * self.b, centroid),
+                "link": RigidBody.rod(0.5, self.c, 0.01, 0.5 * self.c),
+                "spr_cylinder": cylinder,
+                "spr_piston": piston,
+                "cylinder": cylinder,
+                "piston": piston,
+            },
+            note="2ups illustrative defaults",
+        )
+
+    def bodies(self, pose: Jet) -> Bodies:
+        """The SR link (ball at A0, its frame ``[r, z x r, z]`` with ``z`` along A0B1 and ``r =
+        Ry(beta) x`` the axis of both R joints), the platform hinged to it at B1 about ``r``, the SPR
+        leg (piston hinged to the link at B0 about ``r``, cylinder sliding in it, ball-jointed to
+        the base at A1: a loop closure) and the two UPS legs A2B2, A3B3, modelled as S-P-S
+        (axisymmetric legs: the universal joint's hold on their spin is left out). Joints: the
+        strokes from :attr:`home_lengths`."""
+        beta, y = pose[..., 0], pose[..., 2]
+        rho = self.branch * dj.sqrt(self.c**2 - y * y)
+        sb, cb = dj.sin(beta), dj.cos(beta)
+        b1 = dj.stack([rho * sb, y, rho * cb])  # eq 14
+        rotation = dj.rotations([beta, pose[..., 1]], "yx")  # eq 1, alpha = 0
+        r = dj.stack([cb, 0.0 * cb, -sb])  # Ry(beta) x: the R joints' axis
+        z = b1 / self.c
+        b0 = self.link_ratio * b1
+        n, l1 = dj.normalize(b0 - self.base_points[1])
+        frame = lambda axis: dj.stack([r, dj.cross(axis, r), axis], axis=-1)[..., None, :, :]  # noqa: E731
+        tops = b1[..., None, :] + dj.matvec(
+            rotation[..., None, :, :], self.platform_points_local[1:]
+        )
+        (cylinders, pistons), closure, lengths = strut(
+            self.base_points[2:], tops, ("platform", "platform"), labels=("2", "3")
+        )
+        batch = y.shape
+
+        def fixed(k: int) -> Jet:
+            return dj.constant_like(np.broadcast_to(self.base_points[k], (*batch, 1, 3)), pose)
+
+        axis = r.value[..., None, :]
+        groups = (
+            BodyGroup("link", ("link",), ("world",), "ball", fixed(0), rotation=frame(z)),
+            BodyGroup(
+                "platform",
+                ("platform",),
+                ("link",),
+                "hinge",
+                b1[..., None, :],
+                rotation=rotation[..., None, :, :],
+                joint_axis=axis,
+            ),
+            BodyGroup(
+                "spr_piston",
+                ("spr_piston",),
+                ("link",),
+                "hinge",
+                b0[..., None, :],
+                rotation=frame(n),
+                joint_axis=axis,
+            ),
+            BodyGroup(
+                "spr_cylinder",
+                ("spr_cylinder",),
+                ("spr_piston",),
+                "slide",
+                fixed(1),
+                rotation=frame(n),
+                joint_axis=-n.value[..., None, :],
+            ),
+            cylinders,
+            pistons,
+        )
+        joints = dj.stack([l1, lengths[..., 0], lengths[..., 1]]) - self.home_lengths
+        spr = Closure(
+            ("spr_cylinder",), ("world",), np.broadcast_to(self.base_points[1], (*y.shape, 1, 3))
+        )
+        return Bodies(groups, joints, ("spr_cylinder", *pistons.names), (spr, closure))
 
 
 def _polymul(p: Array, q: Array) -> Array:

@@ -1,0 +1,121 @@
+"""The dynamics rows of the benchmark (issue 27): batched inverse dynamics against MuJoCo.
+
+For each mechanism given: the throughput of :func:`parakin.dynamics.inverse_dynamics` on one
+batch of trajectory samples (``n_batch``, in chunks of ``chunk``, on ``workers`` threads: numpy
+releases the GIL in its loops), and the same computation through MuJoCo, one sample at a time
+(:func:`parakin.dynamics.mujoco_check.inverse_dynamics`: the recipe around ``mj_inverse``), on
+``n_mujoco`` samples of the same trajectory, in the same run; their ratio. Rows as
+:func:`parakin.bench.kernel_goals`: ``mechanism, what, value, unit, goal, met``. Timings depend on
+the machine and its load; they never decide a test.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from parakin.dynamics.inverse import inverse_dynamics
+from parakin.dynamics.trajectory import Harmonic
+from parakin.mechanisms.base import Array, Mechanism
+
+__all__ = ["GOALS", "batched_forces", "dynamics_goals"]
+
+#: the issue's goals, for the general 6-6 platform (samples/s on 2 cores; x MuJoCo per sample)
+GOALS = {"stewart66": {"per_s": 1e5, "vs_mujoco": 100.0}}
+
+
+def batched_forces(
+    mech: Mechanism,
+    pose: Array,
+    rate: Array,
+    acceleration: Array,
+    chunk: int = 1024,
+    workers: int = 2,
+) -> Array:
+    """:func:`inverse_dynamics` forces of samples (k, n) in chunks of ``chunk`` on ``workers``
+    threads (the same numbers as one call: every sample is independent)."""
+    starts = range(0, len(pose), chunk)
+
+    def run(i: int) -> Array:
+        sl = slice(i, i + chunk)
+        return inverse_dynamics(mech, pose[sl], rate[sl], acceleration[sl]).force
+
+    if workers <= 1:
+        return np.concatenate([run(i) for i in starts])
+    with ThreadPoolExecutor(workers) as pool:
+        return np.concatenate(list(pool.map(run, starts)))
+
+
+def _best(f, repeats: int) -> float:
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        f()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def dynamics_goals(
+    mechs: Sequence[Mechanism],
+    n_batch: int = 100_000,
+    n_mujoco: int = 200,
+    repeats: int = 3,
+    workers: int = 2,
+    chunk: int = 1024,
+) -> pd.DataFrame:
+    """Per mechanism (with a mass model): batched samples/s, MuJoCo samples/s, and the ratio."""
+    from parakin.dynamics import mujoco_check
+
+    rows: list[dict[str, Any]] = []
+
+    def add(mech: str, what: str, value: float, unit: str, goal: float = np.nan) -> None:
+        rows.append(
+            {
+                "mechanism": mech,
+                "what": what,
+                "value": value,
+                "unit": unit,
+                "goal": goal,
+                "met": bool(value >= goal),
+            }
+        )
+
+    for mech in mechs:
+        if mech.mass_model() is None:
+            continue
+        tr = Harmonic.around(mech, 0.05, 0.5)
+        x, v, a = tr.state(np.linspace(0.0, tr.period, n_batch))
+        batched_forces(mech, x[:chunk], v[:chunk], a[:chunk], chunk, workers)  # warm-up
+        t_batch = _best(lambda: batched_forces(mech, x, v, a, chunk, workers), repeats)  # noqa: B023
+        mm = mujoco_check.build(mech)
+        idx = np.linspace(0, n_batch - 1, n_mujoco).astype(int)
+        mujoco_check.inverse_dynamics(mm, x[idx[:2]], v[idx[:2]], a[idx[:2]])  # warm-up
+        t_mj = _best(lambda: mujoco_check.inverse_dynamics(mm, x[idx], v[idx], a[idx]), 1)  # noqa: B023
+        goal = GOALS.get(mech.name, {})
+        per_s, mj_per_s = n_batch / t_batch, n_mujoco / t_mj
+        add(
+            mech.name,
+            f"inverse dynamics batched ({workers} threads)",
+            per_s,
+            "samples/s",
+            goal.get("per_s", np.nan),
+        )
+        add(
+            mech.name,
+            "inverse dynamics through MuJoCo (mj_inverse recipe), per sample",
+            mj_per_s,
+            "samples/s",
+        )
+        add(
+            mech.name,
+            "inverse dynamics batched vs MuJoCo",
+            per_s / mj_per_s,
+            "x",
+            goal.get("vs_mujoco", np.nan),
+        )
+    return pd.DataFrame(rows)
