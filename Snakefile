@@ -15,7 +15,15 @@ report: "workflow/report/workflow.rst"
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/artefacts.smk"
+include: "workflow/rules/census.smk"
 include: "workflow/rules/report.smk"
+
+
+#: cheap bookkeeping runs on the machine that runs snakemake (no cluster job)
+localrules:
+    all,
+    report,
+    reproduction_check,
 
 
 rule all:

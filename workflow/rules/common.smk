@@ -1,9 +1,21 @@
-# Shared set-up: validate the merged config (one place: parakin.config.validate, i.e. the schema
-# config/schema.yaml plus the orderings a schema cannot express; one short line per bad key), load
-# the artefact registry.
+# Shared set-up: run this checkout's code, validate the merged config (one place:
+# parakin.config.validate, i.e. the schema config/schema.yaml plus the orderings a schema cannot
+# express; one short line per bad key), load the artefact registry.
 import json
+import os
 import shlex
 import sys
+
+#: this checkout's own code comes first, here and in every job (shell prefix below), whatever
+#: parakin the Python environment has installed (a virtual environment shared between clones
+#: would otherwise run, and track, the other clone's src/); a copy of the workflow without src/
+#: (tests/test_pipeline.py) runs the installed parakin
+CHECKOUT_SRC = Path(workflow.basedir) / "src"
+if (CHECKOUT_SRC / "parakin").is_dir():
+    sys.path.insert(0, str(CHECKOUT_SRC))
+    _src = shlex.quote(os.path.relpath(CHECKOUT_SRC))
+    # (the prefix is formatted like a shell command: braces doubled)
+    shell.prefix(f"set -euo pipefail; export PYTHONPATH={_src}${{{{PYTHONPATH:+:$PYTHONPATH}}}}; ")
 
 from parakin import registry
 from parakin.config import validate as validate_config
@@ -29,6 +41,24 @@ def outputs(item):
     return item.output_paths(FIG, GEN)
 
 
+def relative(path):
+    """``path`` relative to the working directory when it lies inside it (rule inputs that do not
+    depend on where the clone is), else as it is (an installed parakin)."""
+    rel = os.path.relpath(path)
+    return path if rel.startswith("..") else rel
+
+
+def sources(item):
+    """The parakin source files the artefact runs (its module and all it imports)."""
+    return [relative(p) for p in item.sources()]
+
+
+def scattered(item):
+    """Chunk files the artefact gathers: its study module's ``chunk_files(config)``, each written
+    by the study's scatter rule (workflow/rules/census.smk); none for the others."""
+    return getattr(sys.modules[item.module], "chunk_files", lambda config: [])(config)
+
+
 def upstream(item):
     return [path for key in item.needs for path in outputs(ARTEFACTS[key])]
 
@@ -48,6 +78,14 @@ SHOWN = (".png", ".svg", ".pdf", ".csv")
 
 def resources_of(item):
     return {**DEFAULT_RESOURCES, **dict(item.resources)}
+
+
+def group_of(item):
+    """Jobs that need no more than the defaults (one core, 15 min) form the group "small": on a
+    cluster, `group-components` (profiles/slurm) packs several into one submission, so the job
+    start-up (queue, interpreter, compiled kernels from the cache) is paid once per batch; a local
+    run ignores groups."""
+    return "small" if item.threads == 1 and not item.resources else None
 
 
 def rst_escape(text):
