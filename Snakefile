@@ -19,13 +19,6 @@ include: "workflow/rules/census.smk"
 include: "workflow/rules/report.smk"
 
 
-#: cheap bookkeeping runs on the machine that runs snakemake (no cluster job)
-localrules:
-    all,
-    report,
-    reproduction_check,
-
-
 rule all:
     default_target: True
     input:

@@ -81,11 +81,12 @@ def resources_of(item):
 
 
 def group_of(item):
-    """Jobs that need no more than the defaults (one core, 15 min) form the group "small": on a
-    cluster, `group-components` (profiles/slurm) packs several into one submission, so the job
-    start-up (queue, interpreter, compiled kernels from the cache) is paid once per batch; a local
-    run ignores groups."""
-    return "small" if item.threads == 1 and not item.resources else None
+    """Jobs that need no more than the defaults (one core, 15 min) and are linked to no other
+    artefact form the group "small": on a cluster, `group-components` (profiles/slurm) sends
+    several in one submission, so that SLURM's queue and the job start-up are paid once per batch.
+    (A group may not wait on a job outside it that waits on the group: artefacts with upstream or
+    downstream artefacts stay alone.) A local run ignores groups."""
+    return "small" if item.threads == 1 and not item.resources and item.key not in LINKED else None
 
 
 def rst_escape(text):
@@ -116,4 +117,6 @@ def outdir_of(item):
     return lambda wildcards, output: str(Path(output[0]).parents[depth - 1])
 
 
+#: artefacts with an upstream or a downstream artefact (never grouped, see group_of)
+LINKED = {key for item in ARTEFACTS.values() for key in (item.key, *item.needs) if item.needs}
 ALL_OUTPUTS = [path for item in ARTEFACTS.values() for path in outputs(item)]
