@@ -132,7 +132,7 @@ def check_drawing(draw, frame: pd.DataFrame, path: Path) -> list[str]:
     return [p for texts in figures for p in text_problems(texts, width, height)]
 
 
-@pytest.mark.parametrize("folder, png, csv, draw", DRAWN, ids=[f"{d[0]}-{d[1]}" for d in DRAWN])
+@pytest.mark.parametrize("folder, png, csv, draw", DRAWN)
 def test_figure_text_is_inside_and_apart(tmp_path, folder, png, csv, draw):
     table = RECORD / folder / csv
     if not table.exists():

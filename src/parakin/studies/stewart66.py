@@ -211,7 +211,7 @@ def real_counts_draw(frame: pd.DataFrame, path: str | Path) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(6.4, 3.6), dpi=100)
+    fig = Figure(figsize=(6.4, 3.6), dpi=100, layout="constrained")
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     bins = np.arange(0, 42, 2)
@@ -330,7 +330,7 @@ def timing_draw(frame: pd.DataFrame, path: str | Path) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(6.4, 3.2), dpi=100)
+    fig = Figure(figsize=(6.4, 3.2), dpi=100, layout="constrained")
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     y = np.arange(len(frame))
@@ -338,8 +338,9 @@ def timing_draw(frame: pd.DataFrame, path: str | Path) -> Path:
     ax.set_yticks(y, frame["method"], fontsize=8)
     ax.set_xscale("log")
     ax.set_xlabel("inputs per second (all solutions of each input)")
-    ax.set_title(
-        "Beyond the papers: 6-6 Gough-Stewart, all solutions per input (timings of one machine)"
+    fig.suptitle(
+        "Beyond the papers: 6-6 Gough-Stewart, all solutions per input\n(timings of one machine)",
+        fontsize=10,
     )
     for yi, (_, r) in zip(y, frame.iterrows()):
         ax.text(
@@ -349,7 +350,6 @@ def timing_draw(frame: pd.DataFrame, path: str | Path) -> Path:
             va="center",
             fontsize=8,
         )
-    fig.tight_layout()
     path = Path(path)
     fig.savefig(path)
     return path
