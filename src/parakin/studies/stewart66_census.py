@@ -2,7 +2,7 @@
 
 Of the 40 complex forward solutions of a general 6-6 platform, how many are real, over many random
 platforms and leg lengths? The inputs (config section ``stewart66_census``; method and the
-comparison with the literature: ``docs/stewart66.md``, "Census"):
+comparison with the literature: ``docs/census.md``):
 
 * ``platforms`` random geometries, the six base and the six platform anchors independent standard
   normal points in 3-D (:func:`parakin.studies.stewart66.random_platform`);
