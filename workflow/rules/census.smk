@@ -19,6 +19,7 @@ if CENSUS in config["studies"]:
         log:
             f"{LOGS}/stewart66_census/chunk_{{scatteritem}}.log",
         params:
+            module=CENSUS,
             cfg=shlex.quote(
                 json.dumps(registry.prune_config(config, ARTEFACTS["stewart66_census:census"]), sort_keys=True)
             ),
@@ -30,5 +31,5 @@ if CENSUS in config["studies"]:
             ENV
         shell:
             "OMP_NUM_THREADS={threads} OPENBLAS_NUM_THREADS={threads} MKL_NUM_THREADS={threads} "
-            "NUMBA_NUM_THREADS={threads} python -m {CENSUS} {wildcards.scatteritem} {output:q} "
+            "NUMBA_NUM_THREADS={threads} python -m {params.module} {wildcards.scatteritem} {output:q} "
             "--config-json {params.cfg} 2>&1 | tee {log:q}"
