@@ -177,6 +177,7 @@ def census_draw(frame: pd.DataFrame, path: str | Path) -> Path:
     (b) platforms by the largest real count among their inputs."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
+    from matplotlib.ticker import MaxNLocator
 
     from parakin.plot import DPI, save_figure, use_style
 
@@ -206,6 +207,7 @@ def census_draw(frame: pd.DataFrame, path: str | Path) -> Path:
         bx.set_title(
             "(b) platforms by the most real solutions among their inputs", fontsize=9, loc="left"
         )
+        bx.yaxis.set_major_locator(MaxNLocator(integer=True))
         bx.set_xticks(np.arange(0, ROOTS + 1, 4))
         bx.set_xlim(-1, ROOTS + 1)
         fig.suptitle("Beyond the papers: census of the real assemblies of the general 6-6 platform")
