@@ -81,12 +81,14 @@ def resources_of(item):
 
 
 def group_of(item):
-    """Jobs that need no more than the defaults (one core, 15 min) and are linked to no other
-    artefact form the group "small": on a cluster, `group-components` (profiles/slurm) sends
-    several in one submission, so that SLURM's queue and the job start-up are paid once per batch.
-    (A group may not wait on a job outside it that waits on the group: artefacts with upstream or
-    downstream artefacts stay alone.) A local run ignores groups."""
-    return "small" if item.threads == 1 and not item.resources and item.key not in LINKED else None
+    """Jobs that need no more than the defaults (one core, 15 min) and are linked to no other job
+    form the group "small": on a cluster, `group-components` (profiles/slurm) sends several in one
+    submission, so that SLURM's queue and scheduling are paid once per batch (each job is still
+    its own step inside it). Artefacts with upstream or downstream artefacts, or chunks to gather,
+    stay alone (a group may not wait on a job outside it that waits on the group, and one waiting
+    on the census would hold its whole batch back). A local run ignores groups."""
+    alone = item.threads > 1 or item.resources or item.key in LINKED or scattered(item)
+    return None if alone else "small"
 
 
 def rst_escape(text):
