@@ -15,6 +15,7 @@ report: "workflow/report/workflow.rst"
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/artefacts.smk"
+include: "workflow/rules/census.smk"
 include: "workflow/rules/report.smk"
 
 

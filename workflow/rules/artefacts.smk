@@ -1,7 +1,8 @@
 # One rule per registered artefact. Inputs: the source files it runs (its module and every parakin
 # module that imports), its paper's reference CSV and the outputs of the artefacts it needs.
+# Scattered studies (the 6-6 census) also gather their chunk files (workflow/rules/census.smk).
 # Params: only the config sections it declares and the seed, so editing one section reruns only
-# the artefacts that read it. threads/resources: what the artefact declares (the long jobs:
+# the artefacts that read it. group: the small jobs share a cluster submission (common.smk). threads/resources: what the artefact declares (the long jobs:
 # training, GA, NSGA-II, PSO, the solver atlas); every figure and table goes into the report
 # (snakemake --report) with its one-line caption from the registry.
 
@@ -11,9 +12,10 @@ for _item in ARTEFACTS.values():
         name:
             _item.rule
         input:
-            sources=_item.sources(),
+            sources=sources(_item),
             reference=reference(_item),
             upstream=upstream(_item),
+            chunks=scattered(_item),
         output:
             report_outputs(_item),
         log:
@@ -28,6 +30,8 @@ for _item in ARTEFACTS.values():
         threads: _item.threads
         resources:
             **resources_of(_item),
+        group:
+            group_of(_item)
         conda:
             ENV
         shell:

@@ -1,9 +1,22 @@
-# Shared set-up: validate the merged config (one place: parakin.config.validate, i.e. the schema
-# config/schema.yaml plus the orderings a schema cannot express; one short line per bad key), load
-# the artefact registry of the config's studies (each checked: parakin.pipeline.check_studies).
+# Shared set-up: run this checkout's code, validate the merged config (one place:
+# parakin.config.validate, i.e. the schema config/schema.yaml plus the orderings a schema cannot
+# express; one short line per bad key), load the artefact registry of the config's studies (each
+# checked: parakin.pipeline.check_studies).
 import json
+import os
 import shlex
 import sys
+
+#: this checkout's own code comes first, here and in every job (shell prefix below), whatever
+#: parakin the Python environment has installed (a virtual environment shared between clones
+#: would otherwise run, and track, the other clone's src/); a copy of the workflow without src/
+#: (tests/test_pipeline.py) runs the installed parakin
+CHECKOUT_SRC = Path(workflow.basedir) / "src"
+if (CHECKOUT_SRC / "parakin").is_dir():
+    sys.path.insert(0, str(CHECKOUT_SRC))
+    _src = shlex.quote(os.path.relpath(CHECKOUT_SRC))
+    # (the prefix is formatted like a shell command: braces doubled)
+    shell.prefix(f"set -euo pipefail; export PYTHONPATH={_src}${{{{PYTHONPATH:+:$PYTHONPATH}}}}; ")
 
 from parakin import registry
 from parakin.config import validate as validate_config
@@ -29,6 +42,24 @@ def outputs(item):
     return item.output_paths(FIG, GEN)
 
 
+def relative(path):
+    """``path`` relative to the working directory when it lies inside it (rule inputs that do not
+    depend on where the clone is), else as it is (an installed parakin)."""
+    rel = os.path.relpath(path)
+    return path if rel.startswith("..") else rel
+
+
+def sources(item):
+    """The parakin source files the artefact runs (its module and all it imports)."""
+    return [relative(p) for p in item.sources()]
+
+
+def scattered(item):
+    """Chunk files the artefact gathers: its study module's ``chunk_files(config)``, each written
+    by the study's scatter rule (workflow/rules/census.smk); none for the others."""
+    return getattr(sys.modules[item.module], "chunk_files", lambda config: [])(config)
+
+
 def upstream(item):
     return [path for key in item.needs for path in outputs(ARTEFACTS[key])]
 
@@ -48,6 +79,17 @@ SHOWN = (".png", ".svg", ".pdf", ".csv")
 
 def resources_of(item):
     return {**DEFAULT_RESOURCES, **dict(item.resources)}
+
+
+def group_of(item):
+    """Jobs that need no more than the defaults (one core, 15 min) and are linked to no other job
+    form the group "small": on a cluster, `group-components` (profiles/slurm) sends several in one
+    submission, so that SLURM's queue and scheduling are paid once per batch (each job is still
+    its own step inside it). Artefacts with upstream or downstream artefacts, or chunks to gather,
+    stay alone (a group may not wait on a job outside it that waits on the group, and one waiting
+    on the census would hold its whole batch back). A local run ignores groups."""
+    alone = item.threads > 1 or item.resources or item.key in LINKED or scattered(item)
+    return None if alone else "small"
 
 
 def rst_escape(text):
@@ -78,4 +120,6 @@ def outdir_of(item):
     return lambda wildcards, output: str(Path(output[0]).parents[depth - 1])
 
 
+#: artefacts with an upstream or a downstream artefact (never grouped, see group_of)
+LINKED = {key for item in ARTEFACTS.values() for key in (item.key, *item.needs) if item.needs}
 ALL_OUTPUTS = [path for item in ARTEFACTS.values() for path in outputs(item)]

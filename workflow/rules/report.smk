@@ -4,6 +4,11 @@ REPORT = f"{FIG}/REPORT.md"
 CHECK = [f"{RESULTS}/reproduction_check.md", f"{RESULTS}/reproduction_check.csv"] if RECORD else []
 
 
+# cheap bookkeeping runs on the machine that runs snakemake, never as a cluster job
+localrules:
+    report,
+
+
 rule report:
     input:
         ALL_OUTPUTS,
@@ -22,6 +27,9 @@ rule report:
 
 
 if RECORD:
+
+    localrules:
+        reproduction_check,
 
     rule reproduction_check:
         input:

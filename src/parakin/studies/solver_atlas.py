@@ -253,52 +253,54 @@ def _cell(v: float) -> str:
 
 
 def draw_solver_atlas(frame: pd.DataFrame, path: Path) -> Path:
-    """Success rate per solver (rows) and mechanism (columns), one panel per scenario, from the
-    atlas table (``extra_solver_atlas.csv``) alone."""
+    """Success rate per solver (rows) and mechanism (columns), one panel per scenario (two panels
+    a row, each cell wide enough for "99.8" and the mechanism names written flat), from the atlas
+    table (``extra_solver_atlas.csv``) alone."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
     from parakin.plot import new_figure, save_figure, use_style
 
     df = frame
-
     solvers = list(dict.fromkeys(df["solver"]))
     mechs = list(dict.fromkeys(df["mechanism"]))
     scen = [s for s in SCENARIOS if s in set(df["scenario"])]
+    rows = (len(scen) + 1) // 2
+    # bins that tell 96 % from 100 %: a practitioner cares most about the top of the scale
+    bounds = [0.0, 0.25, 0.5, 0.75, 0.9, 0.99, 1.0 + 1e-9]
+    cmap = ListedColormap(
+        ["#D55E00", "#E69F00", "#F0E442", "#C2E699", "#78C679", "#238443"]
+    ).with_extremes(bad="0.92")
+    norm = BoundaryNorm(bounds, cmap.N)
     with use_style():
-        fig, ax0 = new_figure((7.0, 1.6 + 0.32 * len(solvers)))
+        fig, ax0 = new_figure((9.6, 0.9 + rows * (0.85 + 0.27 * len(solvers))))
         fig.delaxes(ax0)
-        axes = fig.subplots(1, len(scen), sharey=True, squeeze=False)[0]
-        # bins that tell 96 % from 100 %: a practitioner cares most about the top of the scale
-        bounds = [0.0, 0.25, 0.5, 0.75, 0.9, 0.99, 1.0 + 1e-9]
-        cmap = ListedColormap(
-            ["#D55E00", "#E69F00", "#F0E442", "#C2E699", "#78C679", "#238443"]
-        ).with_extremes(bad="0.92")
-        norm = BoundaryNorm(bounds, cmap.N)
-        for ax, s in zip(axes, scen):
+        axes = fig.subplots(rows, 2, sharey=True, squeeze=False).ravel()
+        for k, (ax, s) in enumerate(zip(axes, scen)):
             g = df[df["scenario"] == s].set_index(["solver", "mechanism"])["success_rate"]
             m = np.array([[g.get((so, me), np.nan) for me in mechs] for so in solvers])
             im = ax.imshow(np.ma.masked_invalid(m), cmap=cmap, norm=norm, aspect="auto")
-            for i in range(len(solvers)):
-                for j in range(len(mechs)):
-                    v = m[i, j]
-                    color = "white" if v == v and v >= 0.99 else "black"
-                    ax.text(
-                        j,
-                        i,
-                        "–" if v != v else _cell(v),
-                        ha="center",
-                        va="center",
-                        fontsize=6.5,
-                        color=color,
-                    )
-            ax.set_xticks(range(len(mechs)), mechs, rotation=30, ha="right")
-            ax.tick_params(left=False)
-            ax.set_title(s)
+            for (i, j), v in np.ndenumerate(m):
+                ax.text(
+                    j,
+                    i,
+                    "–" if v != v else _cell(v),
+                    ha="center",
+                    va="center",
+                    fontsize=7,
+                    color="white" if v == v and v >= 0.99 else "black",
+                )
+            ax.set_xticks(range(len(mechs)), mechs, fontsize=7.5)
+            ax.tick_params(left=False, bottom=False)
+            ax.set_title(f"({'abcdefgh'[k]}) {s}", loc="left", fontsize=9)
             ax.grid(False)
-        axes[0].set_yticks(range(len(solvers)), solvers)
-        cb = fig.colorbar(im, ax=list(axes), shrink=0.8, pad=0.02)
-        cb.set_label("success rate, % (right assembly)")
+        for ax in axes[len(scen) :]:
+            ax.set_visible(False)
+        for ax in axes[::2]:
+            ax.set_yticks(range(len(solvers)), solvers, fontsize=8)
+        cb = fig.colorbar(im, ax=list(axes), shrink=0.6, pad=0.02, aspect=30)
+        cb.set_label("success rate, % (converged to the right assembly)")
         cb.set_ticks(bounds[:-1] + [1.0], labels=["0", "25", "50", "75", "90", "99", "100"])
+        fig.suptitle(f"{TITLE} (FK success rate; '–': not applicable)", fontsize=10)
     return save_figure(fig, path)
 
 

@@ -88,45 +88,73 @@ def assemblies_data(config: dict | None = None) -> pd.DataFrame:
 
 
 def assemblies_draw(frame: pd.DataFrame, path: str | Path) -> Path:
-    """A 5 x 8 grid of 3-D drawings, one per real assembly (legs, base and platform outlines)."""
+    """All real assemblies side by side, 8 a row, in one common 3-D view (orthographic, the same
+    elevation, azimuth and scale in every panel, a metre as long on every axis): base and platform
+    outlines, the six legs and the world axes (0.5 m arrows at the base origin)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    from parakin.plot import DPI, save_figure, use_style
 
     m = Stewart66()
-    n = len(frame)
-    cols = 8
-    rows = max(1, int(np.ceil(n / cols)))
-    fig = Figure(figsize=(2.0 * cols, 2.0 * rows), dpi=100)
-    FigureCanvasAgg(fig)
-    allpts = (
-        np.concatenate(
-            [m.platform_world(frame[list(m.pose_names)].to_numpy()).reshape(-1, 3), m.base_points]
+    poses = frame[list(m.pose_names)].to_numpy(dtype=float)
+    tops = m.platform_world(poses).reshape(len(frame), 6, 3)
+    b = m.base_points
+    pts = np.concatenate([tops.reshape(-1, 3), b, np.zeros((1, 3)), np.eye(3) * AXIS_M])
+    lo, hi = pts.min(0), pts.max(0)
+    cols, cell = 8, 1.55
+    rows = max(1, int(np.ceil(len(frame) / cols)))
+    head, foot = 0.55, 0.35  # inches: title, legend
+    with use_style():
+        fig = Figure(figsize=(cols * cell, rows * cell + head + foot), dpi=DPI)
+        FigureCanvasAgg(fig)
+        w, h = 1 / cols, cell / fig.get_figheight()
+        for i, (top, sol) in enumerate(zip(tops, frame["solution"])):
+            r, c = divmod(i, cols)
+            y0 = 1 - head / fig.get_figheight() - (r + 1) * h
+            ax = fig.add_axes((c * w, y0, w, h), projection="3d", proj_type="ortho")
+            ax.view_init(elev=VIEW[0], azim=VIEW[1])
+            for k in range(6):
+                ax.plot(*np.stack([b[k], top[k]]).T, color="0.1", lw=0.9)
+            for poly, colour in ((b, "0.35"), (top, "tab:red")):
+                ax.add_collection3d(
+                    Poly3DCollection([poly], facecolor=colour, edgecolor=colour, alpha=0.25, lw=0.8)
+                )
+            for axis, colour in zip(np.eye(3) * AXIS_M, ("#D55E00", "#009E73", "#0072B2")):
+                ax.quiver(0, 0, 0, *axis, color=colour, lw=0.8, arrow_length_ratio=0.25)
+            ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]))
+            ax.set_box_aspect(hi - lo, zoom=1.35)
+            ax.set_axis_off()
+            ax.text2D(0.04, 0.9, f"{int(sol)}", transform=ax.transAxes, fontsize=8)
+        fig.suptitle(
+            f"Beyond the papers: Dietmaier's 6-6 platform, all {len(frame)} real assemblies of one "
+            "set of leg lengths (certified, IK-checked)\n"
+            f"one view for all: orthographic, elevation {VIEW[0]:g}°, azimuth {VIEW[1]:g}°, "
+            f"the same scale in every panel (box {hi[0] - lo[0]:.2f} x {hi[1] - lo[1]:.2f} x "
+            f"{hi[2] - lo[2]:.2f} m)",
+            fontsize=10,
+            y=1 - 0.05 / fig.get_figheight(),
+            va="top",
         )
-        if n
-        else m.base_points
-    )
-    lo, hi = allpts.min(0), allpts.max(0)
-    for i, (_, row) in enumerate(frame.iterrows()):
-        ax = fig.add_subplot(rows, cols, i + 1, projection="3d")
-        pose = row[list(m.pose_names)].to_numpy(dtype=float)
-        top = m.platform_world(pose)
-        b = m.base_points
-        for k in range(6):
-            ax.plot(*np.stack([b[k], top[k]]).T, color="tab:blue", lw=1)
-        for pts, colour in ((b, "k"), (top, "tab:red")):
-            loop = np.concatenate([pts, pts[:1]])
-            ax.plot(*loop.T, color=colour, lw=0.8)
-        ax.set_xlim(lo[0], hi[0])
-        ax.set_ylim(lo[1], hi[1])
-        ax.set_zlim(lo[2], hi[2])
-        ax.set_axis_off()
-        ax.set_title(f"{int(row['solution'])}", fontsize=8)
-    fig.suptitle(
-        f"Beyond the papers: Dietmaier's 6-6 platform, {n} real assemblies (certified, IK-checked)"
-    )
-    path = Path(path)
-    fig.savefig(path)
-    return path
+        handles = [
+            Line2D([], [], color="0.35", lw=4, alpha=0.5, label="base"),
+            Line2D([], [], color="tab:red", lw=4, alpha=0.5, label="platform"),
+            Line2D([], [], color="0.1", lw=1, label="legs"),
+            *[
+                Line2D([], [], color=colour, lw=1, label=f"world {name} ({AXIS_M:g} m)")
+                for name, colour in zip("xyz", ("#D55E00", "#009E73", "#0072B2"))
+            ],
+        ]
+        fig.legend(handles=handles, loc="lower center", ncols=6, fontsize=8, frameon=False)
+    return save_figure(fig, path, tag=False)
+
+
+#: the common view of :func:`assemblies_draw`: (elevation, azimuth) in degrees
+VIEW = (18.0, -58.0)
+#: length of the world axes drawn in every panel (m)
+AXIS_M = 0.5
 
 
 # ------------------------------------------------------------------------------------ real counts
@@ -183,7 +211,7 @@ def real_counts_draw(frame: pd.DataFrame, path: str | Path) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(6.4, 3.6), dpi=100)
+    fig = Figure(figsize=(6.4, 3.6), dpi=100, layout="constrained")
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     bins = np.arange(0, 42, 2)
@@ -302,7 +330,7 @@ def timing_draw(frame: pd.DataFrame, path: str | Path) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(6.4, 3.2), dpi=100)
+    fig = Figure(figsize=(6.4, 3.2), dpi=100, layout="constrained")
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     y = np.arange(len(frame))
@@ -310,8 +338,9 @@ def timing_draw(frame: pd.DataFrame, path: str | Path) -> Path:
     ax.set_yticks(y, frame["method"], fontsize=8)
     ax.set_xscale("log")
     ax.set_xlabel("inputs per second (all solutions of each input)")
-    ax.set_title(
-        "Beyond the papers: 6-6 Gough-Stewart, all solutions per input (timings of one machine)"
+    fig.suptitle(
+        "Beyond the papers: 6-6 Gough-Stewart, all solutions per input\n(timings of one machine)",
+        fontsize=10,
     )
     for yi, (_, r) in zip(y, frame.iterrows()):
         ax.text(
@@ -321,7 +350,6 @@ def timing_draw(frame: pd.DataFrame, path: str | Path) -> Path:
             va="center",
             fontsize=8,
         )
-    fig.tight_layout()
     path = Path(path)
     fig.savefig(path)
     return path

@@ -1,0 +1,113 @@
+"""The census of real assemblies of the general 6-6 platform (parakin.studies.stewart66_census):
+the chunking does not change the answer, a resumed run reuses what finished chunks wrote, and the
+counts obey what every 6-6 input must (an even number of real solutions, at least the pose the
+leg lengths came from)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from parakin.studies import stewart66_census as census
+
+SMALL = {"platforms": 3, "inputs_per_platform": 4, "offset": 1.0}
+
+
+def _config(tmp_path, chunks: int, **section) -> dict:
+    return {
+        "seed": 20171010,
+        "generated_dir": str(tmp_path / "generated"),
+        census.KEY: {**SMALL, "chunks": chunks, **section},
+    }
+
+
+def _platforms(config) -> pd.DataFrame:
+    return census._gather(config).drop(columns="wall_s")
+
+
+@pytest.fixture(scope="module")
+def two_cuts(tmp_path_factory):
+    """The same small census cut into 1 and into 3 chunks."""
+    one = _config(tmp_path_factory.mktemp("one"), 1)
+    three = _config(tmp_path_factory.mktemp("three"), 3)
+    return one, three, _platforms(one), _platforms(three)
+
+
+def test_chunks_cover_the_platforms_once():
+    section = {"platforms": 10, "chunks": 4}
+    ranges = [census.chunk_platforms(section, i) for i in range(1, 5)]
+    assert [i for r in ranges for i in r] == list(range(10))
+    assert {len(r) for r in ranges} <= {2, 3}
+    with pytest.raises(ValueError, match="chunk 5 is outside 1..4"):
+        census.chunk_platforms(section, 5)
+
+
+def test_the_census_does_not_depend_on_the_chunking(two_cuts):
+    _, _, one, three = two_cuts
+    pd.testing.assert_frame_equal(one, three)
+
+
+def test_counts_are_even_and_include_the_drawn_pose(two_cuts):
+    """Real solutions of a real system pair off with their conjugates (40 is even), so a complete
+    input has an even real count; its leg lengths are the IK of a real pose, so >= 2."""
+    _, _, rows, _ = two_cuts
+    counts = rows[census.COUNT_COLUMNS].to_numpy()
+    assert counts.sum() == rows["complete"].sum() > 0
+    assert counts[:, 1::2].sum() == 0, "an odd number of real solutions"
+    assert counts[:, 0].sum() == 0, "no real solution, yet the input came from a real pose"
+    assert (rows["root_count"] == 40).all()
+
+
+def test_resume_reuses_finished_chunks_and_redoes_the_rest(two_cuts, monkeypatch):
+    _, three, _, before = two_cuts
+    files = census.chunk_files(three)
+    Path(files[1]).unlink()  # a chunk that failed: no file
+    calls = []
+    write = census.write_chunk
+    monkeypatch.setattr(
+        census, "write_chunk", lambda config, i, path: calls.append(i) or write(config, i, path)
+    )
+    after = _platforms(three)
+    assert calls == [2], "only the missing chunk is computed again"
+    pd.testing.assert_frame_equal(before, after)
+    stale = pd.read_csv(files[0]).iloc[:0]  # a file that does not hold its platforms
+    stale.to_csv(files[0], index=False)
+    _platforms(three)
+    assert calls == [2, 1]
+
+
+def test_census_table_and_figure(two_cuts, tmp_path):
+    from test_figure_text import check_drawing
+
+    config, _, rows, _ = two_cuts
+    table = census.census_data(config)
+    assert table["real_solutions"].tolist() == list(range(41))
+    assert table["complete_inputs"].sum() == rows["complete"].sum()
+    assert table["platforms"].sum() == SMALL["platforms"]
+    assert table["platforms_with_max"].sum() == SMALL["platforms"]
+    assert np.isclose(table["fraction"].sum(), 1.0)
+    assert check_drawing(census.census_draw, table, tmp_path / "census.png") == []
+
+
+def test_bad_chunking_is_refused_in_one_line(tmp_path):
+    with pytest.raises(ValueError, match="chunks = 5 must be <= platforms = 3"):
+        census._gather(_config(tmp_path, 5))
+    config = _config(tmp_path, 2)
+    with pytest.raises(SystemExit, match="not 'I-of-N' with N = stewart66_census.chunks = 2"):
+        census.main(["1-of-3", str(tmp_path / "x.csv"), "--config-json", _json(config)])
+
+
+def test_a_scatter_job_writes_its_chunk(tmp_path, capsys):
+    config = _config(tmp_path, 3)
+    out = tmp_path / "2-of-3.csv"
+    assert census.main(["2-of-3", str(out), "--config-json", _json(config)]) == 0
+    assert pd.read_csv(out)["platform"].tolist() == [1]
+
+
+def _json(config) -> str:
+    import json
+
+    return json.dumps(config)
