@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import pickle
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -183,18 +183,18 @@ def _project(tangents: Array, load: Array) -> Array:
 
 
 def mass_matrix(st: State) -> Array:
-    """``M = sum_b m_b J_b^T J_b + W_b^T I_b W_b`` (..., n, n) in pose coordinates."""
+    """``M = sum_b m_b J_b^T J_b + W_b^T I_b W_b`` (..., n, n) in pose coordinates (symmetric: the
+    upper triangle computed, the lower one its mirror)."""
     n = st.joints.n
-    out = 0.0
+    rows: list = [0.0] * n  # rows[k]: M[k, k:] (n - k, ...)
     for _, body, m in st.groups:
         jc, jw = m.centre.tangents[:n], m.spin.tangents[:n]  # (n, ..., c, 3)
         i_jw = m.inertia_times(body, jw)
-        rows = [
-            np.sum(body.mass * jet.vdot(jc[k], jc) + jet.vdot(jw[k], i_jw), axis=-1)
-            for k in range(n)
-        ]
-        out = out + np.moveaxis(np.stack(rows), (0, 1), (-2, -1))  # (n, n, ...) -> (..., n, n)
-    return out
+        for k in range(n):
+            upper = body.mass * jet.vdot(jc[k], jc[k:]) + jet.vdot(jw[k], i_jw[k:])
+            rows[k] = rows[k] + np.sum(upper, axis=-1)
+    full = np.stack([np.stack([rows[min(k, j)][abs(j - k)] for j in range(n)]) for k in range(n)])
+    return np.moveaxis(full, (0, 1), (-2, -1))  # (n, n, ...) -> (..., n, n)
 
 
 def energy(st: State) -> tuple[Array, Array]:
@@ -277,9 +277,12 @@ def solve_forces(jacobian: ArrayLike, load: ArrayLike) -> tuple[Array, Array, Ar
     j = np.asarray(jacobian, dtype=float)
     q = np.asarray(load, dtype=float)
     m, n = j.shape[-2:]
-    batch = np.broadcast_shapes(j.shape[:-2], q.shape[:-1])
-    jf = np.ascontiguousarray(np.broadcast_to(j, batch + (m, n)).reshape(-1, m, n))
-    qf = np.ascontiguousarray(np.broadcast_to(q, batch + (n,)).reshape(-1, n))
+    batch = j.shape[:-2]
+    if q.shape[:-1] != batch:
+        batch = np.broadcast_shapes(batch, q.shape[:-1])
+        j, q = np.broadcast_to(j, batch + (m, n)), np.broadcast_to(q, batch + (n,))
+    jf = np.ascontiguousarray(j.reshape(-1, m, n))
+    qf = np.ascontiguousarray(q.reshape(-1, n))
     f, cond, residual = np.empty((len(jf), m)), np.empty(len(jf)), np.empty(len(jf))
     ok = np.empty(len(jf), dtype=bool)
     forces(jf, qf, f, cond, residual, ok)
@@ -334,7 +337,8 @@ def inverse_dynamics(
     mass = _mass_model(mech, mass)
     x, v, a = _checked(mech, pose, rate, acceleration)
     w = np.zeros(6) if wrench is None else as_batch(wrench, 6, "wrench")
-    terms = compiled(_inverse_terms, mech, mass, 4)(x, v, a, w)
+    terms = compiled(_inverse_terms, mech, mass, ("pose", "rate", "acceleration", "wrench"))
+    terms = terms(x, v, a, w)
     jac, load = terms["jacobian"], terms["load"]
     picked = _active(active, jac.shape[-2])
     f_active, cond, balance = solve_forces(jac[..., picked, :], load)
@@ -367,11 +371,11 @@ _PROGRAMS: dict[tuple, Callable] = {}
 _PROGRAMS_LOCK = threading.Lock()
 
 
-def compiled(build: Callable, mech: Mechanism, mass: MassModel, arrays: int) -> Callable:
-    """The numpy function ``build(mech, mass)`` of ``arrays`` arrays (pose, rate, then any of
-    :func:`probe`'s acceleration and wrench) recorded as a program
-    (:mod:`parakin.dynamics.program`: the same arithmetic, compiled), or the function itself
-    where it cannot be recorded. Cached per mechanism class, parameters and mass model."""
+def compiled(build: Callable, mech: Mechanism, mass: MassModel, arrays: Sequence[str]) -> Callable:
+    """The numpy function ``build(mech, mass)`` of the ``arrays`` named (of :func:`probe`)
+    recorded as a program (:mod:`parakin.dynamics.program`: the same arithmetic, compiled), or
+    the function itself where it cannot be recorded. Cached per mechanism class, parameters and
+    mass model."""
     try:
         key = (build, type(mech), pickle.dumps(mech.parameters()), pickle.dumps(mass))
     except Exception:  # parameters that do not pickle: no cache, no program
@@ -380,25 +384,26 @@ def compiled(build: Callable, mech: Mechanism, mass: MassModel, arrays: int) -> 
         fn = _PROGRAMS.get(key)
         if fn is None:
             terms = build(mech, mass)
-            fn = record(terms, probe(mech)[:arrays]) or terms
+            state = probe(mech)
+            fn = record(terms, [state[name] for name in arrays]) or terms
             if len(_PROGRAMS) >= 64:
                 _PROGRAMS.pop(next(iter(_PROGRAMS)))
             _PROGRAMS[key] = fn
     return fn
 
 
-def probe(mech: Mechanism) -> tuple[Array, Array, Array, Array]:
+def probe(mech: Mechanism) -> dict[str, Array]:
     """A state that every recording is checked on: :meth:`Mechanism.home`, a rate and an
     acceleration of every coordinate (scaled to :meth:`Mechanism.pose_bounds`), and a wrench."""
     lo, hi = mech.pose_bounds()
     span = 0.5 * (np.asarray(hi, dtype=float) - np.asarray(lo, dtype=float))
     k = np.arange(mech.n_pose)
-    return (
-        np.asarray(mech.home(), dtype=float),
-        0.1 * span * np.cos(k + 1.0),
-        span * np.sin(k + 2.0),
-        np.array([1.0, -2.0, 3.0, 0.1, -0.2, 0.3]),
-    )
+    return {
+        "pose": np.asarray(mech.home(), dtype=float),
+        "rate": 0.1 * span * np.cos(k + 1.0),
+        "acceleration": span * np.sin(k + 2.0),
+        "wrench": np.array([1.0, -2.0, 3.0, 0.1, -0.2, 0.3]),
+    }
 
 
 def _active(active: ArrayLike | None, m: int) -> Array:

@@ -24,6 +24,7 @@ converts a value to a float): the caller then runs the numpy function itself.
 
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 import warnings
@@ -223,24 +224,30 @@ class Program:
     CHUNK = 256
 
     def __call__(self, *arrays: Array) -> dict[str, Array]:
-        from parakin.dynamics._kernels import replay
-
         if len(arrays) != len(self.widths):
             raise ValueError(f"the program takes {len(self.widths)} arrays, got {len(arrays)}")
-        batch = np.broadcast_shapes(*(np.shape(a)[:-1] for a in arrays))
-        flat = np.concatenate(
-            [
-                np.broadcast_to(np.asarray(a, dtype=float), batch + (w,)).reshape(-1, w)
-                for a, w in zip(arrays, self.widths)
-            ],
-            axis=-1,
-        )
-        out = np.empty((flat.shape[0], self.columns))
-        replay(self.code, self.constants, flat, out, self.registers, self.CHUNK)
-        return {
-            name: out[:, start : start + math.prod(shape)].reshape(batch + shape)
+        arrays = [np.asarray(a, dtype=float) for a in arrays]
+        batch = arrays[0].shape[:-1]
+        if any(a.shape[:-1] != batch for a in arrays):
+            batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
+            arrays = [np.broadcast_to(a, batch + a.shape[-1:]) for a in arrays]
+        out = self.run(np.concatenate(arrays, axis=-1).reshape(-1, sum(self.widths)))
+        return {name: out[:, cols].reshape(batch + shape) for name, cols, shape in self._slices}
+
+    @functools.cached_property
+    def _slices(self) -> list[tuple[str, slice, tuple[int, ...]]]:
+        return [
+            (name, slice(start, start + math.prod(shape)), shape)
             for name, (start, shape) in self.outputs.items()
-        }
+        ]
+
+    def run(self, inputs: Array) -> Array:
+        """The outputs (k, :attr:`columns`) of inputs (k, sum of :attr:`widths`), as columns."""
+        from parakin.dynamics._kernels import replay
+
+        out = np.empty((inputs.shape[0], self.columns))
+        replay(self.code, self.constants, inputs, out, self.registers, self.CHUNK)
+        return out
 
     @property
     def size(self) -> int:
