@@ -29,7 +29,6 @@ from parakin.dynamics.inverse import (
     SINGULAR_CONDITION,
     _checked,
     _generalized,
-    _mass_model,
     _state,
     compiled,
     inverse_dynamics,
@@ -127,7 +126,6 @@ def equations(
     """The :class:`Equations` of ``mech`` at poses (..., n) moving at ``rate`` (..., n), from its
     bodies (:meth:`Mechanism.bodies`, recorded once as a compiled program); raises
     UnreachableError outside the mechanism's domain."""
-    mass = _mass_model(mech, mass)
     x, v = _checked(mech, pose, rate)
     return Equations(x, v, **compiled(_motion_terms, mech, mass, ("pose", "rate"))(x, v))
 
@@ -272,7 +270,7 @@ def simulate(
     if not (np.isfinite(t_end) and t_end > 0 and np.isfinite(dt) and 0 < dt <= t_end):
         raise ValueError(f"t_end = {t_end!r} s and dt = {dt!r} s must satisfy 0 < dt <= t_end")
     x, v = _checked(mech, pose, rate)
-    system = _System(mech, _mass_model(mech, mass), force, wrench, active)
+    system = _System(mech, mass, force, wrench, active)
     n = mech.n_pose
     eq = system.equations(np.concatenate([x, v], axis=-1), domain=True)
     y = np.concatenate([x, v, eq.joints, eq.joint_rate], axis=-1)

@@ -334,7 +334,6 @@ def inverse_dynamics(
     """
     if on_singular not in ("raise", "flag"):
         raise ValueError(f"on_singular = {on_singular!r}: use 'raise' or 'flag'")
-    mass = _mass_model(mech, mass)
     x, v, a = _checked(mech, pose, rate, acceleration)
     w = np.zeros(6) if wrench is None else as_batch(wrench, 6, "wrench")
     terms = compiled(_inverse_terms, mech, mass, ("pose", "rate", "acceleration", "wrench"))
@@ -371,19 +370,25 @@ _PROGRAMS: dict[tuple, Callable] = {}
 _PROGRAMS_LOCK = threading.Lock()
 
 
-def compiled(build: Callable, mech: Mechanism, mass: MassModel, arrays: Sequence[str]) -> Callable:
+def compiled(
+    build: Callable, mech: Mechanism, mass: MassModel | None, arrays: Sequence[str]
+) -> Callable:
     """The numpy function ``build(mech, mass)`` of the ``arrays`` named (of :func:`probe`)
     recorded as a program (:mod:`parakin.dynamics.program`: the same arithmetic, compiled), or
-    the function itself where it cannot be recorded. Cached per mechanism class, parameters and
-    mass model."""
+    the function itself where it cannot be recorded. ``mass``: the mass model, ``None`` for the
+    mechanism's own (:meth:`Mechanism.mass_model`, a function of its parameters). Cached per
+    mechanism class, parameters and mass model."""
     try:
         key = (build, type(mech), pickle.dumps(mech.parameters()), pickle.dumps(mass))
     except Exception:  # parameters that do not pickle: no cache, no program
-        return build(mech, mass)
+        return build(mech, _mass_model(mech, mass))
+    fn = _PROGRAMS.get(key)
+    if fn is not None:
+        return fn
     with _PROGRAMS_LOCK:
         fn = _PROGRAMS.get(key)
         if fn is None:
-            terms = build(mech, mass)
+            terms = build(mech, _mass_model(mech, mass))
             state = probe(mech)
             fn = record(terms, [state[name] for name in arrays]) or terms
             if len(_PROGRAMS) >= 64:
