@@ -189,3 +189,26 @@ def test_a_batch_of_simulations_is_each_simulation(rng):
         alone = simulate(mech, starts[k], v0, law, 0.02, 1e-3)
         assert np.array_equal(both.pose[:, k], alone.pose)
         assert np.array_equal(both.drift[:, k], alone.drift)
+
+
+@pytest.mark.parametrize("mech", MECHS, ids=IDS)
+def test_without_numba_the_same_numbers(mech, rng, monkeypatch):
+    """``PARAKIN_KERNELS=0`` (or numba missing): the numpy functions and numpy's solves."""
+    s = random_states(mech, rng)
+    x, v, a, w = s["pose"], s["rate"], s["acceleration"], s["wrench"]
+    f = rng.normal(size=(len(x), mech.n_joints))
+
+    def run():
+        return (
+            D.inverse_dynamics(mech, x, v, a, wrench=w).force,
+            forward.forward_dynamics(mech, x, v, f, wrench=w),
+            equations(mech, x, v).mass_matrix,
+        )
+
+    compiled = run()
+    monkeypatch.setenv("PARAKIN_KERNELS", "0")
+    assert not isinstance(
+        inverse.compiled(inverse._inverse_terms, mech, None, TERMS[0][1]), Program
+    )
+    for got, want in zip(run(), compiled):
+        assert rel(got, want) < TOL

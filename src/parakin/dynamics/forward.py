@@ -36,6 +36,7 @@ from parakin.dynamics.inverse import (
     solve_forces,
 )
 from parakin.dynamics.model import MassModel
+from parakin.dynamics.program import available
 from parakin.errors import SingularityError, UnreachableError
 from parakin.mechanisms.base import Array, Mechanism, as_batch, describe_first
 
@@ -132,9 +133,7 @@ def equations(
 
 def _accelerations(eq: Equations, force: ArrayLike, wrench, active) -> Array:
     """Pose accelerations ``M^-1 (J^T f - h + P^T w)`` under actuator ``force`` (compiled, sample
-    by sample: :func:`parakin.dynamics._kernels.accelerations`)."""
-    from parakin.dynamics._kernels import accelerations
-
+    by sample: :func:`parakin.dynamics._kernels.accelerations`; numpy without numba)."""
     m, n = eq.jacobian.shape[-2:]
     f = as_batch(force, m, "force")
     if active is not None:
@@ -146,15 +145,23 @@ def _accelerations(eq: Equations, force: ArrayLike, wrench, active) -> Array:
     if f.shape[:-1] != batch or extra.shape[:-1] != batch:
         batch = np.broadcast_shapes(batch, f.shape[:-1], extra.shape[:-1])
     xdd, cond = np.empty(batch + (n,)), np.empty(batch)
-    accelerations(
-        _rows(eq.mass_matrix, batch, (n, n)),
-        _rows(eq.jacobian, batch, (m, n)),
-        _rows(eq.bias, batch, (n,)),
-        _rows(f, batch, (m,)),
-        _rows(extra, batch, (n,)),
-        xdd.reshape(-1, n),
-        cond.reshape(-1),
-    )
+    if available():
+        from parakin.dynamics._kernels import accelerations
+
+        accelerations(
+            _rows(eq.mass_matrix, batch, (n, n)),
+            _rows(eq.jacobian, batch, (m, n)),
+            _rows(eq.bias, batch, (n,)),
+            _rows(f, batch, (m,)),
+            _rows(extra, batch, (n,)),
+            xdd.reshape(-1, n),
+            cond.reshape(-1),
+        )
+    else:
+        rhs = np.sum(eq.jacobian * f[..., :, None], axis=-2) - eq.bias + extra
+        cond[...] = np.linalg.cond(np.broadcast_to(eq.mass_matrix, batch + (n, n)))
+        if np.all(cond < SINGULAR_CONDITION):
+            xdd[...] = np.linalg.solve(eq.mass_matrix, rhs[..., None])[..., 0]
     bad = ~(cond < SINGULAR_CONDITION)
     if np.any(bad):
         raise SingularityError(

@@ -34,7 +34,7 @@ from numpy.typing import ArrayLike
 
 import parakin.dynamics.jet as jet
 from parakin.dynamics.model import Bodies, BodyGroup, BodyMotion, MassModel, RigidBody, motion
-from parakin.dynamics.program import record
+from parakin.dynamics.program import available, record
 from parakin.errors import ShapeError, SingularityError, UnreachableError
 from parakin.mechanisms.base import Array, Mechanism, as_batch, describe_first
 
@@ -271,11 +271,13 @@ def solve_forces(jacobian: ArrayLike, load: ArrayLike) -> tuple[Array, Array, Ar
     """``f`` with ``J^T f = Q`` (minimum norm when ``m > n``, least squares when ``m < n``), the
     condition number of ``J`` and the relative residual ``|J^T f - Q| / |Q|``: compiled, sample
     by sample (:func:`parakin.dynamics._kernels.forces`); samples where an elimination meets a
-    zero pivot go through numpy's pseudo-inverse."""
-    from parakin.dynamics._kernels import forces
-
+    zero pivot go through numpy's pseudo-inverse (all of them without numba)."""
     j = np.asarray(jacobian, dtype=float)
     q = np.asarray(load, dtype=float)
+    if not available():
+        return _solve_numpy(j, q)
+    from parakin.dynamics._kernels import forces
+
     m, n = j.shape[-2:]
     batch = j.shape[:-2]
     if q.shape[:-1] != batch:
@@ -378,6 +380,8 @@ def compiled(
     the function itself where it cannot be recorded. ``mass``: the mass model, ``None`` for the
     mechanism's own (:meth:`Mechanism.mass_model`, a function of its parameters). Cached per
     mechanism class, parameters and mass model."""
+    if not available():
+        return build(mech, _mass_model(mech, mass))
     try:
         key = (build, type(mech), pickle.dumps(mech.parameters()), pickle.dumps(mass))
     except Exception:  # parameters that do not pickle: no cache, no program

@@ -25,8 +25,10 @@ converts a value to a float): the caller then runs the numpy function itself.
 from __future__ import annotations
 
 import functools
+import importlib.util
 import math
 import numbers
+import os
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -35,7 +37,7 @@ import numpy as np
 
 Array = np.ndarray
 
-__all__ = ["Symbol", "Program", "record", "NotRecordable"]
+__all__ = ["Symbol", "Program", "record", "NotRecordable", "available"]
 
 # opcodes of the program (parakin.dynamics._kernels.replay tests them in this order)
 MUL, ADD, SUB, MULC, ADDC, NEG, SUBC, CSUB, DIV, DIVC, CDIV = range(11)
@@ -46,6 +48,17 @@ MULADD, MULSUB, SUBMUL, MUL2ADD, MUL2SUB, MULCADD, MULCSUB, SUBMULC = range(19, 
 _COMMUTATIVE = (MUL, ADD)
 #: relative agreement with the numpy function that :func:`record` requires on its probe
 PROBE_RTOL = 1e-9
+
+
+def available() -> bool:
+    """False where numba is missing or ``PARAKIN_KERNELS=0`` (the project's switch for every
+    compiled path): the dynamics then runs its numpy functions, with the same numbers."""
+    return os.environ.get("PARAKIN_KERNELS", "1") != "0" and _have_numba()
+
+
+@functools.lru_cache(maxsize=1)
+def _have_numba() -> bool:
+    return importlib.util.find_spec("numba") is not None
 
 
 class NotRecordable(TypeError):
