@@ -36,7 +36,7 @@ from parakin.dynamics.inverse import (
     solve_forces,
 )
 from parakin.dynamics.model import MassModel
-from parakin.dynamics.program import available
+from parakin.dynamics.program import Program, available
 from parakin.errors import SingularityError, UnreachableError
 from parakin.mechanisms.base import Array, Mechanism, as_batch, describe_first
 
@@ -163,7 +163,7 @@ def _accelerations(eq: Equations, force: ArrayLike, wrench, active) -> Array:
         if np.all(cond < SINGULAR_CONDITION):
             xdd[...] = np.linalg.solve(eq.mass_matrix, rhs[..., None])[..., 0]
     bad = ~(cond < SINGULAR_CONDITION)
-    if np.any(bad):
+    if bad.any():
         raise SingularityError(
             f"the mass matrix in pose coordinates is singular (cond {cond[bad].flat[0]:.3g}): the "
             f"pose coordinates degenerate here{describe_first(bad, cond.shape)}"
@@ -228,9 +228,14 @@ class _System:
         """The equations at ``y``; raises where the joints are not finite (a pose outside the
         domain, where the IK has no real value) or, with ``domain``, where
         :meth:`Mechanism.in_domain` refuses the pose."""
-        x, v = y[..., : self.n], y[..., self.n : 2 * self.n]
-        eq = Equations(x, v, **self.terms(x, v))
-        if not np.all(np.isfinite(eq.joints)) or (domain and not np.all(self.mech.in_domain(x))):
+        n = self.n
+        x, v = y[..., :n], y[..., n : 2 * n]
+        if isinstance(self.terms, Program):  # the state's leading columns are its inputs
+            out = self.terms.run(y[..., : 2 * n].reshape(-1, 2 * n))
+            eq = Equations(x, v, **self.terms.unpack(out, y.shape[:-1]))
+        else:
+            eq = Equations(x, v, **self.terms(x, v))
+        if not np.isfinite(eq.joints).all() or (domain and not self.mech.in_domain(x).all()):
             _checked(self.mech, x, v)  # raises, naming the pose
             bad = ~np.all(np.isfinite(eq.joints), axis=-1)
             raise UnreachableError(

@@ -288,7 +288,7 @@ def solve_forces(jacobian: ArrayLike, load: ArrayLike) -> tuple[Array, Array, Ar
     f, cond, residual = np.empty((len(jf), m)), np.empty(len(jf)), np.empty(len(jf))
     ok = np.empty(len(jf), dtype=bool)
     forces(jf, qf, f, cond, residual, ok)
-    if not np.all(ok):
+    if not ok.all():
         f[~ok], cond[~ok], residual[~ok] = _solve_numpy(jf[~ok], qf[~ok])
     return f.reshape(batch + (m,)), cond.reshape(batch), residual.reshape(batch)
 

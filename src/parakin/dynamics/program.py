@@ -244,7 +244,12 @@ class Program:
         if any(a.shape[:-1] != batch for a in arrays):
             batch = np.broadcast_shapes(*(a.shape[:-1] for a in arrays))
             arrays = [np.broadcast_to(a, batch + a.shape[-1:]) for a in arrays]
-        out = self.run(np.concatenate(arrays, axis=-1).reshape(-1, sum(self.widths)))
+        return self.unpack(
+            self.run(np.concatenate(arrays, axis=-1).reshape(-1, sum(self.widths))), batch
+        )
+
+    def unpack(self, out: Array, batch: tuple[int, ...]) -> dict[str, Array]:
+        """The outputs by name, each (*batch, *shape), from :meth:`run`'s columns."""
         return {name: out[:, cols].reshape(batch + shape) for name, cols, shape in self._slices}
 
     @functools.cached_property

@@ -98,7 +98,7 @@ class Harmonic:
 
     def state(self, t: ArrayLike) -> tuple[Array, Array, Array]:
         t = np.asarray(t, dtype=float)[..., None]
-        if not np.all(np.isfinite(t)):
+        if not np.isfinite(t).all():
             raise ValueError("time samples t must be finite")
         centre, amp, w, phase = self._arrays
         arg = w * t + phase
