@@ -29,10 +29,7 @@ def replay(code, constants, inputs, outputs, registers, chunk):  # noqa: C901 (o
     for start in range(0, n, width):
         m = min(width, n - start)
         for k in range(code.shape[0]):
-            op = code[k, 0]
-            d = code[k, 1]
-            a = code[k, 2]
-            b = code[k, 3]
+            op, d, a, b = code[k, 0], code[k, 1], code[k, 2], code[k, 3]
             if op == 22:  # MUL2ADD: a*b + c*e
                 c, e = code[k, 4], code[k, 5]
                 for i in range(m):
@@ -120,16 +117,24 @@ def replay(code, constants, inputs, outputs, registers, chunk):  # noqa: C901 (o
                 x = constants[b]
                 for i in range(m):
                     reg[d, i] = reg[a, i] ** x
-            elif op == 16:  # INPUT: register d <- input column a
-                for i in range(m):
-                    reg[d, i] = inputs[start + i, a]
-            elif op == 17:  # OUTPUT: output column d <- register a
-                for i in range(m):
-                    outputs[start + i, d] = reg[a, i]
-            else:  # SET: output column d <- constant a
-                x = constants[a]
-                for i in range(m):
-                    outputs[start + i, d] = x
+            else:
+                _transfer(op, d, a, start, m, constants, inputs, outputs, reg)
+
+
+@njit(inline="always")
+def _transfer(op, d, a, start, m, constants, inputs, outputs, reg):
+    """Opcodes 16-18: INPUT (register d <- input column a), OUTPUT (output column d <- register
+    a), SET (output column d <- constant a)."""
+    if op == 16:
+        for i in range(m):
+            reg[d, i] = inputs[start + i, a]
+    elif op == 17:
+        for i in range(m):
+            outputs[start + i, d] = reg[a, i]
+    else:
+        x = constants[a]
+        for i in range(m):
+            outputs[start + i, d] = x
 
 
 @njit(cache=True, nogil=True)
