@@ -10,9 +10,10 @@ numbers (numpy object arrays of :class:`Symbol`, whose arithmetic appends to a t
 yields every scalar operation in order (a Wengert list; Griewank & Walther, *Evaluating
 Derivatives*, 2nd ed., SIAM 2008, ch. 2): identical sub-expressions merged, operations on
 constants folded, those that cannot change a value (``x * 1``, ``x + 0``, ``x * 0`` for finite
-``x``) dropped, unused results removed, and the values given registers by liveness. A small
-compiled interpreter (:func:`parakin.dynamics._kernels.replay`, numba) runs that program over a batch with
-the samples innermost (structure of arrays), or over one sample with almost no overhead.
+``x``) dropped, unused results removed, a product that only one sum reads computed inside it,
+and the values given registers by liveness. A small compiled interpreter
+(:func:`parakin.dynamics._kernels.replay`, numba) runs that program over a batch with the samples
+innermost (structure of arrays), or over one sample with almost no overhead.
 
 The program computes each output by the same operations in the same order as the numpy
 function, so the two agree to rounding (sums over an axis may associate differently, and the
@@ -39,7 +40,7 @@ Array = np.ndarray
 
 __all__ = ["Symbol", "Program", "record", "NotRecordable", "available"]
 
-# opcodes of the program (parakin.dynamics._kernels.replay tests them in this order)
+# opcodes of the program (what parakin.dynamics._kernels.replay dispatches on)
 MUL, ADD, SUB, MULC, ADDC, NEG, SUBC, CSUB, DIV, DIVC, CDIV = range(11)
 SQRT, SIN, COS, POW, POWC, INPUT, OUTPUT, SET = range(11, 19)
 # fused: a*b + c, a*b - c, c - a*b, a*b + c*e, a*b - c*e, a*k + c, a*k - c, c - a*k
@@ -339,40 +340,7 @@ def _fuse(entries: list, readers: Array) -> list[tuple[int, int, tuple[int, ...]
     """The live entries as instructions ``(opcode, entry, register operands, other operands)``,
     in order; a product (of registers, or of a register and a constant) that only one sum or
     difference reads is computed inside it (the same two roundings, one instruction)."""
-
-    def kind(i: int) -> str:
-        op = entries[i][0]
-        if readers[i] == 1 and op in (MUL, MULC):
-            return "p" if op == MUL else "c"
-        return "r"
-
-    fused: dict[int, tuple] = {}
-    absorbed = set()
-    for i in np.flatnonzero(readers):
-        op, a, b = entries[i]
-        if op not in (ADD, SUB):
-            continue
-        ka, kb = kind(a), kind(b)
-        if ka == "c" and kb in "pc":  # one product at a time when one of them has a constant
-            kb = "r"
-        if kb == "c" and ka == "p":
-            kb = "r"
-        if (op, ka, kb) not in _FUSED:
-            continue
-        parts = {
-            "p": lambda j: (entries[j][1:], ()),
-            "c": lambda j: ((entries[j][1],), (entries[j][2],)),
-        }
-        regs, extra = [], []
-        for operand, k in ((a, ka), (b, kb)) if (ka != "r" or kb == "r") else ((b, kb), (a, ka)):
-            if k == "r":
-                regs.append(operand)
-            else:
-                r, c = parts[k](operand)
-                regs += r
-                extra += c
-                absorbed.add(operand)
-        fused[i] = (_FUSED[op, ka, kb], tuple(regs), tuple(extra))
+    fused, absorbed = _fusions(entries, readers)
     out = []
     for i in np.flatnonzero(readers):
         if i in absorbed:
@@ -389,6 +357,40 @@ def _fuse(entries: list, readers: Array) -> list[tuple[int, int, tuple[int, ...]
         else:  # an operation with a constant
             out.append((op, i, (a,), (b,)))
     return out
+
+
+def _fusions(entries: list, readers: Array) -> tuple[dict[int, tuple], set[int]]:
+    """Which sums and differences take in which products (:data:`_FUSED`): ``{entry: (opcode,
+    register operands, constants)}``, and the products so absorbed."""
+
+    def kind(i: int) -> str:
+        op = entries[i][0]
+        if readers[i] == 1 and op in (MUL, MULC):
+            return "p" if op == MUL else "c"
+        return "r"
+
+    fused: dict[int, tuple] = {}
+    absorbed: set[int] = set()
+    for i in np.flatnonzero(readers):
+        op, a, b = entries[i]
+        if op not in (ADD, SUB):
+            continue
+        ka, kb = kind(a), kind(b)
+        if ka == "c" and kb in "pc" or kb == "c" and ka == "p":  # a constant's product alone
+            kb = "r"
+        if (op, ka, kb) not in _FUSED:
+            continue
+        regs, extra = [], []
+        # the products' operands first (the opcodes' order), then the other register
+        for operand, k in ((a, ka), (b, kb)) if ka != "r" or kb == "r" else ((b, kb), (a, ka)):
+            if k == "r":
+                regs.append(operand)
+                continue
+            absorbed.add(operand)
+            regs += entries[operand][1:] if k == "p" else entries[operand][1:2]
+            extra += () if k == "p" else entries[operand][2:]
+        fused[i] = (_FUSED[op, ka, kb], tuple(regs), tuple(extra))
+    return fused, absorbed
 
 
 def _allocate(instructions: list, stores: list) -> list[tuple[int, ...]]:
