@@ -4,7 +4,11 @@
 * :mod:`parakin.dynamics.model`: inertia as data (:class:`RigidBody`, :class:`MassModel`) and the
   description of a mechanism's bodies (:class:`Bodies`), with builders for common legs;
 * :mod:`parakin.dynamics.inverse`: actuator forces by virtual work, redundant drives included;
-* :mod:`parakin.dynamics.forward`: accelerations from forces, and a simulator;
+* :mod:`parakin.dynamics.forward`: the equations of motion, accelerations from forces, and a
+  simulator;
+* :mod:`parakin.dynamics.program`: each mechanism's dynamics recorded once as a straight-line
+  program and replayed compiled (:mod:`parakin.dynamics._kernels`, numba, imported when first
+  needed), the same arithmetic as the numpy functions it comes from;
 * :mod:`parakin.dynamics.trajectory`: trajectories and the power-balance check;
 * :mod:`parakin.dynamics.mujoco`, :mod:`parakin.dynamics.pinocchio`: the two independent checks,
   models generated from the same description.

@@ -1,8 +1,8 @@
 """The dynamics rows of the benchmark (issue 27): batched inverse dynamics against MuJoCo.
 
 For each mechanism given: the throughput of :func:`parakin.dynamics.inverse_dynamics` on one
-batch of trajectory samples (``n_batch``, in chunks of ``chunk``, on ``workers`` threads: numpy
-releases the GIL in its loops), and the same computation through MuJoCo, one sample at a time
+batch of trajectory samples (``n_batch``, in chunks of ``chunk``, on ``workers`` threads: the
+compiled program and solves release the GIL), and the same computation through MuJoCo, one sample at a time
 (:func:`parakin.dynamics.mujoco_check.inverse_dynamics`: the recipe around ``mj_inverse``), on
 ``n_mujoco`` samples of the same trajectory, in the same run; their ratio. Rows as
 :func:`parakin.bench.kernel_goals`: ``mechanism, what, value, unit, goal, met``. Timings depend on

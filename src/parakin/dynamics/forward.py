@@ -27,44 +27,155 @@ from numpy.typing import ArrayLike
 
 from parakin.dynamics.inverse import (
     SINGULAR_CONDITION,
-    State,
-    generalized_forces,
+    _checked,
+    _generalized,
+    _state,
+    compiled,
     inverse_dynamics,
     mass_matrix,
     solve_forces,
-    state,
 )
 from parakin.dynamics.model import MassModel
-from parakin.errors import SingularityError
+from parakin.dynamics.program import Program, available
+from parakin.errors import SingularityError, UnreachableError
 from parakin.mechanisms.base import Array, Mechanism, as_batch, describe_first
 
-__all__ = ["Force", "forward_dynamics", "Simulation", "simulate", "feedforward", "computed_torque"]
+__all__ = [
+    "Equations",
+    "equations",
+    "Force",
+    "forward_dynamics",
+    "Simulation",
+    "simulate",
+    "feedforward",
+    "computed_torque",
+]
 
-#: a force law ``force(t, state) -> (..., m)``: the actuator forces at time ``t`` given the
-#: :class:`~parakin.dynamics.inverse.State` (pose, rate, joints and every body) of the system
-Force = Callable[[float, State], ArrayLike]
+
+@dataclass(frozen=True, eq=False)
+class Equations:
+    """The equations of motion at a batch of states (``pose``, ``rate``, each (..., n)), in pose
+    coordinates: ``M xddot + h = J^T f + P^T w`` for actuator forces ``f`` (..., m) and an
+    external wrench ``w`` (..., 6) on the platform.
+
+    ``mass_matrix`` ``M`` (..., n, n); ``bias`` ``h`` (..., n): the load at ``xddot = 0``
+    (velocity products and gravity); ``jacobian`` ``J = dq/dx`` (..., m, n); ``platform`` ``P``
+    (..., 6, n): the Jacobians of the platform's centre velocity and angular velocity; the joints
+    ``joints``, ``joint_rate`` and ``joint_bias`` (..., m): ``qddot = J xddot + joint_bias``.
+    """
+
+    pose: Array
+    rate: Array
+    joints: Array
+    joint_rate: Array
+    joint_bias: Array
+    jacobian: Array
+    mass_matrix: Array
+    bias: Array
+    platform: Array
+
+    def load(self, xddot: ArrayLike, wrench: ArrayLike | None = None) -> Array:
+        """``Q = M xddot + h - P^T w`` (..., n): what the drives must balance, ``J^T f = Q``
+        (:func:`parakin.dynamics.inverse.generalized_forces` of the same state)."""
+        q = _times(self.mass_matrix, np.asarray(xddot, dtype=float)) + self.bias
+        return q if wrench is None else q - self._wrench(wrench)
+
+    def joint_acceleration(self, xddot: ArrayLike) -> Array:
+        """``qddot = J xddot + joint_bias`` (..., m)."""
+        return _times(self.jacobian, np.asarray(xddot, dtype=float)) + self.joint_bias
+
+    def _wrench(self, wrench: ArrayLike) -> Array:
+        """``P^T w``: the generalised force of an external wrench on the platform."""
+        return _times(np.swapaxes(self.platform, -1, -2), as_batch(wrench, 6, "wrench"))
 
 
-def _accelerations(mech, st, force, wrench, active) -> tuple[Array, Array]:
-    """Pose and joint accelerations of a :class:`State` under actuator ``force``."""
-    jac = st.jacobian
-    f = as_batch(force, jac.shape[-2], "force")
+def _times(matrix: Array, vector: Array) -> Array:
+    """Batched matrix times vector."""
+    return (matrix @ vector[..., None])[..., 0]
+
+
+#: a force law ``force(t, equations) -> (..., m)``: the actuator forces at time ``t`` given the
+#: :class:`Equations` (pose, rate, joints, Jacobian, mass matrix, ...) of the current state
+Force = Callable[[float, Equations], ArrayLike]
+
+
+def _motion_terms(mech: Mechanism, mass: MassModel):
+    """The numpy function of (pose, rate) that gives every array of :class:`Equations`."""
+
+    def terms(x: Array, v: Array) -> dict[str, Array]:
+        st = _state(mech, x, v, mass)
+        joints, platform = st.joints, st.platform()
+        return {
+            "joints": joints.value,
+            "joint_rate": joints.rate,
+            "joint_bias": joints.bias,
+            "jacobian": joints.jacobian,
+            "mass_matrix": mass_matrix(st),
+            "bias": _generalized(st, np.zeros(np.shape(x)), None),
+            "platform": np.concatenate(
+                [platform.centre.jacobian[..., 0, :, :], platform.spin.jacobian[..., 0, :, :]],
+                axis=-2,
+            ),
+        }
+
+    return terms
+
+
+def equations(
+    mech: Mechanism, pose: ArrayLike, rate: ArrayLike, *, mass: MassModel | None = None
+) -> Equations:
+    """The :class:`Equations` of ``mech`` at poses (..., n) moving at ``rate`` (..., n), from its
+    bodies (:meth:`Mechanism.bodies`, recorded once as a compiled program); raises
+    UnreachableError outside the mechanism's domain."""
+    x, v = _checked(mech, pose, rate)
+    return Equations(x, v, **compiled(_motion_terms, mech, mass, ("pose", "rate"))(x, v))
+
+
+def _accelerations(eq: Equations, force: ArrayLike, wrench, active) -> Array:
+    """Pose accelerations ``M^-1 (J^T f - h + P^T w)`` under actuator ``force`` (compiled, sample
+    by sample: :func:`parakin.dynamics._kernels.accelerations`; numpy without numba)."""
+    m, n = eq.jacobian.shape[-2:]
+    f = as_batch(force, m, "force")
     if active is not None:
-        passive = np.setdiff1d(np.arange(jac.shape[-2]), np.asarray(active, dtype=int))
+        passive = np.setdiff1d(np.arange(m), np.asarray(active, dtype=int))
         f = f.copy()
         f[..., passive] = 0.0
-    h = generalized_forces(st, np.zeros(st.joints.value.shape[:-1] + (mech.n_pose,)), wrench)
-    m = mass_matrix(st)
-    rhs = np.sum(jac * f[..., :, None], axis=-2) - h
-    cond = np.linalg.cond(m)
+    batch = eq.bias.shape[:-1]
+    extra = np.zeros(batch + (n,)) if wrench is None else eq._wrench(wrench)
+    if f.shape[:-1] != batch or extra.shape[:-1] != batch:
+        batch = np.broadcast_shapes(batch, f.shape[:-1], extra.shape[:-1])
+    xdd, cond = np.empty(batch + (n,)), np.empty(batch)
+    if available():
+        from parakin.dynamics._kernels import accelerations
+
+        accelerations(
+            _rows(eq.mass_matrix, batch, (n, n)),
+            _rows(eq.jacobian, batch, (m, n)),
+            _rows(eq.bias, batch, (n,)),
+            _rows(f, batch, (m,)),
+            _rows(extra, batch, (n,)),
+            xdd.reshape(-1, n),
+            cond.reshape(-1),
+        )
+    else:
+        rhs = np.sum(eq.jacobian * f[..., :, None], axis=-2) - eq.bias + extra
+        cond[...] = np.linalg.cond(np.broadcast_to(eq.mass_matrix, batch + (n, n)))
+        if np.all(cond < SINGULAR_CONDITION):
+            xdd[...] = np.linalg.solve(eq.mass_matrix, rhs[..., None])[..., 0]
     bad = ~(cond < SINGULAR_CONDITION)
-    if np.any(bad):
+    if bad.any():
         raise SingularityError(
             f"the mass matrix in pose coordinates is singular (cond {cond[bad].flat[0]:.3g}): the "
             f"pose coordinates degenerate here{describe_first(bad, cond.shape)}"
         )
-    xdd = np.linalg.solve(m, rhs[..., None])[..., 0]
-    return xdd, st.joints.acceleration(xdd)
+    return xdd
+
+
+def _rows(a: Array, batch: tuple[int, ...], core: tuple[int, ...]) -> Array:
+    """``a`` broadcast to ``batch + core``, as a contiguous array (samples, *core)."""
+    if a.shape != batch + core:
+        a = np.broadcast_to(a, batch + core)
+    return np.ascontiguousarray(a).reshape((-1, *core))
 
 
 def forward_dynamics(
@@ -79,9 +190,8 @@ def forward_dynamics(
 ) -> Array:
     """Pose accelerations (..., n) of ``mech`` at ``pose``, ``rate`` under actuator ``force``
     (..., m) (and an external ``wrench`` (..., 6) on the platform; joints not in ``active`` exert
-    nothing): ``xddot = M^-1 (J^T f - h)``."""
-    st = state(mech, pose, rate, mass)
-    return _accelerations(mech, st, force, wrench, active)[0]
+    nothing): ``xddot = M^-1 (J^T f + P^T w - h)``."""
+    return _accelerations(equations(mech, pose, rate, mass=mass), force, wrench, active)
 
 
 @dataclass(frozen=True)
@@ -105,23 +215,51 @@ class Simulation:
         return float(np.max(self.drift))
 
 
-def _derivative(mech, mass, force, wrench, active) -> Callable:
-    def f(t: float, y: tuple[Array, Array, Array, Array], st: State | None = None) -> tuple:
-        x, v, _, qd = y
-        st = state(mech, x, v, mass) if st is None else st
-        xdd, qdd = _accelerations(mech, st, force(t, st), wrench, active)
-        return v, xdd, qd, qdd
+class _System:
+    """The simulated system as one state vector ``y = (x, xdot, q, qdot)`` (..., 2n + 2m) and its
+    time derivative (the RK4 right-hand side)."""
 
-    return f
+    def __init__(self, mech, mass, force, wrench, active) -> None:
+        self.mech, self.force, self.wrench, self.active = mech, force, wrench, active
+        self.terms = compiled(_motion_terms, mech, mass, ("pose", "rate"))
+        self.n = mech.n_pose
+
+    def equations(self, y: Array, domain: bool = False) -> Equations:
+        """The equations at ``y``; raises where the joints are not finite (a pose outside the
+        domain, where the IK has no real value) or, with ``domain``, where
+        :meth:`Mechanism.in_domain` refuses the pose."""
+        n = self.n
+        x, v = y[..., :n], y[..., n : 2 * n]
+        if isinstance(self.terms, Program):  # the state's leading columns are its inputs
+            out = self.terms.run(y[..., : 2 * n].reshape(-1, 2 * n))
+            eq = Equations(x, v, **self.terms.unpack(out, y.shape[:-1]))
+        else:
+            eq = Equations(x, v, **self.terms(x, v))
+        if not np.isfinite(eq.joints).all() or (domain and not self.mech.in_domain(x).all()):
+            _checked(self.mech, x, v)  # raises, naming the pose
+            bad = ~np.all(np.isfinite(eq.joints), axis=-1)
+            raise UnreachableError(
+                f"{self.mech.name}'s joints are not finite at pose "
+                f"{np.round(x[bad][0], 6).tolist()}{describe_first(bad, bad.shape)}"
+            )
+        return eq
+
+    def derivative(self, t: float, y: Array, eq: Equations | None = None) -> Array:
+        eq = self.equations(y) if eq is None else eq
+        xdd = _accelerations(eq, self.force(t, eq), self.wrench, self.active)
+        m = eq.joints.shape[-1]
+        return np.concatenate(
+            [eq.rate, xdd, y[..., y.shape[-1] - m :], eq.joint_acceleration(xdd)], axis=-1
+        )
 
 
-def _rk4_step(f: Callable, t: float, y: tuple, dt: float, st: State) -> tuple:
-    """One classical Runge-Kutta step; ``st``: the state at ``y`` (already evaluated)."""
-    k1 = f(t, y, st)
-    k2 = f(t + 0.5 * dt, tuple(a + 0.5 * dt * b for a, b in zip(y, k1)))
-    k3 = f(t + 0.5 * dt, tuple(a + 0.5 * dt * b for a, b in zip(y, k2)))
-    k4 = f(t + dt, tuple(a + dt * b for a, b in zip(y, k3)))
-    return tuple(a + dt / 6 * (b + 2 * c + 2 * d + e) for a, b, c, d, e in zip(y, k1, k2, k3, k4))
+def _rk4_step(f: Callable, t: float, y: Array, dt: float, eq: Equations) -> Array:
+    """One classical Runge-Kutta step; ``eq``: the equations at ``y`` (already evaluated)."""
+    k1 = f(t, y, eq)
+    k2 = f(t + 0.5 * dt, y + 0.5 * dt * k1)
+    k3 = f(t + 0.5 * dt, y + 0.5 * dt * k2)
+    k4 = f(t + dt, y + dt * k3)
+    return y + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
 
 
 def simulate(
@@ -138,36 +276,32 @@ def simulate(
     stabilise: bool = True,
 ) -> Simulation:
     """Integrate ``mech`` from ``pose``, ``rate`` (each (..., n): a batch of motions at once)
-    under actuator forces ``force(t, state) -> (..., m)`` for ``t_end`` seconds in RK4 steps
+    under actuator forces ``force(t, equations) -> (..., m)`` for ``t_end`` seconds in RK4 steps
     of ``dt`` (module docstring). Raises where a pose leaves the domain or the mass matrix
     degenerates."""
     if not (np.isfinite(t_end) and t_end > 0 and np.isfinite(dt) and 0 < dt <= t_end):
         raise ValueError(f"t_end = {t_end!r} s and dt = {dt!r} s must satisfy 0 < dt <= t_end")
-    x = as_batch(pose, mech.n_pose, "pose").copy()
-    v = np.broadcast_to(as_batch(rate, mech.n_pose, "rate"), x.shape).copy()
-    mass = mech.mass_model() if mass is None else mass
-    st = state(mech, x, v, mass)
-    y = (x, v, st.joints.value, st.joints.rate)
-    f = _derivative(mech, mass, force, wrench, active)
+    x, v = _checked(mech, pose, rate)
+    system = _System(mech, mass, force, wrench, active)
+    n = mech.n_pose
+    eq = system.equations(np.concatenate([x, v], axis=-1), domain=True)
+    y = np.concatenate([x, v, eq.joints, eq.joint_rate], axis=-1)
     steps = int(round(t_end / dt))
-    out = {k: [a] for k, a in zip(("pose", "rate", "joints", "joint_rate"), y)}
-    drift, rate_drift = [np.zeros(x.shape[:-1])], [np.zeros(x.shape[:-1])]
+    history = np.empty((steps + 1, *y.shape))
+    drift, rate_drift = np.zeros((2, steps + 1, *y.shape[:-1]))
+    history[0] = y
+    m = eq.joints.shape[-1]
     for k in range(steps):
-        y = _rk4_step(f, k * dt, y, dt, st)
-        st = state(mech, y[0], y[1], mass)
-        drift.append(np.max(np.abs(y[2] - st.joints.value), axis=-1))
-        rate_drift.append(np.max(np.abs(y[3] - st.joints.rate), axis=-1))
+        y = _rk4_step(system.derivative, k * dt, y, dt, eq)
+        eq = system.equations(y, domain=True)
+        drift[k + 1] = np.max(np.abs(y[..., 2 * n : 2 * n + m] - eq.joints), axis=-1)
+        rate_drift[k + 1] = np.max(np.abs(y[..., 2 * n + m :] - eq.joint_rate), axis=-1)
         if stabilise:
-            y = (y[0], y[1], st.joints.value, st.joints.rate)
-        for key, a in zip(out, y):
-            out[key].append(a)
-    stacked = {k: np.stack(a) for k, a in out.items()}
+            y = np.concatenate([y[..., : 2 * n], eq.joints, eq.joint_rate], axis=-1)
+        history[k + 1] = y
+    parts = np.split(history, [n, 2 * n, 2 * n + m], axis=-1)
     return Simulation(
-        np.arange(steps + 1) * dt,
-        **stacked,
-        drift=np.stack(drift),
-        rate_drift=np.stack(rate_drift),
-        stabilised=stabilise,
+        np.arange(steps + 1) * dt, *parts, drift=drift, rate_drift=rate_drift, stabilised=stabilise
     )
 
 
@@ -181,7 +315,7 @@ def feedforward(
     grid = np.arange(int(round(t_end / half)) + 1) * half
     forces = inverse_dynamics(mech, *trajectory.state(grid), mass=mass).force
 
-    def force(t: float, st: State) -> Array:
+    def force(t: float, eq: Equations) -> Array:
         k = int(round(t / half))
         if not (0 <= k < len(grid) and abs(grid[k] - t) <= 1e-9 * max(half, abs(t))):
             raise ValueError(
@@ -203,13 +337,15 @@ def computed_torque(
     if not (np.isfinite(w) and w > 0 and np.isfinite(damping) and damping >= 0):
         raise ValueError(f"frequency = {frequency!r} Hz must be > 0 and damping = {damping!r} >= 0")
 
-    def force(t: float, st: State) -> Array:
+    def force(t: float, eq: Equations) -> Array:
         xd, vd, ad = trajectory.state(t)
-        command = ad + w * w * (xd - st.pose) + 2 * damping * w * (vd - st.rate)
-        jac = st.jacobian
-        picked = np.arange(jac.shape[-2]) if active is None else np.asarray(active, dtype=int)
+        command = ad + w * w * (xd - eq.pose) + 2 * damping * w * (vd - eq.rate)
+        jac, load = eq.jacobian, eq.load(command)
+        if active is None:
+            return solve_forces(jac, load)[0]
+        picked = np.asarray(active, dtype=int)
         f = np.zeros(jac.shape[:-1])
-        f[..., picked] = solve_forces(jac[..., picked, :], generalized_forces(st, command))[0]
+        f[..., picked] = solve_forces(jac[..., picked, :], load)[0]
         return f
 
     return force

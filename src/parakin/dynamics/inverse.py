@@ -24,6 +24,9 @@ forward dynamics (:mod:`parakin.dynamics.forward`).
 
 from __future__ import annotations
 
+import pickle
+import threading
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,6 +34,7 @@ from numpy.typing import ArrayLike
 
 import parakin.dynamics.jet as jet
 from parakin.dynamics.model import Bodies, BodyGroup, BodyMotion, MassModel, RigidBody, motion
+from parakin.dynamics.program import available, record
 from parakin.errors import ShapeError, SingularityError, UnreachableError
 from parakin.mechanisms.base import Array, Mechanism, as_batch, describe_first
 
@@ -104,19 +108,34 @@ def state(
     """Evaluate the mechanism's bodies (:meth:`Mechanism.bodies`) at poses (..., n) moving at
     ``rate`` (..., n); raises UnreachableError outside the mechanism's domain."""
     mass = _mass_model(mech, mass)
+    x, v = _checked(mech, pose, rate)
+    return _state(mech, x, v, mass)
+
+
+def _checked(mech: Mechanism, pose: ArrayLike, rate: ArrayLike, *more: ArrayLike) -> tuple:
+    """Poses and rates (and more arrays of pose size) broadcast together, poses in the domain."""
     x = as_batch(pose, mech.n_pose, "pose")
-    v = as_batch(rate, mech.n_pose, "rate")
+    arrays = [as_batch(a, mech.n_pose, what) for a, what in zip((rate, *more), _NAMES)]
     try:
-        x, v = np.broadcast_arrays(x, v)
+        out = np.broadcast_arrays(x, *arrays)
     except ValueError:
-        raise ShapeError(f"pose {x.shape} and rate {v.shape} do not broadcast") from None
-    inside = mech.in_domain(x)
+        shapes = ", ".join(f"{w} {a.shape}" for w, a in zip(("pose", *_NAMES), (x, *arrays)))
+        raise ShapeError(f"{shapes} do not broadcast") from None
+    inside = mech.in_domain(out[0])
     if not np.all(inside):
         idx = tuple(int(i) for i in np.argwhere(~inside)[0])
         raise UnreachableError(
-            f"pose {np.round(x[idx], 6).tolist()} is outside {mech.name}'s domain (no IK)"
-            f"{describe_first(~inside, x.shape[:-1])}"
+            f"pose {np.round(out[0][idx], 6).tolist()} is outside {mech.name}'s domain (no IK)"
+            f"{describe_first(~inside, out[0].shape[:-1])}"
         )
+    return tuple(out)
+
+
+_NAMES = ("rate", "acceleration")
+
+
+def _state(mech: Mechanism, x: Array, v: Array, mass: MassModel) -> State:
+    """:func:`state` without the checks (also on the symbols of a recorded program)."""
     bodies = mech.bodies(jet.variable(x, v))
     groups = tuple((g, mass.body(g.kind), motion(g, mass.body(g.kind))) for g in bodies.groups)
     return State(x, v, bodies, mass, groups)
@@ -139,13 +158,16 @@ def generalized_forces(st: State, xddot: ArrayLike, wrench: ArrayLike | None = N
     """``Q`` (..., n): the load of every body (inertia and gravity, minus an external ``wrench``
     (..., 6) = force and moment about the platform's centre of mass, world axes) as a
     generalised force on the pose coordinates."""
+    w = None if wrench is None else as_batch(wrench, 6, "wrench")
+    return _generalized(st, jet.numeric(xddot), w)
+
+
+def _generalized(st: State, xdd: Array, w: Array | None) -> Array:
     n = st.joints.n
-    xdd = np.asarray(xddot, dtype=float)
     q = 0.0
     for centre, spin, force, moment in _loads(st, xdd):
         q = q + _project(centre.tangents[:n], force) + _project(spin.tangents[:n], moment)
-    if wrench is not None:
-        w = as_batch(wrench, 6, "wrench")
+    if w is not None:
         p = st.platform()
         q = (
             q
@@ -161,18 +183,18 @@ def _project(tangents: Array, load: Array) -> Array:
 
 
 def mass_matrix(st: State) -> Array:
-    """``M = sum_b m_b J_b^T J_b + W_b^T I_b W_b`` (..., n, n) in pose coordinates."""
+    """``M = sum_b m_b J_b^T J_b + W_b^T I_b W_b`` (..., n, n) in pose coordinates (symmetric: the
+    upper triangle computed, the lower one its mirror)."""
     n = st.joints.n
-    out = 0.0
+    rows: list = [0.0] * n  # rows[k]: M[k, k:] (n - k, ...)
     for _, body, m in st.groups:
         jc, jw = m.centre.tangents[:n], m.spin.tangents[:n]  # (n, ..., c, 3)
         i_jw = m.inertia_times(body, jw)
-        rows = [
-            np.sum(body.mass * jet.vdot(jc[k], jc) + jet.vdot(jw[k], i_jw), axis=-1)
-            for k in range(n)
-        ]
-        out = out + np.moveaxis(np.stack(rows), (0, 1), (-2, -1))  # (n, n, ...) -> (..., n, n)
-    return out
+        for k in range(n):
+            upper = body.mass * jet.vdot(jc[k], jc[k:]) + jet.vdot(jw[k], i_jw[k:])
+            rows[k] = rows[k] + np.sum(upper, axis=-1)
+    full = np.stack([np.stack([rows[min(k, j)][abs(j - k)] for j in range(n)]) for k in range(n)])
+    return np.moveaxis(full, (0, 1), (-2, -1))  # (n, n, ...) -> (..., n, n)
 
 
 def energy(st: State) -> tuple[Array, Array]:
@@ -247,9 +269,32 @@ def _inverse(g: Array) -> tuple[Array, Array]:
 
 def solve_forces(jacobian: ArrayLike, load: ArrayLike) -> tuple[Array, Array, Array]:
     """``f`` with ``J^T f = Q`` (minimum norm when ``m > n``, least squares when ``m < n``), the
-    condition number of ``J`` and the relative residual ``|J^T f - Q| / |Q|``."""
+    condition number of ``J`` and the relative residual ``|J^T f - Q| / |Q|``: compiled, sample
+    by sample (:func:`parakin.dynamics._kernels.forces`); samples where an elimination meets a
+    zero pivot go through numpy's pseudo-inverse (all of them without numba)."""
     j = np.asarray(jacobian, dtype=float)
     q = np.asarray(load, dtype=float)
+    if not available():
+        return _solve_numpy(j, q)
+    from parakin.dynamics._kernels import forces
+
+    m, n = j.shape[-2:]
+    batch = j.shape[:-2]
+    if q.shape[:-1] != batch:
+        batch = np.broadcast_shapes(batch, q.shape[:-1])
+        j, q = np.broadcast_to(j, batch + (m, n)), np.broadcast_to(q, batch + (n,))
+    jf = np.ascontiguousarray(j.reshape(-1, m, n))
+    qf = np.ascontiguousarray(q.reshape(-1, n))
+    f, cond, residual = np.empty((len(jf), m)), np.empty(len(jf)), np.empty(len(jf))
+    ok = np.empty(len(jf), dtype=bool)
+    forces(jf, qf, f, cond, residual, ok)
+    if not ok.all():
+        f[~ok], cond[~ok], residual[~ok] = _solve_numpy(jf[~ok], qf[~ok])
+    return f.reshape(batch + (m,)), cond.reshape(batch), residual.reshape(batch)
+
+
+def _solve_numpy(j: Array, q: Array) -> tuple[Array, Array, Array]:
+    """:func:`solve_forces` in numpy (batched inverse or pseudo-inverse)."""
     m, n = j.shape[-2:]
     jt = np.swapaxes(j, -1, -2)
     if m == n:
@@ -291,23 +336,83 @@ def inverse_dynamics(
     """
     if on_singular not in ("raise", "flag"):
         raise ValueError(f"on_singular = {on_singular!r}: use 'raise' or 'flag'")
-    a = as_batch(acceleration, mech.n_pose, "acceleration")
-    x = as_batch(pose, mech.n_pose, "pose")
-    v = as_batch(rate, mech.n_pose, "rate")
-    try:
-        x, v, a = np.broadcast_arrays(x, v, a)
-    except ValueError:
-        raise ShapeError(
-            f"pose {x.shape}, rate {v.shape} and acceleration {a.shape} do not broadcast"
-        ) from None
-    st = state(mech, x, v, mass)
-    load = generalized_forces(st, a, wrench)
-    jac = st.jacobian
+    x, v, a = _checked(mech, pose, rate, acceleration)
+    w = np.zeros(6) if wrench is None else as_batch(wrench, 6, "wrench")
+    terms = compiled(_inverse_terms, mech, mass, ("pose", "rate", "acceleration", "wrench"))
+    terms = terms(x, v, a, w)
+    jac, load = terms["jacobian"], terms["load"]
     picked = _active(active, jac.shape[-2])
     f_active, cond, balance = solve_forces(jac[..., picked, :], load)
     force = np.zeros(jac.shape[:-1])
     force[..., picked] = f_active
-    return _flagged(st, a, force, load, jac, cond, balance, on_singular)
+    return _flagged(terms, force, cond, balance, on_singular)
+
+
+def _inverse_terms(mech: Mechanism, mass: MassModel):
+    """The numpy function of (pose, rate, acceleration, wrench) that inverse dynamics needs:
+    the load ``Q``, the Jacobian ``J`` and the joint rates and accelerations."""
+
+    def terms(x: Array, v: Array, a: Array, w: Array) -> dict[str, Array]:
+        st = _state(mech, x, v, mass)
+        joints = st.joints
+        return {
+            "load": _generalized(st, a, w),
+            "jacobian": joints.jacobian,
+            "joint_rate": joints.rate,
+            "joint_acceleration": joints.acceleration(a),
+        }
+
+    return terms
+
+
+# ---------------------------------------------------------------------------------------- programs
+#: recorded programs (or the numpy functions that could not be recorded), by what they compute,
+#: the mechanism's class and parameters and the mass model; a few dozen at most
+_PROGRAMS: dict[tuple, Callable] = {}
+_PROGRAMS_LOCK = threading.Lock()
+
+
+def compiled(
+    build: Callable, mech: Mechanism, mass: MassModel | None, arrays: Sequence[str]
+) -> Callable:
+    """The numpy function ``build(mech, mass)`` of the ``arrays`` named (of :func:`probe`)
+    recorded as a program (:mod:`parakin.dynamics.program`: the same arithmetic, compiled), or
+    the function itself where it cannot be recorded. ``mass``: the mass model, ``None`` for the
+    mechanism's own (:meth:`Mechanism.mass_model`, a function of its parameters). Cached per
+    mechanism class, parameters and mass model."""
+    if not available():
+        return build(mech, _mass_model(mech, mass))
+    try:
+        key = (build, type(mech), pickle.dumps(mech.parameters()), pickle.dumps(mass))
+    except Exception:  # parameters that do not pickle: no cache, no program
+        return build(mech, _mass_model(mech, mass))
+    fn = _PROGRAMS.get(key)
+    if fn is not None:
+        return fn
+    with _PROGRAMS_LOCK:
+        fn = _PROGRAMS.get(key)
+        if fn is None:
+            terms = build(mech, _mass_model(mech, mass))
+            state = probe(mech)
+            fn = record(terms, [state[name] for name in arrays]) or terms
+            if len(_PROGRAMS) >= 64:
+                _PROGRAMS.pop(next(iter(_PROGRAMS)))
+            _PROGRAMS[key] = fn
+    return fn
+
+
+def probe(mech: Mechanism) -> dict[str, Array]:
+    """A state that every recording is checked on: :meth:`Mechanism.home`, a rate and an
+    acceleration of every coordinate (scaled to :meth:`Mechanism.pose_bounds`), and a wrench."""
+    lo, hi = mech.pose_bounds()
+    span = 0.5 * (np.asarray(hi, dtype=float) - np.asarray(lo, dtype=float))
+    k = np.arange(mech.n_pose)
+    return {
+        "pose": np.asarray(mech.home(), dtype=float),
+        "rate": 0.1 * span * np.cos(k + 1.0),
+        "acceleration": span * np.sin(k + 2.0),
+        "wrench": np.array([1.0, -2.0, 3.0, 0.1, -0.2, 0.3]),
+    }
 
 
 def _active(active: ArrayLike | None, m: int) -> Array:
@@ -321,7 +426,7 @@ def _active(active: ArrayLike | None, m: int) -> Array:
     return idx
 
 
-def _flagged(st, a, force, load, jac, cond, balance, on_singular) -> InverseDynamics:
+def _flagged(terms, force, cond, balance, on_singular) -> InverseDynamics:
     singular = ~(cond <= SINGULAR_CONDITION)
     unbalanced = ~(balance <= BALANCE_TOL) & ~singular
     batch = cond.shape
@@ -336,14 +441,12 @@ def _flagged(st, a, force, load, jac, cond, balance, on_singular) -> InverseDyna
             f"{balance[unbalanced].flat[0]:.3g} > {BALANCE_TOL:g}{describe_first(unbalanced, batch)}"
         )
     bad = singular | unbalanced
-    force = np.where(bad[..., None], np.nan, force)
-    joints = st.joints
     return InverseDynamics(
-        force=force,
-        joint_rate=joints.rate,
-        joint_acceleration=joints.acceleration(a),
-        generalized=load,
-        jacobian=jac,
+        force=np.where(bad[..., None], np.nan, force),
+        joint_rate=terms["joint_rate"],
+        joint_acceleration=terms["joint_acceleration"],
+        generalized=terms["load"],
+        jacobian=terms["jacobian"],
         condition=cond,
         balance=balance,
         singular=singular,

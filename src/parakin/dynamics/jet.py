@@ -37,6 +37,7 @@ __all__ = [
     "Spin",
     "variable",
     "constant_like",
+    "numeric",
     "dot",
     "cross",
     "norm",
@@ -179,10 +180,17 @@ class Spin:
 
 
 # ---------------------------------------------------------------------------------------- making
+def numeric(a: ArrayLike) -> Array:
+    """``a`` as an array of floats, or as it is when it holds the symbols of a program being
+    recorded (:mod:`parakin.dynamics.program`: object arrays)."""
+    a = np.asarray(a)
+    return a if a.dtype == object else a.astype(float, copy=False)
+
+
 def variable(x: ArrayLike, xdot: ArrayLike) -> Jet:
     """The pose itself: value ``x`` (..., n), tangents the unit directions and ``xdot``, no bias."""
-    x = np.asarray(x, dtype=float)
-    xdot = np.broadcast_to(np.asarray(xdot, dtype=float), x.shape)
+    x = numeric(x)
+    xdot = np.broadcast_to(numeric(xdot), x.shape)
     n = x.shape[-1]
     eye = np.broadcast_to(np.eye(n).reshape((n,) + (1,) * (x.ndim - 1) + (n,)), (n, *x.shape))
     return Jet(x, np.concatenate([eye, xdot[None]], axis=0), np.zeros(x.shape))
@@ -336,7 +344,7 @@ def stack(parts: Sequence[Jet | ArrayLike], axis: int = -1) -> Jet:
 def contract(tangents: Array, xddot: ArrayLike, ndim: int) -> Array:
     """``sum_k tangents[k] xddot[..., k]`` for ``tangents`` (n, ..., *s) of a value of ``ndim`` axes
     and ``xddot`` (..., n) (the batch axes of ``xddot`` lead those of the value)."""
-    xdd = np.moveaxis(np.asarray(xddot, dtype=float), -1, 0)
+    xdd = np.moveaxis(numeric(xddot), -1, 0)
     batch = xdd.ndim - 1
     xdd = xdd.reshape(xdd.shape + (1,) * (ndim - batch))
     return np.einsum("k...,k...->...", tangents, xdd)
@@ -399,14 +407,28 @@ def _skew_times(w: Array, r: Array) -> Array:
     return np.swapaxes(_cross(w[..., None, :], np.swapaxes(r, -1, -2)), -1, -2)
 
 
+def _turn(angle: Array, i: int, j: int) -> Array:
+    """Rotation matrices (..., 3, 3) by ``angle`` (...,) in the plane of axes ``i``, ``j`` (the
+    values of :func:`parakin.geometry.rot_x` and its siblings, for floats or recorded symbols)."""
+    c, s = np.cos(angle), np.sin(angle)
+    r = np.zeros(angle.shape + (3, 3), dtype=angle.dtype)
+    if angle.dtype == object:
+        r[...] = 0.0
+    k = 3 - i - j
+    r[..., k, k] = 1.0
+    r[..., i, i] = c
+    r[..., j, j] = c
+    r[..., i, j] = -s
+    r[..., j, i] = s
+    return r
+
+
 def rotations(angles: Sequence[Jet], axes: str) -> Jet:
     """``R = R_{axes[0]}(angles[0]) R_{axes[1]}(angles[1]) ...`` (e.g. ``axes="zyx"``: Z-Y-X Euler
     angles) as a jet, from the world axes ``u_k`` of the successive turns rather than by products
     of matrix jets: ``dR = [sum_k u_k da_k]x R``, and ``Rddot = [alpha]x R + [omega]x [omega]x R``
     with ``alpha = sum_k u_k a_k'' + (omega_{<k} x u_k) a_k'``."""
-    from parakin.geometry import rot_x, rot_y, rot_z
-
-    elementary = {"x": (rot_x, 0), "y": (rot_y, 1), "z": (rot_z, 2)}
+    elementary = {"x": (1, 2), "y": (2, 0), "z": (0, 1)}
     like = angles[0]
     shape = like.shape
     partial = np.broadcast_to(np.eye(3), shape + (3, 3))
@@ -414,13 +436,13 @@ def rotations(angles: Sequence[Jet], axes: str) -> Jet:
     bias_alpha = np.zeros(shape + (3,))
     omega_before = np.zeros(shape + (3,))
     for angle, name in zip(angles, axes):
-        rot, i = elementary[name]
+        i = "xyz".index(name)
         u = partial[..., :, i]
         rate = angle.rate[..., None]
         w = w + u * angle.tangents[..., None]
         bias_alpha = bias_alpha + u * angle.bias[..., None] + _cross(omega_before, u) * rate
         omega_before = omega_before + u * rate
-        partial = partial @ rot(angle.value)
+        partial = partial @ _turn(angle.value, *elementary[name])
     omega = w[-1]
     bias = _skew_times(bias_alpha, partial) + _skew_times(omega, _skew_times(omega, partial))
     return Jet(partial, _skew_times(w, partial), bias)

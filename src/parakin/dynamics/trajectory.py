@@ -14,6 +14,7 @@ time derivative of the velocities.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -97,13 +98,23 @@ class Harmonic:
 
     def state(self, t: ArrayLike) -> tuple[Array, Array, Array]:
         t = np.asarray(t, dtype=float)[..., None]
-        if not np.all(np.isfinite(t)):
+        if not np.isfinite(t).all():
             raise ValueError("time samples t must be finite")
-        w = 2 * np.pi * np.asarray(self.frequency)
-        arg = w * t + np.asarray(self.phase)
-        amp = np.asarray(self.amplitude)
+        centre, amp, w, phase = self._arrays
+        arg = w * t + phase
         s, c = np.sin(arg), np.cos(arg)
-        return np.asarray(self.centre) + amp * s, amp * w * c, -amp * w**2 * s
+        return centre + amp * s, amp * w * c, -amp * w**2 * s
+
+    @functools.cached_property
+    def _arrays(self) -> tuple[Array, Array, Array, Array]:
+        """Centre, amplitude, angular frequency and phase as arrays (made once: the simulator
+        asks for the state at every stage)."""
+        return (
+            np.asarray(self.centre),
+            np.asarray(self.amplitude),
+            2 * np.pi * np.asarray(self.frequency),
+            np.asarray(self.phase),
+        )
 
 
 @dataclass(frozen=True)
