@@ -108,12 +108,20 @@ def test_active_legs_outside_lambda_domain_is_nan_like_numpy():
 
 def test_mechanisms_without_kernel_raise_not_implemented():
     @dataclasses.dataclass(frozen=True)
-    class Sub(P3P4S):  # a subclass may change the kinematics: refused, not solved as its parent
-        pass
+    class Sub(P3P4S):  # a subclass that changes the kinematics: refused, not solved as its parent
+        def residual(self, pose, joints):
+            return 2 * super().residual(pose, joints)
 
     for mech in (DriveMode(), Sub(), ActiveLegs(mech=Stewart12(convention="cayley"))):
         with pytest.raises(NotImplementedError, match=type(mech).__name__):
             torch_residual(mech)
+
+    @dataclasses.dataclass(frozen=True)
+    class Extended(P3P4S):  # a subclass that only adds a method keeps its parent's kernels
+        def mass(self):
+            return 1.0
+
+    assert torch_residual(Extended()) is not None
     with pytest.raises(NotImplementedError, match="DriveMode"):
         newton_torch(DriveMode(), np.full(6, 0.025), np.zeros(6), device="cpu")
     # the 12-leg cube has a kernel (12 equations, 6 unknowns): a residual, but no square Newton
@@ -128,6 +136,9 @@ def test_own_torch_residual_without_kernel_is_solved():
 
     @dataclasses.dataclass(frozen=True)
     class Own(P3P4S):
+        def residual(self, pose, joints):  # its own numpy residual: no kernel
+            return super().residual(pose, joints)
+
         def torch_residual(self):
             e, m = _t(self.e), _t(self.m)
 
