@@ -355,7 +355,8 @@ def entries_of(module: types.ModuleType, group: str) -> types.SimpleNamespace:
     glob["ROW"] = getattr(drivers, row) if row else None
     if row:  # a method's single call verifies its answer with the kernel's one check
         glob["check"] = entries_of(module, "verify").check.fn
-    where = _build(module)[0] / group
+    path = _build(module)[0]
+    where = path / group
     out = {}
     with _store.numba_cache(where):
         for name in names:
@@ -363,7 +364,7 @@ def entries_of(module: types.ModuleType, group: str) -> types.SimpleNamespace:
             copy = types.FunctionType(fn.__code__, glob, fn.__name__, fn.__defaults__)
             copy.__qualname__, copy.__module__ = fn.__qualname__, fn.__module__
             glob[name] = numba.njit(parallel=name.endswith("parallel"), **_NJIT)(copy)
-            out[name] = _Entry(glob[name], where)
+            out[name] = _Entry(glob[name], path)  # an unreadable file: the whole build is rebuilt
     return types.SimpleNamespace(**out)
 
 

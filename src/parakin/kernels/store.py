@@ -175,21 +175,21 @@ def numba_cache(path: Path) -> Iterator[None]:
 
 
 def first_call(fn: Callable[..., Any], where: Path, *args: Any) -> Any:
-    """``fn(*args)`` for the first time (numba loads it from its cache in ``where`` or compiles it):
-    a cache entry that cannot be read (truncated, garbage, from another build) is removed and
-    rebuilt with a one-line notice; a genuine compile error is raised as it is."""
-    from numba.core.errors import NumbaError
-
+    """``fn(*args)`` for the first time (numba loads it from its cache under ``where`` or compiles
+    it). Where that fails and ``where`` holds cached files, a cache entry could not be read
+    (truncated, garbage, written by another build): ``where`` is removed and the call made again,
+    with a one-line notice. A failure with an empty cache (a genuine compile error) is raised."""
     try:
         return fn(*args)
-    except NumbaError:
-        raise
     except Exception as exc:
         if not where.exists() or not any(where.rglob("*.nb*")):
             raise
+        cause = exc
+        while cause.__context__ is not None and "numba" in type(cause).__module__:
+            cause = cause.__context__  # numba wraps what went wrong while loading a callee
         _notice(
-            f"kernel cache {where} could not be read ({type(exc).__name__}: "
-            f"{' '.join(str(exc).split())[:80]}); rebuilt"
+            f"kernel cache {where} could not be read ({type(cause).__name__}: "
+            f"{' '.join(str(cause).split())[:80]}); rebuilt"
         )
         shutil.rmtree(where, ignore_errors=True)
         return fn(*args)
@@ -199,16 +199,26 @@ def _size(path: Path) -> int:
     return sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
 
 
+def _ours(base: Path) -> list[tuple[Path, str, str]]:
+    """``(path, name, hash)`` of every directory of ``base`` that parakin made: the kernel builds
+    and numba's part (hash ``""``); anything else there is left alone."""
+    out = []
+    for path in sorted(p for p in base.iterdir() if p.is_dir()):
+        name, _, hash_ = path.name.rpartition("-")
+        if _is_build(path, name):
+            out.append((path, name, hash_))
+        elif path.name == "numba":
+            out.append((path, "numba", ""))
+    return out
+
+
 def status() -> dict[str, Any]:
     """The cache directory, the builds in it (name, hash, files, bytes) and numba's part."""
     base = root()
     out: dict[str, Any] = {"root": None if base is None else str(base), "builds": []}
     if base is None or not base.exists():
         return out
-    for path in sorted(p for p in base.iterdir() if p.is_dir()):
-        name, _, hash_ = path.name.rpartition("-")
-        if path.name == "numba" or not _is_build(path, name):
-            name, hash_ = path.name, ""
+    for path, name, hash_ in _ours(base):
         files = [f for f in path.rglob("*") if f.is_file()]
         out["builds"].append(
             {"name": name, "hash": hash_, "files": len(files), "bytes": _size(path)}
@@ -217,15 +227,14 @@ def status() -> dict[str, Any]:
 
 
 def clear() -> int:
-    """Remove every build and numba's part of the cache; returns the bytes freed."""
+    """Remove every build and numba's part of the cache (nothing else); returns the bytes freed."""
     base = root()
     if base is None or not base.exists():
         return 0
     freed = 0
-    for path in base.iterdir():
-        if path.is_dir():
-            freed += _size(path)
-            shutil.rmtree(path, ignore_errors=True)
+    for path, _, _ in _ours(base):
+        freed += _size(path)
+        shutil.rmtree(path, ignore_errors=True)
     return freed
 
 
