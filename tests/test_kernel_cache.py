@@ -28,31 +28,10 @@ DATA = ROOT / "tests" / "data"
 #: a compiled Newton solve of the toy kernel in a fresh process: prints the answer's error
 SOLVE = textwrap.dedent(
     """
-    import dataclasses, sys
-    from types import ModuleType
-    from typing import ClassVar
     import numpy as np
-    import toy_kernels
     from parakin import kernels
-    from parakin.mechanisms.base import Mechanism
     from parakin.solvers import solve_fk
-
-    @dataclasses.dataclass(frozen=True)
-    class Toy(Mechanism, register=False):
-        a: float = 0.5
-        pose_names: ClassVar[tuple] = ("x", "y")
-        joint_names: ClassVar[tuple] = ("l1", "l2")
-        pose_units = joint_units = paper_pose_units = paper_joint_units = ("m", "m")
-        kernels: ClassVar[ModuleType] = toy_kernels
-
-        def kernel_params(self):
-            return np.array([self.a])
-
-        def home(self):
-            return np.array([0.0, 1.0])
-
-        def pose_bounds(self):
-            return np.array([-0.3, 0.6]), np.array([0.3, 1.2])
+    from toy_mechanism import KernelTwoLeg as Toy
 
     m = Toy()
     truth = np.array([0.1, 0.9])

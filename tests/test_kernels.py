@@ -362,31 +362,11 @@ def test_a_mechanism_of_ones_own_declares_its_kernel_module(monkeypatch):
     """A mechanism outside parakin (tests/data/toy_kernels.py: the two-leg toy) declares its kernel
     module and parameter vector and nothing else: it gets the numpy methods, the compiled solves
     and the torch solver from that one module."""
-    import dataclasses
     from pathlib import Path
-    from types import ModuleType
-    from typing import ClassVar
 
     monkeypatch.syspath_prepend(str(Path(__file__).parent / "data"))
-    import toy_kernels
+    from toy_mechanism import KernelTwoLeg
     from toy_study import TwoLeg
-
-    @dataclasses.dataclass(frozen=True)
-    class KernelTwoLeg(Mechanism, register=False):
-        a: float = 0.5
-        pose_names: ClassVar[tuple[str, ...]] = ("x", "y")
-        joint_names: ClassVar[tuple[str, ...]] = ("l1", "l2")
-        pose_units = joint_units = paper_pose_units = paper_joint_units = ("m", "m")
-        kernels: ClassVar[ModuleType] = toy_kernels
-
-        def kernel_params(self):
-            return np.array([self.a])
-
-        def home(self):
-            return np.array([0.0, 1.0])
-
-        def pose_bounds(self):
-            return np.array([-0.3, 0.6]), np.array([0.3, 1.2])
 
     plain, fast = TwoLeg(), KernelTwoLeg()
     lo, hi = plain.pose_bounds()

@@ -182,3 +182,20 @@ def test_a_short_command_does_not_load_compiled_code():
     )
     assert forced.returncode == 0, forced.stderr
     assert forced.stdout.split("\n") == [out.stdout.split("\n")[0], "True", ""]
+
+
+def test_docs_quote_the_3rpr_as_it_is():
+    """docs/kernels.md walks through the 3-RPR with excerpts of its two files (blocks opening with
+    ``# file: PATH``): each is that file's text, so the walk-through cannot drift from the code."""
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    text = (root / "docs" / "kernels.md").read_text()
+    blocks = re.findall(r"```python\n# file: (\S+)\n(.*?)```", text, re.S)
+    assert {path for path, _ in blocks} == {
+        "src/parakin/kernels/rpr3.py",
+        "src/parakin/mechanisms/rpr3.py",
+    }
+    for path, body in blocks:
+        assert body in (root / path).read_text(), f"docs/kernels.md quotes {path} as it was"
