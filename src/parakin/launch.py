@@ -1,6 +1,6 @@
 """The ``parakin`` command's entry point, and a server that runs pipeline jobs in one warm process.
 
-Every job of the pipeline is one ``parakin reproduce ...`` command. On its own each pays Python's
+Every job of the pipeline is one ``parakin reproduce ...`` command (or ``report``, ``check``). On its own each pays Python's
 start, the imports (numpy, scipy, pandas, matplotlib, sympy, parakin) and numba's start: about
 1.3-1.8 s of CPU per job, a third of the quick pipeline's CPU time (issue 30). With
 ``PARAKIN_SERVER=auto`` (or a socket path) in its environment, ``parakin reproduce`` hands its
@@ -33,6 +33,8 @@ from pathlib import Path
 __all__ = ["main", "serve"]
 
 ENV = "PARAKIN_SERVER"
+#: the commands a pipeline job runs: these go through the server where there is one
+PIPELINE_COMMANDS = ("reproduce", "report", "check")
 _ACCEPTED, _STALE = b"ok\n", b"stale\n"
 #: what follows a job's output on the socket: this marker and the exit status
 _TRAILER = b"\x00parakin-exit "
@@ -40,10 +42,11 @@ _SOURCES = Path(__file__).resolve().parent
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``parakin ...``: a ``reproduce`` job through the server where ``PARAKIN_SERVER`` is set,
-    everything else (and any job the server cannot take) by :func:`parakin.cli.main`."""
+    """``parakin ...``: a pipeline job (:data:`PIPELINE_COMMANDS`) through the server where
+    ``PARAKIN_SERVER`` is set, everything else (and any job the server cannot take) by
+    :func:`parakin.cli.main`."""
     args = sys.argv[1:] if argv is None else list(argv)
-    if args[:1] == ["reproduce"] and os.environ.get(ENV) and supported():
+    if args[:1] and args[0] in PIPELINE_COMMANDS and os.environ.get(ENV) and supported():
         code = _delegate(args)
         if code is not None:
             return code
