@@ -10,11 +10,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from parakin.bench import _sample
-from parakin.mechanisms import P3P4S, UPS2, Stewart12, Stewart36
+from parakin.bench import _compiled_mechanisms, _sample
 from parakin.solvers import solve_fk
 
-MECHS = {m.name: m for m in (P3P4S(), UPS2(), Stewart12(), Stewart36())}
+#: every registered mechanism with compiled kernels
+MECHS = {m.name: m for m in _compiled_mechanisms()}
 
 
 @pytest.fixture(scope="module", params=list(MECHS))

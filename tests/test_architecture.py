@@ -26,8 +26,6 @@ GENERIC_NAMES = GENERIC_MODULES | {"Mechanism"}
 #: files allowed to name concrete mechanisms, with the reason
 ALLOWED = {
     "parakin/cli.py": "the command line maps mechanism names to classes",
-    "parakin/bench.py": "kernel_goals measures the compiled kernels of the four mechanisms "
-    "that have them (issue 17's goals are stated per mechanism)",
 }
 
 

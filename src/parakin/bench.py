@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import os
 import time
+import timeit
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -19,7 +20,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from parakin.mechanisms.base import Array, Mechanism
+from parakin.mechanisms.base import REGISTRY, Array, Mechanism
 from parakin.solvers import solve_fk
 
 __all__ = ["SolverSpec", "bench_fk", "BASELINE"]
@@ -82,11 +83,7 @@ def bench_fk(
             latencies[i] = time.perf_counter() - t0
             xs[i], nits[i], oks[i] = r.x, r.nit, r.success
         if spec.batched:
-            best = np.inf
-            for _ in range(max(repeats, 1)):
-                t0 = time.perf_counter()
-                rb = solve_fk(mech, q2, x0=home, **kwargs)
-                best = min(best, time.perf_counter() - t0)
+            best, rb = _best_of(lambda: solve_fk(mech, q2, x0=home, **kwargs), repeats)  # noqa: B023
             err, nit, ok, n_acc = _errors(rb.x, x2), rb.nit, rb.success, len(q2)
             throughput = len(q2) / best
         else:
@@ -154,13 +151,24 @@ def _kernels_off():
             os.environ["PARAKIN_KERNELS"] = old
 
 
+def _best_of(f: Callable[[], Any], repeats: int) -> tuple[float, Any]:
+    """The shortest of ``repeats`` timed calls of ``f`` (``timeit``) and the last call's result."""
+    out: list[Any] = [None]
+
+    def call() -> None:
+        out[0] = f()
+
+    return min(timeit.repeat(call, number=1, repeat=max(repeats, 1))), out[0]
+
+
 def _best(f: Callable[[], Any], repeats: int) -> float:
-    best = np.inf
-    for _ in range(max(repeats, 1)):
-        t0 = time.perf_counter()
-        f()
-        best = min(best, time.perf_counter() - t0)
-    return best
+    return _best_of(f, repeats)[0]
+
+
+def _compiled_mechanisms() -> list[Mechanism]:
+    """Every registered mechanism with compiled kernels (default parameters), in registry order."""
+    mechs = [cls() for cls in REGISTRY.values()]
+    return [m for m in mechs if m.kernel() is not None]
 
 
 def kernel_goals(
@@ -179,9 +187,8 @@ def kernel_goals(
     ``n_all`` inputs) and the 6-6's (ms per input and inputs/s, ``n_all_66`` inputs; 0 skips it),
     each also against its numpy path (``PARAKIN_KERNELS=0``) in the same run; and Li 2017's PSO
     experiment as published (50 runs x 50 particles x 1000 iterations, seconds).
-    One row per measurement: ``mechanism, what, value, unit, goal, met``."""
-    from parakin.mechanisms import P3P4S, UPS2, Stewart12, Stewart36, Stewart66
-
+    One row per measurement: ``mechanism, what, value, unit, goal, met``. The mechanisms are the
+    registered ones with kernels (:data:`parakin.mechanisms.base.REGISTRY`)."""
     rows: list[dict[str, Any]] = []
 
     def add(
@@ -198,7 +205,7 @@ def kernel_goals(
             }
         )
 
-    for mech in (P3P4S(), UPS2(), Stewart12(), Stewart36()):
+    for mech in _compiled_mechanisms():
         if progress:
             progress(mech.name)
         _, q1 = _sample(mech, n_single, seed=17)
@@ -225,7 +232,7 @@ def kernel_goals(
             solve_fk(mech, q2[:1000], method=method, maxiter=100)
             t = _best(lambda: solve_fk(mech, q2, method=method, maxiter=100), repeats)  # noqa: B023
             add(mech.name, f"{method} batched", len(q2) / t, "solves/s", goal)
-    mech = Stewart36()
+    mech = REGISTRY["stewart36"]()  # the goals of issue 17 name the 3-6 and the 6-6
     _, qa = _sample(mech, n_all, seed=19)
     solve_fk(mech, qa[:10], method="all-solutions")
     t = _best(lambda: solve_fk(mech, qa, method="all-solutions"), repeats)
@@ -237,7 +244,7 @@ def kernel_goals(
     if n_all_66:
         if progress:
             progress("stewart66 all-solutions")
-        m66 = Stewart66()
+        m66 = REGISTRY["stewart66"]()
         _, q66 = _sample(m66, n_all_66, seed=20)
         m66.fk_all(q66[:2])  # warm-up: the geometry's start system, the cached kernels
         t = _best(lambda: m66.fk_all(q66), repeats)
@@ -295,7 +302,6 @@ def kernel_goals(
         add(mech.name, "PSO single solve (40 x 300), numpy loop", r_np, "solves/s", np.nan)
         add(mech.name, "PSO single solve vs numpy loop", r / r_np, "x", np.nan)
     from parakin.dynamics.bench import dynamics_goals  # issue 27: the dynamics rows
-    from parakin.mechanisms import REGISTRY
 
     dyn = dynamics_goals(
         [c() for c in REGISTRY.values()], n_batch, max(10, min(200, n_batch // 500)), repeats

@@ -12,17 +12,20 @@ An ``fk`` answer near a singularity (another solution close by) gets a one-line 
 from __future__ import annotations
 
 import argparse
+import contextvars
 import dataclasses
 import json
 import math
+import os
 import re
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+import yaml
 
-from parakin import mechanisms
+from parakin import kernels, mechanisms
 from parakin.errors import ParakinError
 from parakin.io import read_rows, read_text, write_rows
 from parakin.units import TO_SI, from_si, parse_quantity, to_si
@@ -88,35 +91,117 @@ def iteration_count(text: str) -> int:
     return int(value)
 
 
-def parameters_of(cls) -> list[str]:
-    """The real parameters ``--param`` may set: the mechanism's float fields (class attributes,
-    tuples, switches such as a branch or a convention are not parameters)."""
-    return sorted(f.name for f in dataclasses.fields(cls) if f.type in ("float", float))
+def _default(field: dataclasses.Field):
+    if field.default is not dataclasses.MISSING:
+        return field.default
+    if field.default_factory is not dataclasses.MISSING:
+        return field.default_factory()
+    return None
 
 
-def _parameter(name: str, key: str, text: str) -> float:
-    value = parse_quantity(text)
-    if not (math.isfinite(value) and 0 < value <= PARAM_LIMIT):
+def _numeric_shape(value) -> tuple[int, ...] | None:
+    """The shape of ``value`` if it is a real number or an array of them (not a bool), else None."""
+    if isinstance(value, (bool, np.bool_, str)) or value is None:
+        return None
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    return a.shape
+
+
+def parameters_of(cls) -> dict[str, object]:
+    """The parameters ``--param`` and ``--geometry`` may set, name -> default: every field of the
+    mechanism's dataclass whose default is a real number or an array of them, by the names of the
+    Python API (switches such as a convention name or a flag are not parameters)."""
+    out = {}
+    for f in dataclasses.fields(cls):
+        default = _default(f)
+        if _numeric_shape(default) is not None:
+            out[f.name] = default
+    return out
+
+
+def _parameter(where: str, value, default):
+    """``value`` (a number, a quantity such as ``35deg``, or a nested list of them) checked against
+    the parameter's default: the same shape, finite, at most :data:`PARAM_LIMIT` in magnitude (SI)
+    and whole where the default is an integer; arrays as nested tuples (mechanisms are hashable)."""
+    shape = _numeric_shape(default)
+    try:
+        a = np.vectorize(lambda v: parse_quantity(v) if isinstance(v, str) else float(v))(
+            np.asarray(value, dtype=object)
+        ).astype(float)
+    except (TypeError, ValueError) as exc:
         raise ValueError(
-            f"--param {key}={text} of {name}: {value!r} must be a positive finite number "
-            f"<= {PARAM_LIMIT:g} (SI units)"
+            f"{where}: {value!r:.60} is not a number or an array of numbers ({exc})"
+        ) from None
+    if a.shape != shape:
+        want = "one number" if not shape else f"an array of shape {shape}"
+        raise ValueError(f"{where}: expected {want}, got shape {a.shape}")
+    if not np.all(np.isfinite(a) & (np.abs(a) <= PARAM_LIMIT)):
+        raise ValueError(
+            f"{where}: values must be finite numbers <= {PARAM_LIMIT:g} in magnitude (SI units)"
         )
-    return value
+    if isinstance(default, (int, np.integer)):
+        if not float(a).is_integer():
+            raise ValueError(f"{where}: {float(a)!r} must be a whole number")
+        return int(a)
+    return float(a) if not shape else _nested_tuple(a)
 
 
-def _mechanism(name: str, params: Sequence[str]):
+def _nested_tuple(a: np.ndarray):
+    return tuple(_nested_tuple(v) for v in a) if a.ndim else float(a)
+
+
+def _param_text(text: str, default):
+    """The value of ``--param NAME=TEXT``: a number or quantity, or for an array parameter a
+    YAML/JSON list (``[[0, 0, 0], [1, 0, 0], ...]``)."""
+    if not _numeric_shape(default):
+        return text
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError:
+        raise ValueError(f"{text!r:.60} is not a YAML/JSON list") from None
+
+
+def _geometry(path: str) -> dict:
+    """The parameters in ``--geometry FILE`` (YAML or JSON, the names of the Python API)."""
+    from parakin.config import check_bounds
+
+    try:
+        data = yaml.safe_load(read_text(path, "--geometry"))
+    except yaml.YAMLError as exc:
+        raise ValueError(
+            f"--geometry {path}: not YAML or JSON ({' '.join(str(exc).split())})"
+        ) from None
+    if not isinstance(data, dict):
+        raise ValueError(f"--geometry {path}: expected a mapping of parameter names to values")
+    check_bounds(data, f"--geometry {path}")
+    return data
+
+
+def _mechanism(name: str, params: Sequence[str], geometry: str | None = None):
+    """The mechanism ``name`` with the parameters of ``--geometry FILE``, then of each ``--param
+    NAME=VALUE`` (the declared parameters, :func:`parameters_of`)."""
     cls = mechanisms.get(name)
-    changes = {}
+    known = parameters_of(cls)
+    given = {}
+    if geometry is not None:
+        given = {k: (f"--geometry {geometry}: {k}", v) for k, v in _geometry(geometry).items()}
     for item in params:
         key, sep, value = item.partition("=")
         if not sep:
             raise ValueError(f"--param {item!r} must look like NAME=VALUE (e.g. phi=35deg)")
-        changes[key.strip()] = value
-    known = parameters_of(cls)
-    unknown = sorted(set(changes) - set(known))
+        key = key.strip()
+        given[key] = (f"--param {item}", _param_text(value, known.get(key)))
+    unknown = sorted(set(given) - set(known))
     if unknown:
-        raise ValueError(f"unknown parameter(s) {unknown} of {name}; known: {known}")
-    return cls(**{key: _parameter(name, key, text) for key, text in changes.items()})
+        raise ValueError(f"unknown parameter(s) {unknown} of {name}; known: {sorted(known)}")
+    values = {k: _parameter(where, v, known[k]) for k, (where, v) in given.items()}
+    try:
+        return cls(**values)
+    except TypeError as exc:
+        raise ValueError(f"{name}: {exc}") from None
 
 
 def _finite(values: np.ndarray, what: str, inputs: np.ndarray) -> np.ndarray:
@@ -209,11 +294,24 @@ def _inputs(args, mech, what: str, paper: bool) -> tuple[np.ndarray, np.ndarray]
         given = _batch(values, len(names), f"--{what}", names)
     option = f"--{what}" if args.input is None else f"--input {args.input}"
     _angles(given, names, units, option)
+    _compiled_if_worth_it(len(given))
     return given, _finite(to_si(given, units), f"{option} in SI units", given)
 
 
+#: a command with fewer inputs runs the kernels on numpy: loading compiled code costs 0.5-1 s per
+#: process (minutes on an empty cache), more than numpy takes for a few hundred inputs
+#: (``PARAKIN_KERNELS=1`` compiles anyway, ``=0`` never)
+COMPILED_MIN_INPUTS = 256
+
+
+def _compiled_if_worth_it(n_inputs: int) -> None:
+    """For the rest of this command: the numpy path below :data:`COMPILED_MIN_INPUTS` inputs."""
+    if n_inputs < COMPILED_MIN_INPUTS and os.environ.get("PARAKIN_KERNELS") != "1":
+        kernels.use_interpreted()
+
+
 def cmd_ik(args) -> int:
-    mech = _mechanism(args.mechanism, args.param)
+    mech = _mechanism(args.mechanism, args.param, args.geometry)
     paper = args.units == "paper"
     pu, ju = _units(mech, "pose", paper), _units(mech, "joint", paper)
     given, pose = _inputs(args, mech, "pose", paper)
@@ -246,7 +344,7 @@ def cmd_ik(args) -> int:
 
 
 def cmd_fk(args) -> int:
-    mech = _mechanism(args.mechanism, args.param)
+    mech = _mechanism(args.mechanism, args.param, args.geometry)
     paper = args.units == "paper"
     pu, ju = _units(mech, "pose", paper), _units(mech, "joint", paper)
     given, joints = _inputs(args, mech, "joints", paper)
@@ -589,6 +687,31 @@ BENCHES = {
 }
 
 
+def cmd_kernels(args) -> int:
+    """``parakin kernels``: where compiled code is cached, what is there; ``--clear`` empties it."""
+    from parakin.kernels import store
+
+    root = store.root()
+    if args.clear:
+        freed = store.clear()
+        print(f"parakin kernels: removed {freed / 1e6:.1f} MB of compiled code from {root}")
+        return 0
+    status = store.status()
+    on = "on" if kernels.enabled() else "off (the numpy path)"
+    print(f"cache: {status['root'] or 'none writable'}; compiled path {on}")
+    for b in status["builds"]:
+        what = f"{b['name']} ({b['hash']})" if b["hash"] else b["name"]
+        print(f"  {what:<50} {b['files']:>4} files {b['bytes'] / 1e6:8.1f} MB")
+    return 0
+
+
+def _add_kernels(sub) -> None:
+    p = sub.add_parser("kernels", help="the cache of compiled kernels: status (default) or --clear")
+    p.add_argument("--status", action="store_true", help="list the cached builds (default)")
+    p.add_argument("--clear", action="store_true", help="remove every cached build")
+    p.set_defaults(func=cmd_kernels)
+
+
 def cmd_readme(args) -> int:
     """Copy the "at a glance" block of ``figures/benchmarks.md`` into README (``--check``: only compare)."""
     from parakin.config import ROOT
@@ -807,6 +930,7 @@ def build_parser() -> argparse.ArgumentParser:
         _add_record,
         _add_report,
         _add_dynamics,
+        _add_kernels,
     ):
         add(sub)
     return parser
@@ -819,7 +943,15 @@ def _mechanism_args(p) -> None:
         action="append",
         default=[],
         metavar="NAME=VALUE",
-        help="override a mechanism parameter (SI, or with a unit: phi=35deg, d=120mm)",
+        help="set a mechanism parameter, by its name in the Python API: a number (SI, or with "
+        "a unit: phi=35deg, d=120mm) or an array as a YAML/JSON list (base=[[0,0,0],...])",
+    )
+    p.add_argument(
+        "--geometry",
+        default=None,
+        metavar="FILE",
+        help="the mechanism's parameters from a YAML or JSON file (names of the Python API, "
+        "arrays as lists); --param values override them",
     )
     p.add_argument(
         "--units", choices=["si", "paper"], default="si", help="units of input and output"
@@ -1123,6 +1255,13 @@ def _add_dynamics(sub) -> None:
         help="override a mechanism parameter",
     )
     p.add_argument(
+        "--geometry",
+        type=nonempty,
+        default=None,
+        metavar="FILE",
+        help="the mechanism's parameters from a YAML or JSON file; --param values override them",
+    )
+    p.add_argument(
         "--wrench",
         type=finite_float,
         nargs=6,
@@ -1150,7 +1289,7 @@ def cmd_dynamics(args) -> int:
     from parakin import dynamics
     from parakin.dynamics.trajectory import read_trajectory
 
-    mech = _mechanism(args.mechanism, args.param)
+    mech = _mechanism(args.mechanism, args.param, args.geometry)
     if mech.mass_model() is None:
         raise ValueError(f"{mech.name} declares no masses (mass_model()): no dynamics")
     traj = read_trajectory(args.trajectory, mech)
@@ -1198,7 +1337,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         with np.errstate(all="ignore"):  # non-finite results are checked, not warned about
-            return args.func(args)
+            return contextvars.copy_context().run(args.func, args)  # settings stay in the command
     except (
         ParakinError,
         ValueError,

@@ -21,7 +21,7 @@ KEY = "toy_study"
 
 
 @dataclasses.dataclass(frozen=True)
-class TwoLeg(Mechanism):
+class TwoLeg(Mechanism, register=False):
     """Point (x, y) above two pivots at (-a, 0) and (a, 0); the joints are the two leg lengths."""
 
     a: float = 0.5

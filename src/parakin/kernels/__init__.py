@@ -1,95 +1,112 @@
 """One source per mechanism: its kernels, run by numba (one pose), numpy and torch (batches).
 
-A mechanism opts in by returning a :class:`Kernel` from ``Mechanism.kernel()``: the name of a
-module of five functions for **one** pose (``residual(p, x, q, out)``, ``jacobian(p, x, q, out)``,
-``ik(p, x, out) -> ok``, ``in_domain(p, x) -> ok``, ``on_assembly(p, x, q) -> ok``), written once,
-elementwise and branch-free in the names of :mod:`parakin.kernels._math`, and the parameter
-vector ``p`` they read. The same functions serve three paths (docs/kernels.md):
+A mechanism declares its kernel module (``Mechanism.kernels``) and its parameter vector
+(``Mechanism.kernel_params()``); :meth:`~parakin.mechanisms.base.Mechanism.kernel` returns the
+:class:`Kernel` of an instance. The module holds five functions for **one** pose
+(``residual(p, x, q, out)``, ``jacobian(p, x, q, out)``, ``ik(p, x, out) -> ok``,
+``in_domain(p, x) -> ok``, ``on_assembly(p, x, q) -> ok``), written once, elementwise and
+branch-free in the names of :mod:`parakin.kernels._math`. The same functions serve three paths
+(docs/kernels.md):
 
-* :func:`evaluate`: the batched numpy API (the module as imported; the batch on the trailing
+* :func:`evaluate`: the batched numpy API (the module as imported, the batch on the trailing
   axis), what the mechanisms' ``residual``, ``jacobian_pose``, ``ik``, ... methods call;
-* :func:`compiled` / :func:`build`: the functions under ``numba.njit``, and compiled Newton,
-  Levenberg-Marquardt, Broyden and BFGS loops over them (the template ``_loops.py``, written with
-  the kernel module's name into the kernel cache and compiled with ``cache=True``, so the compile
-  cost is paid once per machine, not per process), each in a serial and a ``prange``-parallel
-  driver that run the same per-row code (identical results);
+* :func:`compiled` / :func:`entries_of`: the functions under ``numba.njit``, and the solver loops
+  of :mod:`parakin.kernels.drivers` (Newton, Levenberg-Marquardt, Broyden, BFGS, verification,
+  particle swarm; written once for every mechanism, the kernel passed as their first arguments)
+  compiled over them, each in a serial and a ``prange``-parallel entry (identical results),
+  cached on disk under a hash of every source that went in (:mod:`parakin.kernels.store`);
 * :func:`torch_kernel`: the functions on torch tensors (CPU or CUDA), the residual and analytic
   Jacobian of :mod:`parakin.solvers.torch_newton`.
 
-:func:`solve` is what :func:`parakin.solvers.solve_fk` calls first: it returns ``None`` (use the
-generic numpy path) for a mechanism without a kernel, a method without a compiled loop, an
-option the loop does not take, a callback, or where numba is not installed. Numba (and torch)
-are imported only here, lazily: the kernel modules import without them.
-
-Cache: ``$PARAKIN_KERNEL_CACHE`` or ``$XDG_CACHE_HOME/parakin/kernels`` (default
-``~/.cache/parakin/kernels``). Set ``PARAKIN_KERNELS=0`` to switch the compiled path off.
+Nothing compiled is imported with this package: numba is imported, and a loop loaded or compiled,
+on the first solve that asks for it. :func:`enabled` says whether the compiled path is on: numba
+installed, ``PARAKIN_KERNELS`` not ``0``, a writable cache (:func:`parakin.kernels.store.root`),
+and not inside :func:`interpreted` (a short command whose solve costs less than loading compiled
+code, e.g. ``parakin fk`` of a few inputs, runs the same kernels on numpy).
 """
 
 from __future__ import annotations
 
+import contextvars
 import dataclasses
-import hashlib
-import importlib
 import importlib.util
-import inspect
 import os
 import sys
-import tempfile
 import threading
+import types
+from collections.abc import Iterator
+from contextlib import contextmanager
 from functools import cache, lru_cache
-from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import numpy as np
 
-from parakin.kernels import _math
+from parakin.kernels import _math, methods
+from parakin.kernels import store as _store
 
 __all__ = [
+    "PARALLEL_MIN_ROWS",
+    "SCALAR_MAX_ROWS",
     "Kernel",
-    "build",
-    "cache_dir",
     "compiled",
     "enabled",
+    "entries_of",
     "evaluate",
-    "solve",
+    "interpreted",
+    "kernel_of",
     "torch_kernel",
+    "use_interpreted",
+    "use_parallel",
     "verify_hooks",
-    "PARALLEL_MIN_ROWS",
-    "METHODS",
 ]
 
 #: rows from which a batch runs on every core (below: the serial driver, no thread start-up)
 PARALLEL_MIN_ROWS = 64
-
-#: method -> option names (and defaults) its compiled loop takes; others go to the numpy path
-METHODS: dict[str, dict[str, float]] = {
-    "newton": {"xtol": 0.0},
-    "lm": {"xtol": 0.0, "gtol": 0.0, "tau": 1e-9},
-    "broyden": {"xtol": 0.0},
-    "bfgs": {"xtol": 0.0, "gtol": 0.0, "c1": 1e-4, "shrink": 0.5, "maxls": 30, "reg": 1e-10},
-}
-_OPTION_ORDER = ("tol", "maxiter", "xtol", "gtol", "tau", "c1", "shrink", "maxls", "reg")
+#: batches up to this size run row by row on Python floats (:func:`_scalar_namespace`): a
+#: vectorised call costs ~1 us per numpy operation whatever the size, a scalar row ~50 ns
+SCALAR_MAX_ROWS = 4
+#: the kernel functions of a module, in the order the entries bind them (RES, JAC, IK, DOM, ASM)
+FUNCTIONS = ("residual", "jacobian", "ik", "in_domain", "on_assembly")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class Kernel:
-    """A mechanism's compiled kernels: the module of its ``njit`` functions, its parameters."""
+    """A mechanism's kernels: the module of its one-source functions and its parameters."""
 
-    module: str  #: importable module with residual, jacobian, ik, in_domain, on_assembly
+    module: types.ModuleType  #: residual, jacobian, ik, in_domain, on_assembly (one pose)
     params: np.ndarray  #: float64 parameter vector passed as ``p`` to every kernel
     n_pose: int
     n_joints: int
     home: np.ndarray | None = None  #: the mechanism's home pose (the default start), if given
-    #: False: the numpy and torch paths only (``solve_fk`` keeps the generic numpy solvers)
-    compiled: bool = True
+
+
+# ---------------------------------------------------------------------------- is it on?
+_INTERPRETED: contextvars.ContextVar[bool] = contextvars.ContextVar("interpreted", default=False)
 
 
 def enabled() -> bool:
-    """False where numba is missing or ``PARAKIN_KERNELS=0``."""
-    if os.environ.get("PARAKIN_KERNELS", "1") == "0":
+    """Whether the compiled path runs: numba installed, ``PARAKIN_KERNELS`` not ``0``, a writable
+    cache directory, and not inside :func:`interpreted`."""
+    if os.environ.get("PARAKIN_KERNELS", "1") == "0" or _INTERPRETED.get():
         return False
-    return _have_numba()
+    return _have_numba() and _store.root() is not None
+
+
+@contextmanager
+def interpreted(on: bool = True) -> Iterator[None]:
+    """Inside this block (``on``) the compiled path is off: the same kernels run on numpy. For
+    work too small to pay for loading compiled code (0.5-1 s per process, more on a cold cache)."""
+    token = _INTERPRETED.set(on or _INTERPRETED.get())
+    try:
+        yield
+    finally:
+        _INTERPRETED.reset(token)
+
+
+def use_interpreted() -> None:
+    """Turn the compiled path off for the rest of the current context (``contextvars``: a thread,
+    or a command run in its own context, as the CLI does)."""
+    _INTERPRETED.set(True)
 
 
 @lru_cache(maxsize=1)
@@ -97,63 +114,49 @@ def _have_numba() -> bool:
     return importlib.util.find_spec("numba") is not None
 
 
-def cache_dir() -> Path:
-    """Where the generated solver modules (and numba's cache of them) live."""
-    env = os.environ.get("PARAKIN_KERNEL_CACHE")
-    if env:
-        return Path(env)
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "parakin" / "kernels"
-
-
-#: the kernels' own numba options: no on-disk cache of their own (numba would key it on the kernel
-#: file alone and serve a stale build after a change to ``_math.py``); the cached loops hold them
-_NJIT = dict(cache=False, error_model="numpy", nogil=True)
-
-
 @cache
-def compiled(module: str) -> ModuleType:
-    """The kernel functions of ``module`` under ``numba.njit`` (one pose, scalar math): a module
-    registered in ``sys.modules`` as ``_parakin_numba_<module>``, which the generated loops
-    import. The generated loops (``cache=True``, keyed on the hash of every source) keep them
-    compiled on disk. A module not written with :func:`parakin.kernels._math.kernel` (its own
-    ``numba.njit`` functions, compiled path only) is returned as it is."""
+def _numba() -> types.ModuleType:
+    """numba, with the fork-safe ``workqueue`` threading layer (the pipeline forks worker
+    processes; GNU OpenMP is not fork-safe) unless ``NUMBA_THREADING_LAYER`` says otherwise."""
     import numba
 
-    source = importlib.import_module(module)
-    if not one_source(module):  # a module of numba.njit functions of its own: used as it is
-        return source
-    ns = _math.rebind(source, _math.numba_names(numba.njit), numba.njit(**_NJIT))
-    name = "_parakin_numba_" + module.replace(".", "_")
-    mod = ModuleType(name, f"numba kernels of {module}")
-    mod.__dict__.update(vars(ns))
-    sys.modules[name] = mod
-    return mod
+    if "NUMBA_THREADING_LAYER" not in os.environ:
+        numba.config.THREADING_LAYER = "workqueue"  # no effect once a layer is running
+    return numba
 
 
-#: batches up to this size run row by row on Python floats (:func:`_scalar_namespace`): a
-#: vectorised call costs ~1 us per numpy operation whatever the size, a scalar row ~50 ns
-SCALAR_MAX_ROWS = 4
+def kernel_of(mech: Any) -> Kernel | None:
+    """``mech.kernel()`` (with its home filled in) where the compiled path is enabled, else None."""
+    get = getattr(mech, "kernel", None)
+    if get is None or not enabled():
+        return None
+    k = get()
+    if k is not None and k.home is None:
+        k = dataclasses.replace(k, home=np.asarray(mech.home(), dtype=float))
+    return k
 
 
+def use_parallel(n: int, parallel: bool | None) -> bool:
+    """Whether a batch of ``n`` rows runs on the prange driver: large batches, from the main thread
+    only (numba's ``workqueue`` layer, chosen because it is fork-safe, must not be entered from two
+    threads at once; other threads get the serial driver, same results)."""
+    if parallel is None:
+        parallel = n >= PARALLEL_MIN_ROWS
+    return parallel and threading.current_thread() is threading.main_thread()
+
+
+# ---------------------------------------------------------------------------- numpy and scalars
 @cache
-def one_source(module: str) -> bool:
-    """Whether kernel ``module`` is written once for numba, numpy and torch (its functions marked
-    with :func:`parakin.kernels._math.kernel`), not as ``numba.njit`` functions only."""
-    mod = importlib.import_module(module)
-    return any(getattr(f, "__parakin_kernel__", False) for f in vars(mod).values())
-
-
-@cache
-def _numpy_module(module: str) -> ModuleType:
-    return importlib.import_module(module)
-
-
-@cache
-def _scalar_namespace(module: str) -> Any:
+def _scalar_namespace(module: types.ModuleType) -> Any:
     """The kernels on Python floats (``math`` functions, the scalar ``where`` / ``maximum`` that
     numba compiles, uncompiled): the same IEEE operations as the numpy and numba runs."""
-    return _math.rebind(importlib.import_module(module), _math.scalar_names())
+    return _math.rebind(module, _math.scalar_names())
+
+
+def _flat(values: Any, batch: tuple[int, ...]) -> np.ndarray:
+    """``values (..., k)`` broadcast to ``batch`` and transposed to ``(k, N)`` (contiguous)."""
+    a = np.asarray(values, dtype=float)
+    return np.ascontiguousarray(np.broadcast_to(a, batch + a.shape[-1:]).reshape(-1, a.shape[-1]).T)
 
 
 def evaluate(kernel: Kernel, name: str, pose: np.ndarray, joints: np.ndarray | None = None):
@@ -163,22 +166,19 @@ def evaluate(kernel: Kernel, name: str, pose: np.ndarray, joints: np.ndarray | N
     ``(..., m, n)`` for ``jacobian``, ``(values (..., m), ok (...))`` for ``ik`` and the mask
     ``(...)`` for ``in_domain`` / ``on_assembly``. Floating-point warnings are silenced: NaN
     marks a pose outside the domain, as in the compiled path."""
-    fn = getattr(_numpy_module(kernel.module), name)
+    fn = getattr(kernel.module, name)
     x = np.asarray(pose, dtype=float)
     batch = x.shape[:-1]
     if joints is not None:
-        q = np.asarray(joints, dtype=float)
-        batch = np.broadcast_shapes(batch, q.shape[:-1])
-        qt = np.ascontiguousarray(
-            np.broadcast_to(q, batch + q.shape[-1:]).reshape(-1, q.shape[-1]).T
-        )
-    xt = np.ascontiguousarray(np.broadcast_to(x, batch + x.shape[-1:]).reshape(-1, x.shape[-1]).T)
+        batch = np.broadcast_shapes(batch, np.shape(joints)[:-1])
+    qt = None if joints is None else _flat(joints, batch)
+    xt = _flat(x, batch)
     size = xt.shape[1]
     p = kernel.params.tolist()
     m, n = kernel.n_joints, kernel.n_pose
     if size <= SCALAR_MAX_ROWS:
         try:
-            return _evaluate_rows(kernel, name, xt, qt if joints is not None else None, p, batch)
+            return _evaluate_rows(kernel, name, xt, qt, p, batch)
         except (ArithmeticError, ValueError):  # x / 0, sin(inf): numpy's inf / NaN instead
             pass
     with np.errstate(all="ignore"):
@@ -225,6 +225,7 @@ def _evaluate_rows(kernel: Kernel, name: str, xt: np.ndarray, qt: Any, p: list, 
     return out if shape else ok.reshape(batch)
 
 
+# ---------------------------------------------------------------------------- torch
 class _Slots:
     """Where a torch kernel writes ``out[i]`` / ``out[i, j]``: kept, then stacked (no in-place
     writes, so ``torch.func`` transforms compose with the kernel)."""
@@ -254,13 +255,7 @@ def torch_kernel(kernel: Kernel) -> tuple[Any, Any]:
     """``(residual, jacobian)`` of ``kernel`` on torch tensors: ``residual(pose (..., n), joints
     (..., m)) -> (..., m)``, ``jacobian(pose, joints) -> (..., m, n)`` (the analytic
     ``jacobian_pose``), on the device and in the dtype of ``pose``, from the same source as the
-    numpy and numba paths. Compose with ``torch.func`` (vmap, jacrev, jacfwd). Needs torch.
-    NotImplementedError for a kernel module that is not :func:`one_source`."""
-    if not one_source(kernel.module):
-        raise NotImplementedError(
-            f"kernel module {kernel.module} is numba-only (not written in the names of "
-            "parakin.kernels._math): no torch version"
-        )
+    numpy and numba paths. Compose with ``torch.func`` (vmap, jacrev, jacfwd). Needs torch."""
     ns = _torch_namespace(kernel.module)
     p = tuple(float(v) for v in kernel.params)
     m, n = kernel.n_joints, kernel.n_pose
@@ -279,148 +274,98 @@ def torch_kernel(kernel: Kernel) -> tuple[Any, Any]:
 
 
 @cache
-def _torch_namespace(module: str) -> Any:
+def _torch_namespace(module: types.ModuleType) -> Any:
     import torch
 
-    return _math.rebind(importlib.import_module(module), _math.torch_names(torch))
+    return _math.rebind(module, _math.torch_names(torch))
 
 
-def compiled_name(module: str) -> str:
-    """The module the generated loops import the numba kernels of ``module`` from (registered
-    by :func:`compiled`, which :func:`build` calls first)."""
-    return compiled(module).__name__
-
-
-def _source_of(module: str) -> str:
-    mod = importlib.import_module(module)
-    return inspect.getsource(mod)
+# ---------------------------------------------------------------------------- compiled
+#: numba options of the kernels and of the entries (``cache=True``: in the kernel's directory)
+_NJIT = dict(cache=True, error_model="numpy", nogil=True)
 
 
 @cache
-def build(module: str, n_joints: int, n_pose: int) -> ModuleType:
-    """The compiled solver loops over the kernels of ``module`` (generated once, then imported).
+def _build(module: types.ModuleType) -> tuple[Any, Any]:
+    """``(path, hash)`` of the compiled code of kernel ``module``: the directory named by the hash
+    of the kernel (and of any kernel module it takes functions from), ``_math``, the drivers, the
+    entries and the options table (:func:`parakin.kernels.store.digest`)."""
+    from parakin.kernels import drivers, entries
 
-    The generated file's name carries a hash of the template, the kernel module's source (and
-    :mod:`parakin.kernels._math`'s) and the numba version, so numba's on-disk cache never serves
-    loops compiled against an older kernel (numba itself only watches the file a function is
-    defined in). The loops import the kernels from :func:`compiled`'s module."""
-    import numba
-
-    name, text = _generated(module, n_joints, n_pose, numba.__version__)
-    if (
-        "NUMBA_THREADING_LAYER" not in os.environ
-    ):  # fork-safe (the pipeline forks worker processes);
-        numba.config.THREADING_LAYER = (
-            "workqueue"  # GNU OpenMP is not. No effect once a layer is running.
-        )
-    folder = cache_dir()
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"{name}.py"
-    if not path.exists():  # atomic: concurrent processes may build the same file
-        _prune(folder, name.rsplit("_", 1)[0])
-        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".tmp")
-        with os.fdopen(fd, "w") as fh:
-            fh.write(f"# generated by parakin.kernels.build from {module}; do not edit\n" + text)
-        os.replace(tmp, path)
-    if name in sys.modules:
-        return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(name, path)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[name] = mod
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def _generated(module: str, n_joints: int, n_pose: int, numba_version: str) -> tuple[str, str]:
-    """The name and text of the loops module generated for ``module``: the name ends in a hash of
-    the text, the kernel sources and the numba version."""
-    template = (Path(__file__).parent / "_loops.py").read_text()
-    # name -> (driver arguments, body for row i): a serial and a prange-parallel driver each
-    pso = "p, Q, X, V, PB, PF, GB, GF, RND, W, k0, lo, hi, vmax, coef, STATE, HIST"
-    drivers = {
-        **{
-            name: (
-                "p, Q, X0, opts, X, info, res",
-                f"res[i] = {name}_row(p, Q[i], X0[i], opts, X[i], info[i])",
-            )
-            for name in METHODS
-        },
-        "verify": ("p, Q, X, flags, err", "err[i] = verify_row(p, Q[i], X[i], flags[i])"),
-        "pso": (
-            pso,
-            "pso_row(" + ", ".join(a + "[i]" if a.isupper() else a for a in pso.split(", ")) + ")",
-        ),
+    sources = {module} | {  # a kernel may take functions from another kernel module
+        sys.modules[f.__module__]
+        for f in vars(module).values()
+        if getattr(f, "__parakin_kernel__", False)
     }
-    batch = []
-    for name, (args, body) in drivers.items():
-        if name in METHODS:  # one pose, solved and checked in one call (the single-call path)
-            batch.append(
-                f"@njit(**_O)\ndef {name}_one(p, q, x0, opts, x, info, out):\n"
-                "    if not (_finite(q) and _finite(x0)):\n        info[0] = 999\n        return\n"
-                f"    out[0] = {name}_row(p, q, x0, opts, x, info)\n"
-                "    out[1] = verify_row(p, q, x, info[4:])\n"
-            )
-        for kind, loop, extra in (
-            ("serial", "range", ""),
-            ("parallel", "prange", "parallel=True, "),
-        ):
-            batch.append(
-                f"@njit({extra}**_O)\ndef {name}_{kind}({args}):\n"
-                f"    for i in {loop}(Q.shape[0]):\n        {body}\n"
-            )
-    text = (
-        template.replace("__KERNEL_MODULE__", compiled_name(module))
-        .replace("__M__", str(int(n_joints)))
-        .replace("__N__", str(int(n_pose)))
-        + "\n\n"
-        + "\n\n".join(batch)
+    hash_ = _store.digest(
+        *sorted(sources, key=lambda m: m.__name__), _math, drivers, entries, methods
     )
-    kernel_source = _source_of(module) + _source_of(_math.__name__)
-    digest = hashlib.sha256((text + kernel_source + numba_version).encode()).hexdigest()[:16]
-    return f"parakin_loops_{module.replace('.', '_')}_{int(n_joints)}x{int(n_pose)}_{digest}", text
+    return _store.kernel_dir(module.__name__, hash_), hash_
 
 
-def _prune(folder: Path, prefix: str) -> None:
-    """Remove the loops generated for an older version of a kernel module (and numba's cache of
-    them): their hash no longer matches, they would only fill the cache."""
-    for old in folder.glob(f"{prefix}_*.py"):
-        digest = old.stem[len(prefix) + 1 :]
-        if len(digest) != 16 or any(
-            c not in "0123456789abcdef" for c in digest
-        ):  # another module's
-            continue
-        for f in [old, *(folder / "__pycache__").glob(f"{old.stem}.*")]:
-            try:
-                f.unlink()
-            except OSError:  # another process got there first, or no permission: harmless
-                pass
+@cache
+def compiled(module: types.ModuleType) -> Any:
+    """The kernel functions of ``module`` under ``numba.njit`` (one pose, scalar math), as a
+    namespace; cached on disk in the kernel's directory."""
+    numba = _numba()
+    path, _ = _build(module)
+    with _store.numba_cache(path / "kernel"):
+        return _math.rebind(module, _math.numba_names(numba.njit), numba.njit(**_NJIT))
 
 
-def kernel_of(mech: Any) -> Kernel | None:
-    """``mech.kernel()`` (with its home filled in) where the compiled path is enabled, else None."""
-    get = getattr(mech, "kernel", None)
-    if get is None or not enabled():
-        return None
-    k = get()
-    if k is not None and not k.compiled:
-        return None
-    if k is not None and k.home is None:
-        k = dataclasses.replace(k, home=np.asarray(mech.home(), dtype=float))
-    return k
+#: entry groups: name -> (the entries of parakin.kernels.entries compiled in it, its ROW loop);
+#: the first names are helpers the others call (compiled once, linked into each)
+_GROUPS = {
+    **{m: (("row", "one", "serial", "parallel"), m) for m in methods.COMPILED},
+    "verify": (("check", "verify_serial", "verify_parallel"), None),
+    "pso": (("swarm", "pso_serial", "pso_parallel"), None),
+}
 
 
-def loops_of(kernel: Kernel) -> ModuleType:
-    """The compiled solver loops over ``kernel``'s module (built once, cached on disk)."""
-    return build(kernel.module, kernel.n_joints, kernel.n_pose)
+class _Entry:
+    """A compiled entry that loads (or compiles) itself on its first call, through
+    :func:`parakin.kernels.store.first_call` (an unreadable cache entry is rebuilt); after that
+    :attr:`fn` is the numba function itself."""
+
+    def __init__(self, fn: Any, where: Any) -> None:
+        self.fn, self.where, self.ready = fn, where, False
+
+    def __call__(self, *args: Any) -> Any:
+        if self.ready:
+            return self.fn(*args)
+        out = _store.first_call(self.fn, self.where, *args)
+        self.ready = True
+        return out
 
 
-def use_parallel(n: int, parallel: bool | None) -> bool:
-    """Whether a batch of ``n`` rows runs on the prange driver: large batches, from the main thread
-    only (numba's ``workqueue`` layer, chosen in :func:`build` because it is fork-safe, must not be
-    entered from two threads at once; other threads get the serial driver, same results)."""
-    if parallel is None:
-        parallel = n >= PARALLEL_MIN_ROWS
-    return parallel and threading.current_thread() is threading.main_thread()
+@cache
+def entries_of(module: types.ModuleType, group: str) -> types.SimpleNamespace:
+    """The entries of ``group`` (a method of :data:`parakin.kernels.methods.COMPILED`,
+    ``"verify"`` or ``"pso"``) compiled over the kernels of ``module``: copies of the functions
+    of :mod:`parakin.kernels.entries` with the kernel's functions and the method's loop bound
+    (as :func:`parakin.kernels._math.rebind` binds math names), numba-cached in
+    ``<kernel dir>/<group>``. Each compiles (or loads) on its first call."""
+    from parakin.kernels import drivers, entries
+
+    numba = _numba()
+    names, row = _GROUPS[group]
+    kern = compiled(module)
+    glob = dict(vars(entries))
+    glob.update(zip(("RES", "JAC", "IK", "DOM", "ASM"), (getattr(kern, f) for f in FUNCTIONS)))
+    glob["ROW"] = getattr(drivers, row) if row else None
+    if row:  # a method's single call verifies its answer with the kernel's one check
+        glob["check"] = entries_of(module, "verify").check.fn
+    path = _build(module)[0]
+    where = path / group
+    out = {}
+    with _store.numba_cache(where):
+        for name in names:
+            fn = getattr(entries, name)
+            copy = types.FunctionType(fn.__code__, glob, fn.__name__, fn.__defaults__)
+            copy.__qualname__, copy.__module__ = fn.__qualname__, fn.__module__
+            glob[name] = numba.njit(parallel=name.endswith("parallel"), **_NJIT)(copy)
+            out[name] = _Entry(glob[name], path)  # an unreadable file: the whole build is rebuilt
+    return types.SimpleNamespace(**out)
 
 
 def verify_hooks(mech: Any, joints: np.ndarray, x: np.ndarray, *, parallel: bool | None = None):
@@ -430,12 +375,11 @@ def verify_hooks(mech: Any, joints: np.ndarray, x: np.ndarray, *, parallel: bool
     kernel = kernel_of(mech)
     if kernel is None:
         return None
-    loops = loops_of(kernel)
+    group = entries_of(kernel.module, "verify")
     n = len(joints)
     flags = np.zeros((n, 2), dtype=np.int64)
     err = np.empty(n)
-    use_par = use_parallel(n, parallel)
-    fn = loops.verify_parallel if use_par else loops.verify_serial
+    fn = group.verify_parallel if use_parallel(n, parallel) else group.verify_serial
     fn(
         kernel.params,
         np.ascontiguousarray(joints, dtype=float),

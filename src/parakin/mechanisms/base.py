@@ -14,6 +14,14 @@ From that one function everything generic follows:
 
 Arrays are batched: a pose array has shape ``(..., n_pose)``, a joint array ``(..., n_joints)``;
 one pose or a million, no Python loop over poses.
+
+A mechanism is its geometry, declared once: a subclass names its kernel module (:attr:`kernels`,
+the closure equations, Jacobian, IK, domain and assembly test of **one** pose, written once for
+numpy, numba and torch; docs/kernels.md) and returns its parameters as one vector
+(:meth:`kernel_params`); the numpy methods below, the compiled solvers and the torch solver then
+all run those functions. A subclass that declares a ``name`` registers itself
+(:data:`REGISTRY`): the command line, the tests, the solver atlas and the benchmarks read their
+list of mechanisms from there.
 """
 
 from __future__ import annotations
@@ -21,13 +29,15 @@ from __future__ import annotations
 import dataclasses
 from abc import ABC, abstractmethod
 from collections.abc import Callable
+from functools import cache, cached_property
+from types import ModuleType
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from parakin.errors import ShapeError, SingularityError, UnreachableError
-from parakin.kernels import Kernel
+from parakin.kernels import Kernel, evaluate
 
 if TYPE_CHECKING:  # the types of the optional dynamics hooks (parakin.dynamics imports this module)
     from parakin.dynamics.jet import Jet
@@ -38,7 +48,58 @@ Array = NDArray[np.float64]
 #: (:meth:`Mechanism.torch_residual`; ``Any``: torch is optional)
 TorchResidual = Callable[[Any, Any], Any]
 
-__all__ = ["Mechanism", "Skeleton", "TorchResidual", "as_batch", "describe_first"]
+__all__ = [
+    "REGISTRY",
+    "Mechanism",
+    "Skeleton",
+    "TorchResidual",
+    "as_batch",
+    "describe_first",
+]
+
+#: CLI name -> mechanism class, in the order the classes were defined; filled by
+#: :meth:`Mechanism.__init_subclass__` (see :func:`parakin.mechanisms.get` for the lookup that
+#: first imports every mechanism module of the package)
+REGISTRY: dict[str, type[Mechanism]] = {}
+
+#: the methods a kernel module provides; a subclass that overrides one of them below the class
+#: that declared the kernels has no kernel (:meth:`Mechanism.kernel`): it may change the kinematics
+KERNEL_METHODS = ("residual", "jacobian_pose", "ik", "in_domain", "on_assembly", "kernel_params")
+
+
+def _register(cls: type[Mechanism]) -> None:
+    """Add ``cls`` to :data:`REGISTRY` under ``cls.name`` (done for every subclass that declares a
+    ``name``, unless it is defined with ``register=False``). A second class under a taken name is
+    an error, unless it is the same class defined again (a reloaded module)."""
+    old = REGISTRY.get(cls.name)
+    if old is not None and old.__qualname__ != cls.__qualname__:
+        raise ValueError(
+            f"mechanism name {cls.name!r} is taken by {old.__module__}.{old.__qualname__}"
+        )
+    REGISTRY[cls.name] = cls
+
+
+#: what a registered mechanism declares about itself besides its ``name``
+_DESCRIBED = (
+    "pose_names",
+    "joint_names",
+    "pose_units",
+    "joint_units",
+    "paper_pose_units",
+    "paper_joint_units",
+)
+
+
+@cache
+def _kernel_owner(cls: type) -> type | None:
+    """The class whose :attr:`Mechanism.kernels` ``cls`` uses, or None: no kernels declared, or a
+    class between ``cls`` and that one overrides a method of :data:`KERNEL_METHODS`."""
+    for klass in cls.__mro__:
+        if klass.__dict__.get("kernels") is not None:
+            return klass
+        if any(name in klass.__dict__ for name in KERNEL_METHODS):
+            return None
+    return None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -95,15 +156,46 @@ class Mechanism(ABC):
     #: Units the paper prints poses and joints in (``--units paper`` in the CLI), e.g. mm and deg.
     paper_pose_units: ClassVar[tuple[str, ...]]
     paper_joint_units: ClassVar[tuple[str, ...]]
+    #: The kernel module (:mod:`parakin.kernels`): ``residual``, ``jacobian``, ``ik``,
+    #: ``in_domain`` and ``on_assembly`` of one pose, written once; with :meth:`kernel_params` it
+    #: gives this class its numpy methods, the compiled solvers and the torch solver. ``None``: the
+    #: mechanism writes :meth:`ik` and :meth:`residual` itself (the generic numpy solvers run).
+    kernels: ClassVar[ModuleType | None] = None
+
+    def __init_subclass__(cls, register: bool = True, **kwargs: Any) -> None:
+        """Register a subclass that declares a ``name`` and the names and units of its pose and
+        joints (:data:`REGISTRY`, what the CLI, tests, atlas and benchmarks list);
+        ``register=False`` keeps a variant or a test's mechanism out of the lists."""
+        super().__init_subclass__(**kwargs)
+        if register and "name" in cls.__dict__ and all(hasattr(cls, a) for a in _DESCRIBED):
+            _register(cls)
 
     # ------------------------------------------------------------------ what a mechanism defines
-    @abstractmethod
-    def ik(self, pose: ArrayLike) -> Array:
-        """Joint values ``(..., n_joints)`` of ``pose`` ``(..., n_pose)``; raises UnreachableError."""
+    def kernel_params(self) -> Array:
+        """The parameter vector ``p`` every function of :attr:`kernels` reads (float64, 1-D)."""
+        raise NotImplementedError(f"{type(self).__name__} declares no kernel parameters")
 
-    @abstractmethod
+    def ik(self, pose: ArrayLike) -> Array:
+        """Joint values ``(..., n_joints)`` of ``pose`` ``(..., n_pose)``; raises UnreachableError
+        where the pose is outside the domain. Default: the kernel's ``ik``."""
+        x = as_batch(pose, self.n_pose, "pose")
+        q, ok = evaluate(self._declared_kernel, "ik", x)
+        bad = ~ok & np.all(np.isfinite(x), axis=-1)  # a non-finite pose: NaN, named by callers
+        if np.any(bad):
+            idx = tuple(np.argwhere(bad)[0])
+            raise UnreachableError(
+                f"pose {tuple(np.round(x[idx], 6).tolist())} is outside the domain of "
+                f"{type(self).__name__}: no inverse kinematics{describe_first(bad, x.shape[:-1])}"
+            )
+        return q
+
     def residual(self, pose: ArrayLike, joints: ArrayLike) -> Array:
-        """Closure equations ``(..., n_joints)``: zero exactly where pose and joints assemble."""
+        """Closure equations ``(..., n_joints)``: zero exactly where pose and joints assemble.
+        Default: the kernel's ``residual``."""
+        x = as_batch(pose, self.n_pose, "pose")
+        return evaluate(
+            self._declared_kernel, "residual", x, as_batch(joints, self.n_joints, "joints")
+        )
 
     @abstractmethod
     def home(self) -> Array:
@@ -122,10 +214,17 @@ class Mechanism(ABC):
     def n_joints(self) -> int:
         return len(self.joint_names)
 
-    def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike) -> Array:
-        """``d residual / d pose`` ``(..., n_joints, n_pose)``; central differences by default."""
+    def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
+        """``d residual / d pose`` ``(..., n_joints, n_pose)``: the kernel's ``jacobian`` (``joints``
+        default to the IK of ``pose``), else central differences of :meth:`residual`."""
         x = as_batch(pose, self.n_pose, "pose")
-        q = as_batch(joints, self.n_joints, "joints")
+        if self.kernels is not None:
+            if joints is None:
+                q = evaluate(self._declared_kernel, "ik", x)[0]
+            else:
+                q = as_batch(joints, self.n_joints, "joints")
+            return evaluate(self._declared_kernel, "jacobian", x, q)
+        q = self.ik(x) if joints is None else as_batch(joints, self.n_joints, "joints")
         return _central_difference(lambda xx: self.residual(xx, q), x)
 
     def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike) -> Array:
@@ -186,19 +285,27 @@ class Mechanism(ABC):
     # ------------------------------------------------------------------ is a pose a valid answer?
     def in_domain(self, pose: ArrayLike) -> NDArray[np.bool_]:
         """Boolean mask ``(...)``: True where ``pose`` lies in the mechanism's domain (finite, and
-        where its IK is defined). Default: :meth:`is_reachable`. A forward solve that converges
-        outside it is not a success (:mod:`parakin.solvers.verify`)."""
+        where its IK is defined): the kernel's ``in_domain``, else :meth:`is_reachable`. A forward
+        solve that converges outside it is not a success (:mod:`parakin.solvers.verify`)."""
         x = np.asarray(pose, dtype=float)
         fin = np.all(np.isfinite(x), axis=-1)
+        if self.kernels is not None:
+            return fin & evaluate(
+                self._declared_kernel, "in_domain", np.where(fin[..., None], x, 0)
+            )
         out = np.zeros(x.shape[:-1], dtype=bool)
         out[fin] = self.is_reachable(x[fin])
         return out
 
     def on_assembly(self, pose: ArrayLike, joints: ArrayLike) -> NDArray[np.bool_]:
         """Boolean mask ``(...)``: True where ``pose`` is on the assembly mode / branch this
-        mechanism asks for (the papers' by default). Default: every pose (no assembly modes told
-        apart beyond what :meth:`ik` reproduces)."""
+        mechanism asks for (the papers' by default): the kernel's ``on_assembly``, else every pose
+        (no assembly modes told apart beyond what :meth:`ik` reproduces)."""
         x = np.asarray(pose, dtype=float)
+        if self.kernels is not None:
+            return evaluate(
+                self._declared_kernel, "on_assembly", x, np.asarray(joints, dtype=float)
+            )
         return np.ones(np.broadcast_shapes(x.shape[:-1], np.shape(joints)[:-1]), dtype=bool)
 
     def joint_error(self, pose: ArrayLike, joints: ArrayLike) -> Array:
@@ -222,14 +329,26 @@ class Mechanism(ABC):
     fk: Any = None
 
     def kernel(self) -> Kernel | None:
-        """This mechanism's kernels (:mod:`parakin.kernels`), or ``None`` (the default): numeric FK
-        then runs the generic numpy solvers on the methods above, and the torch solver needs
-        :meth:`torch_residual`. A kernel module writes ``residual``, ``jacobian_pose``, ``ik``,
-        ``in_domain`` and ``on_assembly`` once, for numba (the compiled loops), numpy (the batched
-        methods, which call it) and torch (:mod:`parakin.solvers.torch_newton`); see
-        docs/kernels.md. Subclasses that override one of those methods return ``None`` unless
-        they provide their own kernel."""
-        return None
+        """This mechanism's kernels (:mod:`parakin.kernels`): the module :attr:`kernels` with
+        :meth:`kernel_params`, run by the compiled solvers and the torch solver; ``None`` without
+        one, and for a subclass that overrides a method of :data:`KERNEL_METHODS` below the class
+        that declared the kernels (it may change the kinematics; the generic numpy solvers then
+        run its own methods)."""
+        if _kernel_owner(type(self)) is None:
+            return None
+        return self._declared_kernel
+
+    @cached_property
+    def _declared_kernel(self) -> Kernel:
+        """The :class:`Kernel` of :attr:`kernels` and :meth:`kernel_params` (built once)."""
+        if self.kernels is None:
+            raise NotImplementedError(
+                f"{type(self).__name__} declares no kernels: it must define ik and residual"
+            )
+        params = np.ascontiguousarray(self.kernel_params(), dtype=float)
+        return Kernel(
+            self.kernels, params, self.n_pose, self.n_joints, np.asarray(self.home(), float)
+        )
 
     def torch_residual(self) -> TorchResidual | None:
         """A torch residual ``f(pose (..., n), joints (..., m)) -> (..., m)`` for a mechanism

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from types import ModuleType
 from typing import ClassVar, Literal
 
 import numpy as np
@@ -31,7 +32,8 @@ import parakin.dynamics.jet as dj
 from parakin.dynamics.jet import Jet
 from parakin.dynamics.model import Bodies, BodyGroup, MassModel, RigidBody, rods
 from parakin.errors import SingularityError, UnreachableError
-from parakin.kernels import Kernel, evaluate
+from parakin.kernels import evaluate
+from parakin.kernels import p3p4s as kernels
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
 __all__ = ["P3P4S"]
@@ -62,6 +64,8 @@ class P3P4S(Mechanism):
     paper_joint_units: ClassVar[tuple[str, ...]] = ("m", "m", "m")
     #: limb azimuths gamma_i of the base vertices u_i (paper §1.1)
     gammas: ClassVar[tuple[float, ...]] = tuple(np.deg2rad([0.0, 120.0, 240.0]))
+    #: residual (eq 4), its Jacobian, the IK (eqs 2-5), the domain and the working mode
+    kernels: ClassVar[ModuleType] = kernels
 
     def __post_init__(self) -> None:
         for key in ("r_a", "r_b", "L", "d"):
@@ -143,24 +147,12 @@ class P3P4S(Mechanism):
         b = np.einsum("...ij,ij->...i", w, self.m)
         return b, self.L**2 - (np.einsum("...ij,...ij->...i", w, w) - b**2)
 
-    # residual, jacobian_pose, ik, in_domain and on_assembly are the kernels of
-    # parakin.kernels.p3p4s (one source for numpy, numba and torch; docs/kernels.md)
+    # residual, jacobian_pose, in_domain and on_assembly (the working mode of ik: every rod leans
+    # along its rail) are the kernels of parakin.kernels.p3p4s (Mechanism's defaults; one source
+    # for numpy, numba and torch, docs/kernels.md)
     def is_reachable(self, pose: ArrayLike) -> np.ndarray:
         """True where every limb's eq. (5) square root is real."""
-        return evaluate(self._kernel, "in_domain", as_batch(pose, 3, "pose"))
-
-    def in_domain(self, pose: ArrayLike) -> np.ndarray:
-        """Finite and reachable (every limb's eq. (5) square root real)."""
-        x = np.asarray(pose, dtype=float)
-        return np.all(np.isfinite(x), axis=-1) & evaluate(self._kernel, "in_domain", x)
-
-    def on_assembly(self, pose: ArrayLike, joints: ArrayLike) -> np.ndarray:
-        """The working mode of :meth:`ik` (the minus root of eq. 5): every rod leans along its rail,
-        ``n_i . m_i >= 0``, up to a rounding slack of 1e-6 where the two modes merge at the
-        workspace edge (there the joint tolerance decides). The mirror assembly below the rails
-        (z ~ -0.16 m at home strokes) has ``n_i . m_i < 0``."""
-        x, q = np.asarray(pose, dtype=float), np.asarray(joints, dtype=float)
-        return evaluate(self._kernel, "on_assembly", x, q)
+        return evaluate(self._declared_kernel, "in_domain", as_batch(pose, 3, "pose"))
 
     def ik(self, pose: ArrayLike) -> Array:
         """Strokes ``l_i`` (m) of platform position ``pose`` (m), eqs (2)-(5), working branch.
@@ -170,7 +162,7 @@ class P3P4S(Mechanism):
         Raises UnreachableError where the square root is imaginary.
         """
         x = as_batch(pose, 3, "pose")
-        q, ok = evaluate(self._kernel, "ik", x)
+        q, ok = evaluate(self._declared_kernel, "ik", x)
         if not np.all(ok):
             _, disc = self._discriminant(x)
             bad = disc < 0  # a non-finite pose gives NaN strokes: its callers name it not finite
@@ -183,21 +175,9 @@ class P3P4S(Mechanism):
                 )
         return q
 
-    def residual(self, pose: ArrayLike, joints: ArrayLike) -> Array:
-        """``(|d_i - c_i|^2 - L^2) / 2L`` (eq 4): metres to first order, polynomial everywhere."""
-        return evaluate(
-            self._kernel, "residual", as_batch(pose, 3, "pose"), as_batch(joints, 3, "joints")
-        )
-
     def _rod(self, pose: Array, joints: Array) -> Array:
         """Rod vectors ``d_i - c_i = w_i - l_i m_i`` (..., 3, 3)."""
         return self._w(pose) - joints[..., :, None] * self.m
-
-    def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike) -> Array:
-        """``d residual / d p``: row i is ``(d_i - c_i)/L`` (= n_i on the constraint manifold)."""
-        return evaluate(
-            self._kernel, "jacobian", as_batch(pose, 3, "pose"), as_batch(joints, 3, "joints")
-        )
 
     def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """``d residual / d l``: diagonal, ``-n_i . m_i``."""
@@ -294,18 +274,8 @@ class P3P4S(Mechanism):
         self.fk(joints)
 
     # ------------------------------------------------------------------ closed-form FK
-    def kernel(self) -> Kernel | None:
-        """The kernels (:mod:`parakin.kernels.p3p4s`) for the compiled and torch paths; None for
-        a subclass (it may change the kinematics; its numpy methods still run them)."""
-        if type(self) is not P3P4S:
-            return None
-        return self._kernel
-
-    @cached_property
-    def _kernel(self) -> Kernel:
-        return Kernel("parakin.kernels.p3p4s", self._kernel_params(), 3, 3, self.home())
-
-    def _kernel_params(self) -> Array:
+    def kernel_params(self) -> Array:
+        """``delta, L``, the radial unit vectors ``e_i`` (3 x 3), the rail unit vectors ``m_i``."""
         return np.concatenate([[self.delta, self.L], self.e.ravel(), self.m.ravel()])
 
     def fk(self, joints: ArrayLike, branch: Literal["upper", "lower"] = "upper") -> Array:

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
+from types import ModuleType
 from typing import ClassVar
 
 import numpy as np
@@ -41,6 +42,7 @@ from parakin.dynamics.jet import Jet
 from parakin.dynamics.model import Bodies, MassModel, RigidBody, hexapod, hexapod_masses
 from parakin.errors import UnreachableError
 from parakin.kernels import Kernel, evaluate
+from parakin.kernels import stewart12 as kernels
 from parakin.mechanisms.base import (
     Array,
     Mechanism,
@@ -182,6 +184,7 @@ class Stewart12(Mechanism):
     compat_tol: float = 1e-9
 
     name: ClassVar[str] = "stewart12"
+    kernels: ClassVar[ModuleType] = kernels
     pose_names: ClassVar[tuple[str, ...]] = ("x0", "y0", "z0", "lambda1", "lambda2", "lambda3")
     joint_names: ClassVar[tuple[str, ...]] = tuple(f"l{k}" for k in range(1, 13))
     pose_units: ClassVar[tuple[str, ...]] = ("m", "m", "m", "1", "1", "1")
@@ -309,7 +312,7 @@ class Stewart12(Mechanism):
         if self.convention == "euler_parameters":
             x = as_batch(pose, 6, "pose")
             self._check_orientation(x)
-            return evaluate(self._kernel, "ik", x)[0]
+            return evaluate(self._declared_kernel, "ik", x)[0]
         v = self.leg_vectors(pose)
         return np.sqrt(np.einsum("...ij,...ij->...i", v, v))
 
@@ -318,7 +321,7 @@ class Stewart12(Mechanism):
         x = np.asarray(pose, dtype=float)
         fin = np.all(np.isfinite(x), axis=-1)
         if self.convention == "euler_parameters":
-            return fin & evaluate(self._kernel, "in_domain", x)
+            return fin & evaluate(self._declared_kernel, "in_domain", x)
         return fin & ~self._outside(x)
 
     def _outside(self, x: Array) -> np.ndarray:
@@ -334,7 +337,7 @@ class Stewart12(Mechanism):
         q = as_batch(joints, 12, "joints")
         x = as_batch(pose, 6, "pose")
         if self.convention == "euler_parameters":
-            return evaluate(self._kernel, "residual", x, q)
+            return evaluate(self._declared_kernel, "residual", x, q)
         bad = self._outside(x)
         r = self.ik(np.where(bad[..., None], 0.0, x)) - q
         return np.where(bad[..., None], np.nan, r)
@@ -344,7 +347,7 @@ class Stewart12(Mechanism):
         rows outside the lambda domain."""
         x = as_batch(pose, 6, "pose")
         if self.convention == "euler_parameters":
-            return evaluate(self._kernel, "jacobian", x, np.zeros(12))  # reads no joints
+            return evaluate(self._declared_kernel, "jacobian", x, np.zeros(12))  # reads no joints
         bad = self._outside(x)
         j = self.leg_jacobian(np.where(bad[..., None], 0.0, x), range(12))
         return np.where(bad[..., None, None], np.nan, j)
@@ -429,17 +432,10 @@ class Stewart12(Mechanism):
 
     def kernel(self) -> Kernel | None:
         """The kernels (:mod:`parakin.kernels.stewart12`) of the default Euler-parameter
-        convention for the compiled and torch paths; None for the other conventions and for
-        subclasses."""
-        if type(self) is not Stewart12 or self.convention != "euler_parameters":
-            return None
-        return self._kernel
+        convention; None for the other conventions."""
+        return super().kernel() if self.convention == "euler_parameters" else None
 
-    @cached_property
-    def _kernel(self) -> Kernel:
-        return Kernel("parakin.kernels.stewart12", self._kernel_params(), 6, 12, self.home())
-
-    def _kernel_params(self, legs: tuple[int, ...] = tuple(range(12))) -> Array:
+    def kernel_params(self, legs: tuple[int, ...] = tuple(range(12))) -> Array:
         """Platform point (local frame) of each of ``legs`` (0-based), then their base points."""
         p = self.platform_points_local[[self.leg_joint[k] for k in legs]]
         return np.concatenate([p.ravel(), self.base_points[list(legs)].ravel()])
@@ -614,7 +610,7 @@ class Stewart12(Mechanism):
 
 
 @dataclass(frozen=True)
-class DriveMode(Mechanism):
+class DriveMode(Mechanism, register=False):
     """The compatibility equations of one drive mode as a solvable "mechanism" (paper eq. 28).
 
     Unknowns ("pose"): the ``6 - R`` passive leg lengths ``X`` (m); inputs ("joints"): the
@@ -720,7 +716,7 @@ class DriveMode(Mechanism):
 
 
 @dataclass(frozen=True)
-class ActiveLegs(Mechanism):
+class ActiveLegs(Mechanism, register=False):
     """Pose-space FK from any ``N >= 6`` active legs: residual ``l_k(pose) - l_k`` over the active
     legs only (beyond the paper, docs/ye_stewart12.md#s7.1); solve with ``lm`` (least squares for N > 6) or
     ``newton``. The passive lengths then follow by :meth:`Stewart12.ik`."""
@@ -729,6 +725,7 @@ class ActiveLegs(Mechanism):
     active: tuple[int, ...] = (1, 2, 3, 4, 5, 6)  #: 1-based active legs
 
     name: ClassVar[str] = "stewart12-active"
+    kernels: ClassVar[ModuleType] = kernels
     pose_names: ClassVar[tuple[str, ...]] = Stewart12.pose_names
     joint_names: ClassVar[tuple[str, ...]] = ()
     pose_units: ClassVar[tuple[str, ...]] = Stewart12.pose_units
@@ -760,11 +757,9 @@ class ActiveLegs(Mechanism):
 
     def kernel(self) -> Kernel | None:
         """The kernels of :mod:`parakin.kernels.stewart12` over the active legs (the default
-        Euler-parameter convention) for the torch path; None for the other conventions and for
-        subclasses. Not compiled (``compiled=False``): ``solve_fk`` keeps the numpy solvers, as
-        before the kernels were one source (compiling loops for each leg count is left to a
-        decision on the solver atlas)."""
-        return self._kernel if type(self) is ActiveLegs and self._by_kernel else None
+        Euler-parameter convention), compiled like any mechanism's; None for the other
+        conventions and a subclass of Stewart12 as ``mech``."""
+        return super().kernel() if self._by_kernel else None
 
     @property
     def _by_kernel(self) -> bool:
@@ -772,17 +767,9 @@ class ActiveLegs(Mechanism):
         subclass of it, in the Euler-parameter convention)."""
         return type(self.mech) is Stewart12 and self.mech.convention == "euler_parameters"
 
-    @cached_property
-    def _kernel(self) -> Kernel:
-        legs = tuple(k - 1 for k in self.active)
-        return Kernel(
-            "parakin.kernels.stewart12",
-            self.mech._kernel_params(legs),
-            6,
-            len(legs),
-            self.home(),
-            compiled=False,
-        )
+    def kernel_params(self) -> Array:
+        """The active legs' platform and base points (:meth:`Stewart12.kernel_params`)."""
+        return self.mech.kernel_params(tuple(k - 1 for k in self.active))
 
     def _inside(self, pose: ArrayLike) -> tuple[Array, Array]:
         """Pose with out-of-domain rows (|lambda| >= 1 for Euler parameters) replaced by home, and
@@ -797,7 +784,7 @@ class ActiveLegs(Mechanism):
         """``l_k(pose) - l_k`` over the active legs; NaN rows outside the lambda domain."""
         if self._by_kernel:
             q = np.asarray(joints, dtype=float)
-            return evaluate(self._kernel, "residual", as_batch(pose, 6, "pose"), q)
+            return evaluate(self._declared_kernel, "residual", as_batch(pose, 6, "pose"), q)
         x, bad = self._inside(pose)
         r = self.ik(x) - np.asarray(joints, dtype=float)
         return np.where(bad[..., None], np.nan, r)
@@ -805,7 +792,7 @@ class ActiveLegs(Mechanism):
     def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
         if self._by_kernel:
             x = as_batch(pose, 6, "pose")
-            return evaluate(self._kernel, "jacobian", x, np.zeros(self.n_joints))
+            return evaluate(self._declared_kernel, "jacobian", x, np.zeros(self.n_joints))
         x, bad = self._inside(pose)
         j = self.mech.leg_jacobian(x, [k - 1 for k in self.active])
         return np.where(bad[..., None, None], np.nan, j)

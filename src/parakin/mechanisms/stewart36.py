@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from types import ModuleType
 from typing import ClassVar
 
 import numpy as np
@@ -34,7 +35,7 @@ from parakin.dynamics.jet import Jet
 from parakin.dynamics.model import Bodies, MassModel, hexapod, hexapod_masses
 from parakin.errors import UnreachableError
 from parakin.geometry import euler_zyx, euler_zyx_from_matrix
-from parakin.kernels import Kernel, evaluate
+from parakin.kernels import stewart36 as kernels
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
 __all__ = ["Stewart36", "TABLE3_ROW1"]
@@ -57,6 +58,7 @@ class Stewart36(Mechanism):
     a: float = 1.0  #: top triangle side (dimensionless unit, paper §3)
 
     name: ClassVar[str] = "stewart36"
+    kernels: ClassVar[ModuleType] = kernels
     pose_names: ClassVar[tuple[str, ...]] = ("alpha", "beta", "gamma", "X", "Y", "Z")
     joint_names: ClassVar[tuple[str, ...]] = ("L1", "L2", "L3", "L4", "L5", "L6")
     pose_units: ClassVar[tuple[str, ...]] = ("rad", "rad", "rad", "1", "1", "1")
@@ -113,40 +115,15 @@ class Stewart36(Mechanism):
         """``A_p(i) - B_i`` (..., 6, 3)."""
         return self.platform_world(pose)[..., LEG_TOP, :] - self.base_points
 
-    # ik, residual, jacobian_pose and on_assembly are the kernels of parakin.kernels.stewart36
-    # (one source for numpy, numba and torch; docs/kernels.md)
-    def ik(self, pose: ArrayLike) -> Array:
-        """Leg lengths ``L_i = |T A_p(i) + O_A - B_i|`` (eq. 2), shape (..., 6). Every pose has an IK."""
-        return evaluate(self._kernel, "ik", as_batch(pose, 6, "pose"))[0]
-
-    def residual(self, pose: ArrayLike, joints: ArrayLike) -> Array:
-        """``f_i = |T A_p(i) + O_A - B_i|^2 - L_i^2`` (eq. 3, squared form)."""
-        q = as_batch(joints, 6, "joints")
-        return evaluate(self._kernel, "residual", as_batch(pose, 6, "pose"), q)
-
-    def in_domain(self, pose: ArrayLike) -> np.ndarray:
-        """Every finite pose has an IK."""
-        return np.all(np.isfinite(np.asarray(pose, dtype=float)), axis=-1)
-
-    def on_assembly(self, pose: ArrayLike, joints: ArrayLike) -> np.ndarray:
-        """The assembly above the base, ``Z > 0``, as :meth:`fk` and the paper take it (the mirror
-        image below the base has the same leg lengths)."""
-        x, q = np.asarray(pose, dtype=float), np.asarray(joints, dtype=float)
-        return evaluate(self._kernel, "on_assembly", x, q)
-
+    # ik (eq. 2), residual (eq. 3, squared), jacobian_pose (d f / d pose: 2 u_q . (w_i x v_i) for
+    # the angles, u_q the joint axis of angle q in the fixed frame, 2 v_i for X, Y, Z), in_domain
+    # (every finite pose) and on_assembly (above the base, Z > 0, as fk and the paper take it: the
+    # mirror image below has the same legs) are the kernels of parakin.kernels.stewart36
+    # (Mechanism's defaults; one source for numpy, numba and torch, docs/kernels.md)
     def objective(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """The paper's fitness, eq. (4): ``F = sum_i f_i^2`` (the text's "eq. (5)" is a slip, docs/li2017_stewart36.md#g5)."""
         f = self.residual(pose, joints)
         return np.sum(f * f, axis=-1)
-
-    def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
-        """Analytic ``d f / d pose`` (..., 6, 6): ``2 v_i`` for X, Y, Z and, for the angles,
-        ``2 v_i . (dT/dq a_i) = 2 u_q . (w_i x v_i)`` with ``w_i = T a_i`` and ``u_q`` the joint axis
-        of angle q in the fixed frame (``dT a = u_q x T a`` for the z-y'-x'' chain): ``u_alpha = z``,
-        ``u_beta = Rz(alpha) y``, ``u_gamma = T x``. One cross product, no 3x3 products.
-        ``joints`` is not needed."""
-        x = as_batch(pose, 6, "pose")
-        return evaluate(self._kernel, "jacobian", x, np.zeros(6))  # the kernel reads no joints
 
     def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """``d f / d L = -2 diag(L)``."""
@@ -400,18 +377,8 @@ class Stewart36(Mechanism):
         best = np.argmin(np.where(ok, dist, np.inf), axis=-1)
         return np.take_along_axis(sols, best[..., None, None], axis=-2)[..., 0, :]
 
-    def kernel(self) -> Kernel | None:
-        """The kernels (:mod:`parakin.kernels.stewart36`) for the compiled and torch paths; None
-        for a subclass (it may change the kinematics; its numpy methods still run them)."""
-        if type(self) is not Stewart36:
-            return None
-        return self._kernel
-
-    @cached_property
-    def _kernel(self) -> Kernel:
-        return Kernel("parakin.kernels.stewart36", self._kernel_params(), 6, 6, self.home())
-
-    def _kernel_params(self) -> Array:
+    def kernel_params(self) -> Array:
+        """The platform point of each leg in the moving frame (6 x 3), then the base points."""
         return np.concatenate([self.top_points[LEG_TOP].ravel(), self.base_points.ravel()])
 
     def mirror(self, pose: ArrayLike) -> Array:

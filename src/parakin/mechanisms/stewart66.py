@@ -30,6 +30,7 @@ import dataclasses
 from dataclasses import dataclass
 from functools import cached_property
 from importlib import resources
+from types import ModuleType
 from typing import Any, ClassVar
 
 import numpy as np
@@ -41,6 +42,7 @@ from parakin.dynamics.jet import Jet
 from parakin.dynamics.model import Bodies, MassModel, hexapod, hexapod_masses
 from parakin.errors import UnreachableError
 from parakin.geometry import euler_zyx, euler_zyx_from_matrix
+from parakin.kernels import stewart66 as stewart66_kernels
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
 __all__ = [
@@ -181,6 +183,12 @@ class Stewart66(Mechanism):
     joint_units: ClassVar[tuple[str, ...]] = ("m",) * 6
     paper_pose_units: ClassVar[tuple[str, ...]] = ("deg", "deg", "deg", "m", "m", "m")
     paper_joint_units: ClassVar[tuple[str, ...]] = ("m",) * 6
+    #: the compiled single solves and the torch solver (the numpy methods below are the same)
+    kernels: ClassVar[ModuleType] = stewart66_kernels
+
+    def kernel_params(self) -> Array:
+        """The six platform points (moving frame), then the six base points."""
+        return np.concatenate([self.platform_points.ravel(), self.base_points.ravel()])
 
     def __post_init__(self) -> None:
         b = _as_points(self.base, "base")

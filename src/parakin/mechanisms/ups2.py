@@ -29,6 +29,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 from functools import cached_property
+from types import ModuleType
 from typing import ClassVar
 
 import numpy as np
@@ -39,7 +40,8 @@ from parakin.dynamics.jet import Jet
 from parakin.dynamics.model import Bodies, BodyGroup, Closure, MassModel, RigidBody, strut
 from parakin.errors import UnreachableError
 from parakin.geometry import rot_x, rot_y
-from parakin.kernels import Kernel, evaluate
+from parakin.kernels import evaluate
+from parakin.kernels import ups2 as kernels
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
 
 __all__ = ["UPS2"]
@@ -64,6 +66,7 @@ class UPS2(Mechanism):
     branch: int = 1
 
     name: ClassVar[str] = "2ups"
+    kernels: ClassVar[ModuleType] = kernels
     pose_names: ClassVar[tuple[str, ...]] = ("beta", "gamma", "Y")
     joint_names: ClassVar[tuple[str, ...]] = ("l1", "l2", "l3")
     pose_units: ClassVar[tuple[str, ...]] = ("rad", "rad", "m")
@@ -198,8 +201,10 @@ class UPS2(Mechanism):
         l1 = 4 * self.c**2 / 9 + 0.75 * a * a - (2 / _SQ3) * a * y
         return np.sqrt(np.maximum(np.stack([l1, q - s, q + s], axis=-1), 0.0))
 
-    # residual, jacobian_pose, ik, in_domain and on_assembly are the kernels of
-    # parakin.kernels.ups2 (one source for numpy, numba and torch; docs/kernels.md)
+    # residual (eq 18 with strokes as inputs), jacobian_pose (differentiated from the closed forms
+    # of lengths_closed_form), in_domain (|Y| < c) and on_assembly (the working assembly of fk,
+    # |beta|, |gamma| < 90 deg on this instance's branch) are the kernels of parakin.kernels.ups2
+    # (Mechanism's defaults; one source for numpy, numba and torch, docs/kernels.md)
     def ik(self, pose: ArrayLike, check_limits: bool = False) -> Array:
         """Strokes ``q = l(pose) - l(home)`` (m) of ``pose`` = (beta, gamma, Y) (rad, rad, m), from
         the closed forms of :meth:`lengths_closed_form`.
@@ -208,7 +213,7 @@ class UPS2(Mechanism):
         ``check_limits=True``, where a stroke exceeds eq (19)'s limits.
         """
         x = as_batch(pose, 3, "pose")
-        q, ok = evaluate(self._kernel, "ik", x)
+        q, ok = evaluate(self._declared_kernel, "ik", x)
         bad = ~ok
         if np.any(bad):
             idx = tuple(np.argwhere(bad)[0])
@@ -220,17 +225,6 @@ class UPS2(Mechanism):
             self._check_limits(q)
         return q
 
-    def in_domain(self, pose: ArrayLike) -> np.ndarray:
-        """Finite, with ``|Y| < c`` (eq. 14 has a real rho)."""
-        x = np.asarray(pose, dtype=float)
-        return np.all(np.isfinite(x), axis=-1) & evaluate(self._kernel, "in_domain", x)
-
-    def on_assembly(self, pose: ArrayLike, joints: ArrayLike) -> np.ndarray:
-        """The working assembly of :meth:`fk`: ``|beta|, |gamma| < 90 deg`` (angles modulo 2 pi), on
-        this instance's ``branch`` of eq. (14) (which the pose coordinates cannot leave)."""
-        x, q = np.asarray(pose, dtype=float), np.asarray(joints, dtype=float)
-        return evaluate(self._kernel, "on_assembly", x, q)
-
     def _check_limits(self, q: Array) -> None:
         lim = np.asarray(self.stroke_limits)
         over = np.abs(q) > lim * (1 + 1e-12)
@@ -241,19 +235,6 @@ class UPS2(Mechanism):
                 f"stroke l{j + 1} = {q[idx] * 1e3:.6g} mm exceeds the limit +/-{lim[j] * 1e3:.6g} mm "
                 f"(eq. 19){describe_first(np.any(over, axis=-1), q.shape[:-1])}"
             )
-
-    def residual(self, pose: ArrayLike, joints: ArrayLike) -> Array:
-        """``f_j = l_j(pose) - l_j(home) - q_j`` (m): eq (18) with strokes as inputs."""
-        return evaluate(
-            self._kernel, "residual", as_batch(pose, 3, "pose"), as_batch(joints, 3, "joints")
-        )
-
-    def jacobian_pose(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
-        """Analytic ``d l / d (beta, gamma, Y)`` (..., 3, 3), differentiated from the closed forms
-        of :meth:`lengths_closed_form`: ``d(l_j^2) / (2 l_j)`` (equal to the vector form
-        ``(l_j / |l_j|) . d l_j`` of eqs (9)-(11) to rounding). ``joints`` is not needed."""
-        x = as_batch(pose, 3, "pose")
-        return evaluate(self._kernel, "jacobian", x, np.zeros(3))  # the kernel reads no joints
 
     def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
         """``d residual / d q = -I``."""
@@ -387,18 +368,8 @@ class UPS2(Mechanism):
         A pose of branch -1 is interpreted by ``UPS2(..., branch=-1)``."""
         return {b: dataclasses.replace(self, branch=b).fk_all(joints) for b in (1, -1)}
 
-    def kernel(self) -> Kernel | None:
-        """The kernels (:mod:`parakin.kernels.ups2`) for the compiled and torch paths; None for a
-        subclass (it may change the kinematics; its numpy methods still run them)."""
-        if type(self) is not UPS2:
-            return None
-        return self._kernel
-
-    @cached_property
-    def _kernel(self) -> Kernel:
-        return Kernel("parakin.kernels.ups2", self._kernel_params(), 3, 3, self.home())
-
-    def _kernel_params(self) -> Array:
+    def kernel_params(self) -> Array:
+        """``a, k, c, h, branch`` and the home lengths ``l_j(home)``."""
         return np.concatenate(
             [[self.a, self.k, self.c, self.h, float(self.branch)], self.home_lengths]
         )

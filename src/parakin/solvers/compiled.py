@@ -1,4 +1,4 @@
-"""The compiled solve behind :func:`parakin.solvers.solve_fk`: the kernels' loops
+"""The compiled solve behind :func:`parakin.solvers.solve_fk`: the kernels' entries
 (:mod:`parakin.kernels`) run on a flat batch or one pose and their results returned as
 :class:`~parakin.solvers.result.FKResult`, verified by the same rules as every other solve
 (:mod:`parakin.solvers.verify`). Kernels know nothing of solvers; this module joins the two."""
@@ -10,11 +10,18 @@ from typing import Any
 
 import numpy as np
 
-from parakin.kernels import _OPTION_ORDER, METHODS, kernel_of, loops_of, use_parallel
+from parakin.kernels import entries_of, kernel_of, methods, use_parallel
 from parakin.solvers.result import FKResult, summarize
 from parakin.solvers.verify import default_joint_tol, judge_one
 
 __all__ = ["solve", "solve_one"]
+
+
+def _without_callback(options: dict[str, Any]) -> dict[str, Any] | None:
+    """``options`` less a ``callback=None``; None where a callback is given (numpy path)."""
+    if options.get("callback") is not None:
+        return None
+    return {k: v for k, v in options.items() if k != "callback"}
 
 
 def solve(
@@ -31,38 +38,21 @@ def solve(
     """The compiled solve of the flat batch (``joints (N, m)``, ``x0 (N, n)``) as an
     :class:`~parakin.solvers.result.FKResult` (not yet verified), or ``None`` where the compiled
     path does not apply. ``parallel``: None = by batch size (:data:`PARALLEL_MIN_ROWS`)."""
-    if method not in METHODS or options.get("callback") is not None:
-        return None
-    allowed = METHODS[method]
-    if any(k not in allowed and k != "callback" for k in options):
-        return None
-    kernel = kernel_of(mech)
+    options = _without_callback(options)
+    opts = None if options is None else methods.pack(method, tol, maxiter, options)
+    kernel = None if opts is None else kernel_of(mech)
     if kernel is None:
         return None
     start = time.perf_counter()
-    values = {
-        **allowed,
-        **{k: v for k, v in options.items() if k != "callback"},
-        "tol": tol,
-        "maxiter": maxiter,
-    }
-    try:
-        opts = np.array([float(values.get(k, 0.0)) for k in _OPTION_ORDER])
-    except (TypeError, ValueError):  # let the numpy solver report a bad option
-        return None
-    if method == "bfgs" and not float(values["maxls"]).is_integer():
-        return None
-    loops = loops_of(kernel)
+    group = entries_of(kernel.module, method)
     n = len(joints)
     q = np.ascontiguousarray(joints, dtype=float)
     x0 = np.ascontiguousarray(x0, dtype=float)
     x = np.empty_like(x0)
     info = np.zeros((n, 4), dtype=np.int64)
     res = np.empty(n)
-    use_par = use_parallel(n, parallel)
-    getattr(loops, f"{method}_{'parallel' if use_par else 'serial'}")(
-        kernel.params, q, x0, opts, x, info, res
-    )
+    run = group.parallel if use_parallel(n, parallel) else group.serial
+    run(kernel.params, q, x0, opts, x, info, res)
     status = info[:, 0].copy()
     return FKResult(
         x=x,
@@ -78,10 +68,10 @@ def solve(
     )
 
 
-_OPTS: dict[
-    tuple, np.ndarray
-] = {}  # (method, tol, maxiter, options) -> options vector (single-call path)
-_ONE: dict[tuple[str, str], Any] = {}  # (kernel module, method) -> compiled single-pose solve
+#: (method, tol, maxiter, options) -> options vector (single-call path)
+_OPTS: dict[tuple, np.ndarray] = {}
+#: (kernel module, method) -> compiled single-pose solve, once it has loaded
+_ONE: dict[tuple[Any, str], Any] = {}
 
 
 def _options(method: str, tol: float, maxiter: int, options: dict[str, Any]) -> np.ndarray | None:
@@ -92,16 +82,21 @@ def _options(method: str, tol: float, maxiter: int, options: dict[str, Any]) -> 
         key = None
     except KeyError:
         pass
-    values = {**METHODS[method], **options, "tol": tol, "maxiter": maxiter}
-    try:
-        opts = np.array([float(values.get(k, 0.0)) for k in _OPTION_ORDER])
-    except (TypeError, ValueError, OverflowError):
-        return None
-    if method == "bfgs" and not float(values["maxls"]).is_integer():
-        return None
-    if key is not None and len(_OPTS) < 1000:
+    opts = methods.pack(method, tol, maxiter, options)
+    if opts is not None and key is not None and len(_OPTS) < 1000:
         _OPTS[key] = opts
     return opts
+
+
+def _single(kernel: Any, method: str) -> Any:
+    """The compiled single-pose entry of ``kernel`` and ``method`` (the numba function itself once
+    it has loaded, which saves the loader's check on every later call)."""
+    fn = _ONE.get((kernel.module, method))
+    if fn is None:
+        fn = entries_of(kernel.module, method).one
+        if fn.ready:
+            fn = _ONE[kernel.module, method] = fn.fn
+    return fn
 
 
 def solve_one(
@@ -120,10 +115,7 @@ def solve_one(
     by :func:`parakin.solvers.verify.judge_one` (the rules of :func:`~parakin.solvers.verify.verify`).
     Returns the 0-d :class:`~parakin.solvers.result.FKResult` or ``None`` where this path does
     not apply (then the general path runs). ``start``: the caller's ``perf_counter`` at entry."""
-    if method not in METHODS or not (isinstance(joints, (np.ndarray, list, tuple))):
-        return None
-    allowed = METHODS[method]
-    if any(k not in allowed for k in options):
+    if method not in methods.COMPILED or not (isinstance(joints, (np.ndarray, list, tuple))):
         return None
     kernel = kernel_of(mech)
     if kernel is None:
@@ -138,14 +130,11 @@ def solve_one(
         return None
     if q.shape != (kernel.n_joints,) or x0.shape != (kernel.n_pose,):
         return None
-    fn = _ONE.get((kernel.module, method))
-    if fn is None:
-        fn = _ONE[kernel.module, method] = getattr(loops_of(kernel), f"{method}_one")
     x = np.empty(kernel.n_pose)
     info = np.zeros(6, dtype=np.int64)  # status, nit, nfev, njev, in domain, on assembly
     out = np.empty(2)  # residual, joint error
-    fn(kernel.params, q, x0, opts, x, info, out)
-    if info[0] == 999:  # non-finite joints or start: the general path marks the row
+    _single(kernel, method)(kernel.params, q, x0, opts, x, info, out)
+    if info[0] == methods.BAD_INPUT:  # joints or start not finite: the general path marks it
         return None
     jtol = default_joint_tol(tol, options) if joint_tol is None else float(joint_tol)
     status = judge_one(int(info[0]), bool(info[4]), bool(info[5]), float(out[1]), jtol)

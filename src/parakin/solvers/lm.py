@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from parakin.kernels.methods import DEFAULTS
 from parakin.mechanisms.base import Array, Mechanism
 from parakin.solvers.newton import solve_linear
 from parakin.solvers.result import Evaluator, FKResult, State, StepInfo, inf_norm, iterate
@@ -77,9 +78,9 @@ def levenberg_marquardt(
     *,
     tol: float,
     maxiter: int,
-    tau: float = 1e-9,
-    xtol: float = 0.0,
-    gtol: float = 0.0,
+    tau: float = DEFAULTS["tau"],
+    xtol: float = DEFAULTS["xtol"],
+    gtol: float = DEFAULTS["gtol"],
     callback: Callable[[int, Array, Array], Any] | None = None,
 ) -> FKResult:
     """Levenberg-Marquardt on ``min |residual(x, q)|^2 / 2``.

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from parakin.kernels.methods import DEFAULTS
 from parakin.mechanisms.base import Array, Mechanism
 from parakin.solvers.gauss_newton import lstsq_step
 from parakin.solvers.result import Evaluator, FKResult, State, StepInfo, inf_norm, iterate
@@ -61,7 +62,7 @@ def newton(
     *,
     tol: float,
     maxiter: int,
-    xtol: float = 0.0,
+    xtol: float = DEFAULTS["xtol"],
     callback: Callable[[int, Array, Array], Any] | None = None,
 ) -> FKResult:
     """Newton-Raphson on ``residual(x, q) = 0`` (Dennis & Schnabel 1996, ch. 5, Alg. 5.1.1).

@@ -345,17 +345,17 @@ def pso(
 
 
 def _compiled(mech: Mechanism, inertia: Any, x: Array, joints: Array):
-    """``(kernel, loops)`` where the compiled PSO loop applies: a mechanism with kernels, the
+    """``(kernel, entries)`` where the compiled PSO loop applies: a mechanism with kernels, the
     default fitness (eq. 20), no callback, and a schedule whose weights do not depend on which
     runs are still going ("constant", "linear", :class:`ChaoticLogistic`); else None."""
     if not (isinstance(inertia, ChaoticLogistic) or inertia in ("constant", "linear")):
         return None
-    from parakin.kernels import kernel_of, loops_of
+    from parakin.kernels import entries_of, kernel_of
 
     kernel = kernel_of(mech)
     if kernel is None or kernel.n_pose != x.shape[-1] or kernel.n_joints != joints.shape[-1]:
         return None
-    return kernel, loops_of(kernel)
+    return kernel, entries_of(kernel.module, "pso")
 
 
 def _compiled_loop(

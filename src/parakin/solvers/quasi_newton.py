@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from parakin.kernels.methods import DEFAULTS
 from parakin.mechanisms.base import Array, Mechanism
 from parakin.solvers.newton import newton_direction, solve_linear
 from parakin.solvers.result import Evaluator, FKResult, State, StepInfo, inf_norm, iterate
@@ -97,7 +98,7 @@ def broyden(
     *,
     tol: float,
     maxiter: int,
-    xtol: float = 0.0,
+    xtol: float = DEFAULTS["xtol"],
     update: str = "direct",
     callback: Callback | None = None,
 ) -> FKResult:
@@ -237,12 +238,12 @@ def bfgs(
     *,
     tol: float,
     maxiter: int,
-    xtol: float = 0.0,
-    gtol: float = 0.0,
-    c1: float = 1e-4,
-    shrink: float = 0.5,
-    maxls: int = 30,
-    reg: float = 1e-10,
+    xtol: float = DEFAULTS["xtol"],
+    gtol: float = DEFAULTS["gtol"],
+    c1: float = DEFAULTS["c1"],
+    shrink: float = DEFAULTS["shrink"],
+    maxls: int = int(DEFAULTS["maxls"]),
+    reg: float = DEFAULTS["reg"],
     callback: Callback | None = None,
 ) -> FKResult:
     """BFGS minimising ``f(x) = |residual(x, q)|^2 / 2`` (Nocedal & Wright 2006, Alg. 6.1).

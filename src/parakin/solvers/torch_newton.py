@@ -46,7 +46,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from parakin.errors import ShapeError
-from parakin.kernels import one_source, torch_kernel
+from parakin.kernels import torch_kernel
 from parakin.mechanisms.base import Mechanism
 from parakin.solvers.result import FKResult, Status, summarize
 
@@ -85,8 +85,7 @@ def torch_residual(mech: Mechanism) -> ResidualFn:
     """``mech.residual`` on torch tensors: ``f(pose (..., n), joints (..., m)) -> (..., m)``.
 
     The mechanism's kernel (:meth:`Mechanism.kernel`, run by :func:`parakin.kernels.torch_kernel`)
-    where it has one written once for all paths (:func:`parakin.kernels.one_source`), else its
-    own :meth:`Mechanism.torch_residual`. It works in the dtype and on
+    where it has one, else its own :meth:`Mechanism.torch_residual`. It works in the dtype and on
     the device of ``pose`` (float64 matches numpy to rounding), is batched over any leading axes
     and composes with ``torch.func`` (vmap, jacfwd, jacrev). Raises NotImplementedError where the
     mechanism has neither (``kernel()`` returns ``None`` for a subclass of a mechanism with
@@ -94,7 +93,7 @@ def torch_residual(mech: Mechanism) -> ResidualFn:
     """
     _need_torch()
     k = mech.kernel()
-    if k is not None and one_source(k.module):
+    if k is not None:
         return torch_kernel(k)[0]
     fun = mech.torch_residual()
     if fun is None:
@@ -110,7 +109,7 @@ def torch_jacobian(mech: Mechanism) -> Callable[[Tensor, Tensor], Tensor] | None
     mechanism's kernel; ``None`` without one."""
     _need_torch()
     k = mech.kernel()
-    return torch_kernel(k)[1] if k is not None and one_source(k.module) else None
+    return torch_kernel(k)[1] if k is not None else None
 
 
 # ============================================================================ the solver

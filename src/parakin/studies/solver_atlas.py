@@ -20,10 +20,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from parakin import mechanisms
 from parakin.atlas import BASELINE, SCENARIOS, AtlasCase, run_atlas, standard_solvers
 from parakin.config import rng, seed_for
 from parakin.io import atomic_write_text, markdown_table, write_csv, write_table
-from parakin.mechanisms import P3P4S, Stewart66
 from parakin.mechanisms.base import Array, Mechanism
 from parakin.registry import TIMING, Tolerance, artefact
 
@@ -75,27 +75,34 @@ def _box(mech: Mechanism, fraction: float) -> tuple[Array, Array]:
     return np.maximum(lo, home - half), np.minimum(hi, home + half)
 
 
-def atlas_cases(config: dict, *, network: bool = True) -> list[AtlasCase]:
-    """The four papers' mechanisms as the pipeline configures them, each with every solver that
-    applies. The 12-leg cube is solved from its six active legs of the 6-leg drive mode (the
-    linear closed form needs all twelve, so it has none here); the 3-P(4S) also gets the hybrid
-    with the network the pipeline trained, when ``network`` and the file exists."""
+def paper_setups(config: dict) -> dict[str, Mechanism]:
+    """The papers' mechanisms as the pipeline configures them, by CLI name. The 12-leg cube is
+    solved from its six active legs of the 6-leg drive mode (the linear closed form needs all
+    twelve, so it has none here)."""
     from parakin.mechanisms.stewart12 import ActiveLegs
     from parakin.papers import li2017_stewart36, li2020_2ups, ye_stewart12
 
-    cfg = config[KEY]["solver_atlas"]
     passive = ye_stewart12.common.passive_sets(config)[0]
-    mechs = {
-        "3p4s": P3P4S(),
+    return {
+        "3p4s": mechanisms.P3P4S(),
         "2ups": li2020_2ups.common.mech(config),
         "stewart12": ActiveLegs(
             mech=ye_stewart12.common.mech(config),
             active=tuple(k for k in range(1, 13) if k not in passive),
         ),
         "stewart36": li2017_stewart36.common.mech(config),
-        # beyond the papers: the general 6-6 platform (Dietmaier's, 40 real assemblies)
-        "stewart66": Stewart66(),
     }
+
+
+def atlas_cases(config: dict, *, network: bool = True) -> list[AtlasCase]:
+    """Every registered mechanism (:data:`parakin.mechanisms.REGISTRY`), the papers' as the
+    pipeline configures them (:func:`paper_setups`) and first, each with every solver that
+    applies: a mechanism registered later gets its rows here by itself (its pose box the whole of
+    ``pose_bounds()`` unless ``box_fraction`` names it). The 3-P(4S) also gets the hybrid with
+    the network the pipeline trained, when ``network`` and the file exists."""
+    cfg = config[KEY]["solver_atlas"]
+    mechs = paper_setups(config)
+    mechs.update({n: cls() for n, cls in mechanisms.REGISTRY.items() if n not in mechs})
     net = None
     if network:
         from parakin.nn import load_network
@@ -106,7 +113,7 @@ def atlas_cases(config: dict, *, network: bool = True) -> list[AtlasCase]:
         net = load_network(network_path(config), fallback=True)
     cases = []
     for key, mech in mechs.items():
-        box = _box(mech, cfg["box_fraction"][key])
+        box = _box(mech, cfg["box_fraction"].get(key, 1.0))
         solvers = standard_solvers(
             mech,
             pso_swarm=cfg["pso"]["swarm"],

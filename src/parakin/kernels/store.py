@@ -1,0 +1,259 @@
+"""Where compiled code is kept, and why it can be trusted: one directory, checked on every use.
+
+Layout of the cache directory (:func:`root`)::
+
+    <root>/numba/                  numba's cache of parakin's own ``cache=True`` modules
+    <root>/<kernel>-<hash>/<what>/ one kernel's compiled functions and the solver entries over it
+
+``<hash>`` is a digest of every source that goes into the machine code (the kernel module,
+``_math``, the drivers, the entries, the options table) and of the numba and Python versions:
+an edited kernel, driver or library is a new directory, never a stale build (numba itself checks
+only the file a function is defined in; a driver compiled over a kernel of another file would be
+served after that kernel changed). Older builds of the same kernel are removed when a new one is
+made. A cache entry that cannot be read (a corrupt index or data file) is removed and rebuilt, with
+a one-line notice (:func:`first_call`).
+
+The directory is ``$PARAKIN_KERNEL_CACHE``, else the per-user cache of ``platformdirs``
+(``~/.cache/parakin/kernels`` on Linux). Where it cannot be written, the per-user cache, then a
+temporary directory, then none (the numpy path: :func:`root` returns ``None``), each step with a
+one-line notice on the ``parakin.kernels`` logger. Numba's own cache directory
+(``NUMBA_CACHE_DIR``) is pointed at ``<root>/numba`` when this module is imported, before any
+parakin module decorates a function, so no cache lands beside the sources.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import shutil
+import sys
+import tempfile
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from functools import cache
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+__all__ = ["clear", "digest", "first_call", "kernel_dir", "numba_cache", "root", "status"]
+
+log = logging.getLogger("parakin.kernels")
+
+#: what a kernel's directory name ends in: ``-`` and this many hex digits of its hash
+HASH_DIGITS = 16
+_LOCK = threading.RLock()
+
+
+def _notice(message: str) -> None:
+    """One line on the ``parakin.kernels`` logger (stderr unless the application configures
+    logging)."""
+    log.warning("parakin: %s", message)
+
+
+def _writable(path: Path) -> str | None:
+    """None where ``path`` is (or can be made) a directory we may write, else why not."""
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path):
+            pass
+    except OSError as exc:
+        return exc.strerror or type(exc).__name__
+    return None
+
+
+def _user_dir() -> Path:
+    try:
+        import platformdirs
+    except ImportError:  # platformdirs is a dependency; XDG as a last resort
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        return Path(base) / "parakin" / "kernels"
+    return Path(platformdirs.user_cache_dir("parakin", appauthor=False)) / "kernels"
+
+
+def _candidates() -> list[tuple[str, Path]]:
+    """``(label, path)`` in the order tried."""
+    out = []
+    env = os.environ.get("PARAKIN_KERNEL_CACHE")
+    if env:
+        out.append(("$PARAKIN_KERNEL_CACHE", Path(env)))
+    out.append(("the per-user cache", _user_dir()))
+    user = f"{os.getuid()}" if hasattr(os, "getuid") else "user"
+    out.append(("a temporary directory", Path(tempfile.gettempdir()) / f"parakin-kernels-{user}"))
+    return out
+
+
+@cache
+def root() -> Path | None:
+    """The cache directory (created), or ``None`` where no candidate can be written (then the
+    compiled path is off). Resolved once per process."""
+    for i, (label, path) in enumerate(_candidates()):
+        why = _writable(path)
+        if why is None:
+            return path
+        nxt = _candidates()[i + 1][0] if i + 1 < len(_candidates()) else "the numpy path"
+        _notice(f"kernel cache {path} ({label}) is not writable ({why}); using {nxt}")
+    return None
+
+
+def _numba_default() -> None:
+    """Point numba's cache at ``<root>/numba`` (parakin's plain ``cache=True`` modules, e.g.
+    :mod:`parakin.kernels.stewart36_all`): through the environment before numba is imported, in
+    its config after. Without a writable root numba keeps its own choice."""
+    where = root()
+    if where is None:
+        return
+    path = str(where / "numba")
+    if "numba" in sys.modules and sys.modules["numba"] is not None:
+        sys.modules["numba"].config.CACHE_DIR = path
+    else:
+        os.environ["NUMBA_CACHE_DIR"] = path
+
+
+def _source(module: ModuleType) -> bytes:
+    path = getattr(module, "__file__", None)
+    if path and os.path.exists(path):
+        return Path(path).read_bytes()
+    import inspect
+
+    return inspect.getsource(module).encode()
+
+
+def digest(*modules: ModuleType) -> str:
+    """Hash of the sources of ``modules`` and of the numba and Python versions (hex, truncated)."""
+    import numba
+
+    h = hashlib.sha256()
+    for mod in modules:
+        h.update(mod.__name__.encode() + b"\0" + _source(mod) + b"\0")
+    h.update(f"numba {numba.__version__} python {sys.version}".encode())
+    return h.hexdigest()[:HASH_DIGITS]
+
+
+def kernel_dir(name: str, hash_: str) -> Path:
+    """``<root>/<name>-<hash>``, created; older builds of ``name`` removed."""
+    base = root()
+    assert base is not None, "kernel_dir() without a cache root (enabled() is False)"
+    path = base / f"{name}-{hash_}"
+    if not path.exists():
+        _prune(base, name)
+        path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def _is_build(path: Path, name: str) -> bool:
+    """Whether ``path`` is a kernel directory of ``name`` (``name-`` + hex hash)."""
+    tail = path.name[len(name) + 1 :]
+    return (
+        path.name.startswith(name + "-")
+        and len(tail) == HASH_DIGITS
+        and all(c in "0123456789abcdef" for c in tail)
+    )
+
+
+def _prune(base: Path, name: str) -> None:
+    """Remove the builds of ``name`` made from other sources: their hash no longer matches."""
+    for old in base.glob(f"{name}-*"):
+        if _is_build(old, name):
+            shutil.rmtree(old, ignore_errors=True)  # another process may be there first
+
+
+@contextmanager
+def numba_cache(path: Path) -> Iterator[None]:
+    """numba functions decorated inside this block keep their on-disk cache in ``path`` (numba
+    reads ``config.CACHE_DIR`` when a function is decorated)."""
+    import numba
+
+    with _LOCK:
+        old = numba.config.CACHE_DIR
+        numba.config.CACHE_DIR = str(path)
+        try:
+            yield
+        finally:
+            numba.config.CACHE_DIR = old
+
+
+def first_call(fn: Callable[..., Any], where: Path, *args: Any) -> Any:
+    """``fn(*args)`` for the first time (numba loads it from its cache under ``where`` or compiles
+    it). Where that fails and ``where`` holds cached files, a cache entry could not be read
+    (truncated, garbage, written by another build): ``where`` is removed and the call made again,
+    with a one-line notice. A failure with an empty cache (a genuine compile error) is raised."""
+    try:
+        return fn(*args)
+    except Exception as exc:
+        if not where.exists() or not any(where.rglob("*.nb*")):
+            raise
+        cause = exc
+        while cause.__context__ is not None and "numba" in type(cause).__module__:
+            cause = cause.__context__  # numba wraps what went wrong while loading a callee
+        _notice(
+            f"kernel cache {where} could not be read ({type(cause).__name__}: "
+            f"{' '.join(str(cause).split())[:80]}); rebuilt"
+        )
+        shutil.rmtree(where, ignore_errors=True)
+        return fn(*args)
+
+
+def _one(x):
+    return x + 1.0
+
+
+def warm_numba() -> None:
+    """Start numba in this process (its import and the loading of its typing and lowering
+    registries, about 0.5-1 s) with a trivial function cached under ``<root>/numba``: what a
+    process pays once before its first compiled call; a server that forks its jobs pays it for
+    all of them (:mod:`parakin.launch`)."""
+    import numba
+
+    base = root()
+    if base is None:
+        return
+    with numba_cache(base / "numba"):  # the rest of numba's own caches
+        numba.njit(cache=True)(_one)(1.0)
+
+
+def _size(path: Path) -> int:
+    return sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
+
+
+def _ours(base: Path) -> list[tuple[Path, str, str]]:
+    """``(path, name, hash)`` of every directory of ``base`` that parakin made: the kernel builds
+    and numba's part (hash ``""``); anything else there is left alone."""
+    out = []
+    for path in sorted(p for p in base.iterdir() if p.is_dir()):
+        name, _, hash_ = path.name.rpartition("-")
+        if _is_build(path, name):
+            out.append((path, name, hash_))
+        elif path.name == "numba":
+            out.append((path, "numba", ""))
+    return out
+
+
+def status() -> dict[str, Any]:
+    """The cache directory, the builds in it (name, hash, files, bytes) and numba's part."""
+    base = root()
+    out: dict[str, Any] = {"root": None if base is None else str(base), "builds": []}
+    if base is None or not base.exists():
+        return out
+    for path, name, hash_ in _ours(base):
+        files = [f for f in path.rglob("*") if f.is_file()]
+        out["builds"].append(
+            {"name": name, "hash": hash_, "files": len(files), "bytes": _size(path)}
+        )
+    return out
+
+
+def clear() -> int:
+    """Remove every build and numba's part of the cache (nothing else); returns the bytes freed."""
+    base = root()
+    if base is None or not base.exists():
+        return 0
+    freed = 0
+    for path, _, _ in _ours(base):
+        freed += _size(path)
+        shutil.rmtree(path, ignore_errors=True)
+    return freed
+
+
+_numba_default()

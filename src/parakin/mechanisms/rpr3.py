@@ -1,0 +1,122 @@
+"""The planar 3-RPR parallel mechanism: a platform held in the plane by three legs, each a revolute
+joint on the base, an actuated prismatic joint and a revolute joint on the platform.
+
+Beyond the four papers: the textbook planar parallel mechanism (Gosselin & Angeles 1988; Merlet,
+*Parallel Robots*, 2006, ch. 4), added as the worked example of docs/kernels.md. Its geometry is
+declared once here, its equations once in :mod:`parakin.kernels.rpr3`; everything else (the
+numpy methods, every FK solver, compiled and torch, the CLI, the tests, the solver atlas) follows.
+
+Default geometry (ours, symmetric): base pivots on a circle of radius 0.5 m at 90, 210 and 330 deg,
+platform pivots on a circle of radius 0.2 m turned 60 deg further, so that at home (the platform
+centred, ``phi = 0``) no leg points at the centre and the three leg lines do not meet: home is
+well away from a singularity. Forward kinematics is numeric (up to six assemblies share one set of
+leg lengths; the working one is home's side of the singularity locus, see ``on_assembly``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import ModuleType
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from parakin.kernels import Kernel, evaluate
+from parakin.kernels import rpr3 as kernels
+from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch
+
+__all__ = ["RPR3"]
+
+
+def _circle(radius: float, degrees: ArrayLike) -> tuple[tuple[float, float], ...]:
+    t = np.deg2rad(np.asarray(degrees, dtype=float))
+    return tuple(zip((radius * np.cos(t)).tolist(), (radius * np.sin(t)).tolist()))
+
+
+def _points(values: Any, what: str) -> tuple[tuple[float, float], ...]:
+    a = np.asarray(values, dtype=float)
+    if a.shape != (3, 2) or not np.all(np.isfinite(a)):
+        raise ValueError(f"{what} must be 3 finite points (x, y) in metres, got {values!r:.80}")
+    return tuple(map(tuple, a.tolist()))
+
+
+@dataclass(frozen=True)
+class RPR3(Mechanism):
+    """Planar 3-RPR: ``base`` pivots ``B_i`` (3, 2) in the fixed frame and ``platform`` pivots
+    ``a_i`` (3, 2) in the platform frame, metres. Pose ``(x, y, phi)`` (m, m, rad), joints the leg
+    lengths ``rho_1..3`` (m)."""
+
+    base: Any = _circle(0.5, [90.0, 210.0, 330.0])
+    platform: Any = _circle(0.2, [150.0, 270.0, 30.0])
+
+    name: ClassVar[str] = "rpr3"
+    pose_names: ClassVar[tuple[str, ...]] = ("x", "y", "phi")
+    joint_names: ClassVar[tuple[str, ...]] = ("rho1", "rho2", "rho3")
+    pose_units: ClassVar[tuple[str, ...]] = ("m", "m", "rad")
+    joint_units: ClassVar[tuple[str, ...]] = ("m", "m", "m")
+    paper_pose_units: ClassVar[tuple[str, ...]] = ("mm", "mm", "deg")  # no paper: the usual units
+    paper_joint_units: ClassVar[tuple[str, ...]] = ("mm", "mm", "mm")
+    kernels: ClassVar[ModuleType] = kernels
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "base", _points(self.base, "base"))
+        object.__setattr__(self, "platform", _points(self.platform, "platform"))
+        home_det = self._home_det()
+        if not abs(home_det) > 1e-9:
+            raise ValueError(
+                f"the home pose (0, 0, 0) of this geometry is singular (det(d rho / d pose) = "
+                f"{home_det:.3g}): the leg lines meet in one point or are parallel"
+            )
+
+    def _home_det(self) -> float:
+        """``det(d rho / d pose)`` at home, by the kernel (its sign is not a parameter yet)."""
+        p = np.concatenate([np.ravel(self.base), np.ravel(self.platform), [1.0]])
+        jac = evaluate(Kernel(kernels, p, 3, 3), "jacobian", self.home(), np.zeros(3))
+        return float(np.linalg.det(jac))
+
+    def kernel_params(self) -> Array:
+        """Base pivots, platform pivots, and the sign of the home pose's Jacobian determinant."""
+        sign = np.sign(self._home_det())
+        return np.concatenate([np.ravel(self.base), np.ravel(self.platform), [sign]])
+
+    def home(self) -> Array:
+        """The platform centred over the base, not turned."""
+        return np.zeros(3)
+
+    def pose_bounds(self) -> tuple[Array, Array]:
+        """``|x|, |y| <= 0.1`` m, ``|phi| <= 20`` deg around home: the default geometry's working
+        region, on home's side of the singularity locus."""
+        return np.array([-0.1, -0.1, -np.deg2rad(20.0)]), np.array([0.1, 0.1, np.deg2rad(20.0)])
+
+    def platform_world(self, pose: ArrayLike) -> Array:
+        """The platform pivots in the fixed frame, shape (..., 3, 2)."""
+        x = as_batch(pose, 3, "pose")
+        c, s = np.cos(x[..., 2])[..., None], np.sin(x[..., 2])[..., None]
+        a = np.asarray(self.platform)
+        return np.stack(
+            [
+                x[..., None, 0] + c * a[:, 0] - s * a[:, 1],
+                x[..., None, 1] + s * a[:, 0] + c * a[:, 1],
+            ],
+            axis=-1,
+        )
+
+    def skeleton(self, pose: ArrayLike) -> Skeleton:
+        """The base and platform triangles and the three legs, in the plane ``z = 0``."""
+        x = as_batch(pose, 3, "pose")
+        if x.ndim != 1:
+            raise ValueError(f"skeleton() draws one pose, got a batch of shape {x.shape[:-1]}")
+        self.ik(x)  # an unreachable pose is an error, not a drawing
+        flat = np.zeros((3, 1))
+        b = np.hstack([np.asarray(self.base), flat])
+        p = np.hstack([self.platform_world(x), flat])
+        points = {f"B_{i + 1}": b[i] for i in range(3)} | {f"P_{i + 1}": p[i] for i in range(3)}
+        c, s = np.cos(x[2]), np.sin(x[2])
+        turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        return Skeleton(
+            points=points,
+            segments=[("actuator", np.stack([b[i], p[i]])) for i in range(3)],
+            polygons=[("base", b), ("platform", p)],
+            frames={"O": (np.zeros(3), np.eye(3)), "P": (np.array([x[0], x[1], 0.0]), turn)},
+        )

@@ -1,0 +1,234 @@
+"""The kernel cache cannot lie (issue 30): every fault planted here ends in a right answer, or a
+right answer and a one-line notice, never a traceback and never a stale or edited build.
+
+The faults: a cache directory that cannot be written, a filled cache that is read-only, a corrupt
+numba index or data file, a kernel edited on disk, and numba caches beside the sources. Each runs
+in a fresh process with its own cache directory (``PARAKIN_KERNEL_CACHE``); the compiled solves
+use the toy two-leg kernel of ``tests/data/toy_kernels.py`` (small: it compiles in seconds). No
+timing is asserted.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import stat
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("numba")
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "tests" / "data"
+
+#: a compiled Newton solve of the toy kernel in a fresh process: prints the answer's error
+SOLVE = textwrap.dedent(
+    """
+    import numpy as np
+    from parakin import kernels
+    from parakin.solvers import solve_fk
+    from toy_mechanism import KernelTwoLeg as Toy
+
+    m = Toy()
+    truth = np.array([0.1, 0.9])
+    res = solve_fk(m, m.ik(truth), method="newton")
+    print("compiled" if kernels.kernel_of(m) is not None else "numpy")
+    print(f"error {float(np.abs(res.x - truth).max()):.3g} success {bool(res.success)}")
+    """
+)
+
+
+def _env(cache: Path, **extra: str) -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "PARAKIN_KERNELS")}
+    env.update(
+        PARAKIN_KERNEL_CACHE=str(cache),
+        PYTHONPATH=os.pathsep.join([str(DATA), str(ROOT / "src"), env.get("PYTHONPATH", "")]),
+        XDG_CACHE_HOME=str(cache.parent / "xdg"),  # the per-user fallback, inside the test's dir
+    )
+    env.update(extra)
+    return env
+
+
+def _run(code: str, env: dict[str, str], cwd: Path) -> subprocess.CompletedProcess:
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, cwd=cwd, capture_output=True, text=True, timeout=900
+    )
+    assert "Traceback" not in out.stderr, out.stderr[-3000:]
+    assert out.returncode == 0, out.stderr[-3000:]
+    return out
+
+
+def _notices(stderr: str) -> list[str]:
+    return [line for line in stderr.splitlines() if line.startswith("parakin:")]
+
+
+def _solved(out: subprocess.CompletedProcess, path: str = "compiled") -> None:
+    lines = out.stdout.split("\n")
+    assert lines[0] == path, out.stdout
+    error = float(lines[1].split()[1])
+    assert error < 1e-9 and lines[1].endswith("success True"), out.stdout
+
+
+@pytest.fixture(scope="module")
+def warm(tmp_path_factory) -> Path:
+    """A cache filled by one compiled solve of the toy kernel (copied by the tests that break it)."""
+    cache = tmp_path_factory.mktemp("warm") / "cache"
+    out = _run(SOLVE, _env(cache), cache.parent)
+    _solved(out)
+    assert not _notices(out.stderr), out.stderr
+    return cache
+
+
+def _copy(warm: Path, tmp_path: Path) -> Path:
+    cache = tmp_path / "cache"
+    shutil.copytree(warm, cache)
+    return cache
+
+
+def test_warm_cache_is_used_and_lives_in_one_directory(warm, tmp_path):
+    """The second process solves from the cache; every compiled file is under the cache directory
+    (kernel builds named by their hash, numba's own part in numba/), none beside the sources."""
+    cache = _copy(warm, tmp_path)
+    before = {p: p.stat().st_mtime_ns for p in cache.rglob("*.nb*")}
+    out = _run(SOLVE, _env(cache), tmp_path)
+    _solved(out)
+    assert not _notices(out.stderr)
+    assert {p: p.stat().st_mtime_ns for p in cache.rglob("*.nb*")} == before  # loaded, not rebuilt
+    builds = [p.name for p in cache.iterdir() if p.is_dir()]
+    assert any(b.startswith("toy_kernels-") for b in builds), builds
+    assert not list((ROOT / "src").rglob("*.nbi")) and not list((ROOT / "src").rglob("*.nbc"))
+    assert not list(DATA.rglob("*.nbi"))
+
+
+def test_unwritable_cache_directory_falls_back_with_a_notice(tmp_path):
+    """PARAKIN_KERNEL_CACHE under a regular file (cannot be created, whoever runs the test): one
+    notice line, then the per-user cache."""
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    code = (
+        "from parakin.kernels import store\n"
+        "print(store.root())\n"
+        "from parakin.mechanisms import P3P4S\n"
+        "m = P3P4S(); print(abs(m.fk(m.ik([0.01, 0.0, 0.58]))[0] - 0.01) < 1e-12)\n"
+    )
+    out = _run(code, _env(blocker / "cache", XDG_CACHE_HOME=str(tmp_path / "xdg")), tmp_path)
+    notes = _notices(out.stderr)
+    assert len(notes) == 1 and "is not writable" in notes[0] and "per-user cache" in notes[0]
+    assert out.stdout.split() == [str(tmp_path / "xdg" / "parakin" / "kernels"), "True"]
+
+
+def test_no_writable_location_runs_the_numpy_path(tmp_path, monkeypatch, caplog):
+    """Every candidate unwritable (as no user can make them writable: paths under a regular file):
+    one notice per step, then the compiled path is off and the numpy path answers."""
+    import numpy as np
+
+    from parakin import kernels
+    from parakin.kernels import store
+    from parakin.mechanisms import P3P4S
+    from parakin.solvers import solve_fk
+
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    paths = [("a", blocker / "a"), ("b", blocker / "b"), ("c", blocker / "c")]
+    monkeypatch.setattr(store, "_candidates", lambda: paths)
+    store.root.cache_clear()
+    try:
+        with caplog.at_level("WARNING", logger="parakin.kernels"):
+            assert store.root() is None and not kernels.enabled()
+        notes = [r.getMessage() for r in caplog.records]
+        assert len(notes) == 3 and notes[-1].endswith("using the numpy path"), notes
+        m = P3P4S()
+        truth = np.array([0.01, -0.02, 0.58])
+        res = solve_fk(m, m.ik(truth), method="newton")
+        assert res.success and np.abs(res.x - truth).max() < 1e-9
+    finally:
+        store.root.cache_clear()
+
+
+def test_read_only_filled_cache_falls_back_with_a_notice(warm, tmp_path):
+    cache = _copy(warm, tmp_path)
+    for p in [cache, *cache.rglob("*")]:
+        p.chmod(p.stat().st_mode & ~(stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH))
+    try:
+        probe = cache / "probe"
+        try:
+            probe.mkdir()
+        except OSError:
+            pass
+        else:
+            pytest.skip("this user writes into read-only directories (root)")
+        out = _run(SOLVE, _env(cache), tmp_path)
+    finally:
+        for p in [cache, *cache.rglob("*")]:
+            p.chmod(p.stat().st_mode | stat.S_IWUSR)
+    notes = _notices(out.stderr)
+    assert len(notes) == 1 and "is not writable" in notes[0], out.stderr
+    _solved(out)
+
+
+@pytest.mark.parametrize("what", ["index", "data"])
+def test_corrupt_cache_file_is_rebuilt_with_a_notice(warm, tmp_path, what):
+    """A numba index (.nbi) or data file (.nbc) of the build overwritten with garbage: the solve
+    rebuilds that entry (one notice line) and answers right; the next process is quiet again."""
+    cache = _copy(warm, tmp_path)
+    files = sorted(cache.rglob("*.nbi" if what == "index" else "*.nbc"))
+    assert files
+    for f in files:
+        f.write_bytes(b"\x80\x04garbage, not a pickle" * 3)
+    out = _run(SOLVE, _env(cache), tmp_path)
+    _solved(out)
+    notes = _notices(out.stderr)
+    assert notes and all("could not be read" in n and "rebuilt" in n for n in notes), out.stderr
+    again = _run(SOLVE, _env(cache), tmp_path)
+    _solved(again)
+    assert not _notices(again.stderr)
+
+
+def test_a_kernel_edited_on_disk_is_never_served_stale(warm, tmp_path):
+    """The kernel module changed after its build was cached (its assembly test now rejects every
+    pose below y = 5 m): the edited source gets a build of its own (a new hash), and the answer is
+    the edited kernel's (a wrong assembly, not the success a stale build would report)."""
+    cache = _copy(warm, tmp_path)
+    data = tmp_path / "data"
+    shutil.copytree(DATA, data, ignore=shutil.ignore_patterns("__pycache__"))
+    kern = data / "toy_kernels.py"
+    text = kern.read_text()
+    marker = '"""Every pose of the domain is the working assembly."""\n    return x[1] > 0'
+    assert marker in text
+    kern.write_text(text.replace(marker, marker.replace("x[1] > 0", "x[1] > 5.0")))
+    env = _env(cache)
+    env["PYTHONPATH"] = env["PYTHONPATH"].replace(str(DATA), str(data))
+    out = _run(SOLVE.replace("success {", "status {int(res.status)} success {"), env, tmp_path)
+    lines = out.stdout.split("\n")
+    assert lines[0] == "compiled", out.stdout
+    assert lines[1].split()[2:] == ["status", "-6", "success", "False"], (
+        out.stdout
+    )  # WRONG_ASSEMBLY
+    builds = sorted(p.name for p in cache.iterdir() if p.name.startswith("toy_kernels-"))
+    assert len(builds) == 1 and builds[0] not in {p.name for p in warm.iterdir()}
+
+
+def test_cli_kernels_status_and_clear(warm, tmp_path):
+    cache = _copy(warm, tmp_path)
+    env = _env(cache)
+    status = subprocess.run(
+        [sys.executable, "-m", "parakin.cli", "kernels", "--status"],
+        env=env,
+        capture_output=True,
+        text=True,
+    )
+    assert status.returncode == 0 and str(cache) in status.stdout, status.stderr
+    assert "toy_kernels" in status.stdout
+    (cache / "unrelated").mkdir()  # --clear removes parakin's builds only
+    clear = subprocess.run(
+        [sys.executable, "-m", "parakin.cli", "kernels", "--clear"],
+        env=env,
+        capture_output=True,
+        text=True,
+    )
+    assert clear.returncode == 0 and "removed" in clear.stdout, clear.stderr
+    assert [p.name for p in cache.iterdir()] == ["unrelated"]

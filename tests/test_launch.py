@@ -1,0 +1,127 @@
+"""The job server (parakin.launch): a ``parakin reproduce`` job run by a fork of a warm process
+writes the same files, prints the same and exits with the same status as the job run on its own;
+a server refuses to run jobs on sources other than its own; no server, no change."""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from parakin import launch
+
+ROOT = Path(__file__).resolve().parents[1]
+CONFIG = ["--config", "config/config.yaml", "--config", "config/quick.yaml"]
+
+pytestmark = pytest.mark.skipif(not launch.supported(), reason="no fork/pidfd on this platform")
+
+
+def _env(**extra: str) -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if k != launch.ENV}
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
+    env.update(extra)
+    return env
+
+
+def _parakin(*args: str, env: dict[str, str]) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "parakin.launch", *args],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        timeout=600,
+    )
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    path = tmp_path_factory.mktemp("server") / "s.sock"
+    env = _env(PARAKIN_SERVER_IDLE="120")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "parakin.launch", "--serve", str(path)],
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
+    for _ in range(1200):  # the warm-up imports every study (seconds, more on a loaded machine)
+        if path.exists() or proc.poll() is not None:
+            break
+        time.sleep(0.1)
+    assert path.exists(), proc.stderr.read().decode() if proc.poll() is not None else "no socket"
+    yield path
+    proc.terminate()
+    proc.wait(timeout=30)
+
+
+def test_a_job_through_the_server_is_the_job_on_its_own(server, tmp_path):
+    job = ["reproduce", "ye_stewart12", "table1", *CONFIG]
+    alone = _parakin(*job, "--outdir", str(tmp_path / "alone"), env=_env())
+    served = _parakin(
+        *job, "--outdir", str(tmp_path / "served"), env=_env(PARAKIN_SERVER=str(server))
+    )
+    assert alone.returncode == served.returncode == 0, served.stdout + served.stderr
+    files = sorted(p.name for p in (tmp_path / "alone").iterdir())
+    assert files and files == sorted(p.name for p in (tmp_path / "served").iterdir())
+    for name in files:
+        assert (tmp_path / "alone" / name).read_bytes() == (tmp_path / "served" / name).read_bytes()
+    # the job's output comes back on stdout (its stderr merged in, as the pipeline logs it)
+    lines = (alone.stdout + alone.stderr).decode().splitlines()
+    assert sorted(served.stdout.decode().replace("served", "alone").splitlines()) == sorted(lines)
+
+
+def test_a_failing_job_gives_its_status_and_one_line(server):
+    served = _parakin(
+        "reproduce", "ye_stewart12", "nope", *CONFIG, env=_env(PARAKIN_SERVER=str(server))
+    )
+    assert served.returncode == 2
+    lines = served.stdout.decode().strip().splitlines()
+    assert len(lines) == 1 and "unknown artefact" in lines[0] and "Traceback" not in lines[0]
+
+
+def test_other_sources_are_refused_and_the_server_stops(tmp_path):
+    """A request made from other sources (another stamp) gets "stale"; the server then exits, and
+    the command runs on its own."""
+    path = tmp_path / "s.sock"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "parakin.launch", "--serve", str(path)],
+        cwd=ROOT,
+        env=_env(),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    for _ in range(1200):
+        if path.exists():
+            break
+        time.sleep(0.1)
+    conn = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    conn.connect(str(path))
+    request = {"argv": ["reproduce"], "cwd": str(ROOT), "env": {}, "stamp": "other sources"}
+    conn.sendall(json.dumps(request).encode() + b"\n")
+    assert conn.recv(16) == b"stale\n"
+    conn.close()
+    assert proc.wait(timeout=60) == 0 and not path.exists()
+
+
+def test_without_a_server_the_job_runs_itself_and_starts_one(tmp_path):
+    sock = tmp_path / "auto.sock"
+    job = ["reproduce", "ye_stewart12", "table1", *CONFIG, "--outdir", str(tmp_path / "out")]
+    env = _env(PARAKIN_SERVER=str(sock), PARAKIN_SERVER_IDLE="5")
+    first = _parakin(*job, env=env)
+    assert first.returncode == 0, first.stderr
+    assert (tmp_path / "out" / "table1.csv").exists()
+    assert sock.with_suffix(".log").exists()  # a server was started for the jobs to come
+
+
+def test_source_stamp_follows_the_sources(tmp_path):
+    (tmp_path / "a.py").write_text("x = 1\n")
+    before = launch.source_stamp(tmp_path)
+    time.sleep(0.01)
+    (tmp_path / "a.py").write_text("x = 22\n")
+    assert launch.source_stamp(tmp_path) != before
