@@ -28,9 +28,11 @@ continuation", Adv. Comput. Math. 47: the predictor and step-size rule of Homoto
 * **moving orthogonal chart**: each prediction is rescaled into the chart ``a = conj(x)/|x|``
   of the current point (projective tracking as in HomotopyContinuation.jl: the affine
   representative stays of norm ~1 and the chart adds no poles of its own);
-* **corrector**: three chord-Newton updates with the Jacobian at the predicted point; accepted when
-  the first is below ``kappa |x|`` and each contracts by ``theta``; ``omega = 2 |d_2| / |d_1|^2``
-  estimates the Newton constant; a rejected step halves.
+* **corrector**: two chord-Newton updates with the Jacobian at the predicted point (three on the
+  step reaching ``t = 1``, whose last update must be below ``end_tol |x|``); accepted when the
+  first is below ``kappa |x|`` and each contracts by ``theta`` (or is below the accuracy limit
+  ``noise |x|``); ``omega = 2 |d_2| / |d_1|^2`` estimates the Newton constant; a rejected step
+  halves.
 
 :func:`track_block` runs a queue of paths; :func:`refine_block` refines every endpoint by Newton and
 computes Smale's alpha (:func:`parakin.mechanisms.stewart66_homotopy.certify`) in lanes as well.
@@ -49,7 +51,7 @@ import numpy as np
 from numba import njit
 
 __all__ = [
-    "compressed",
+    "geometry",
     "track_block",
     "refine_block",
     "fk_all",
@@ -95,153 +97,235 @@ def options_vector(options: dict | None = None) -> np.ndarray:
 
 
 # ------------------------------------------------------------------------------ lane arithmetic
+# The loops run over lanes innermost; the sums over the 8 coordinates are written out (a loop there
+# would keep the lane loop from being vectorised), so that each lane loop is one long SIMD body.
+@njit(inline="always", **_O)
+def _row(Q, m, i, v, ln):
+    """``sum_j Q[m, i, j] v[j, ln]`` (``Q`` real)."""
+    return (
+        Q[m, i, 0] * v[0, ln]
+        + Q[m, i, 1] * v[1, ln]
+        + Q[m, i, 2] * v[2, ln]
+        + Q[m, i, 3] * v[3, ln]
+        + Q[m, i, 4] * v[4, ln]
+        + Q[m, i, 5] * v[5, ln]
+        + Q[m, i, 6] * v[6, ln]
+        + Q[m, i, 7] * v[7, ln]
+    )
+
+
+@njit(inline="always", **_O)
+def _cdot(ar, ai, m, br, bi, ln):
+    """``sum_j a[m, j, ln] b[j, ln]`` (complex, no conjugation): ``(re, im)``."""
+    re = (
+        (ar[m, 0, ln] * br[0, ln] - ai[m, 0, ln] * bi[0, ln])
+        + (ar[m, 1, ln] * br[1, ln] - ai[m, 1, ln] * bi[1, ln])
+        + (ar[m, 2, ln] * br[2, ln] - ai[m, 2, ln] * bi[2, ln])
+        + (ar[m, 3, ln] * br[3, ln] - ai[m, 3, ln] * bi[3, ln])
+        + (ar[m, 4, ln] * br[4, ln] - ai[m, 4, ln] * bi[4, ln])
+        + (ar[m, 5, ln] * br[5, ln] - ai[m, 5, ln] * bi[5, ln])
+        + (ar[m, 6, ln] * br[6, ln] - ai[m, 6, ln] * bi[6, ln])
+        + (ar[m, 7, ln] * br[7, ln] - ai[m, 7, ln] * bi[7, ln])
+    )
+    im = (
+        (ar[m, 0, ln] * bi[0, ln] + ai[m, 0, ln] * br[0, ln])
+        + (ar[m, 1, ln] * bi[1, ln] + ai[m, 1, ln] * br[1, ln])
+        + (ar[m, 2, ln] * bi[2, ln] + ai[m, 2, ln] * br[2, ln])
+        + (ar[m, 3, ln] * bi[3, ln] + ai[m, 3, ln] * br[3, ln])
+        + (ar[m, 4, ln] * bi[4, ln] + ai[m, 4, ln] * br[4, ln])
+        + (ar[m, 5, ln] * bi[5, ln] + ai[m, 5, ln] * br[5, ln])
+        + (ar[m, 6, ln] * bi[6, ln] + ai[m, 6, ln] * br[6, ln])
+        + (ar[m, 7, ln] * bi[7, ln] + ai[m, 7, ln] * br[7, ln])
+    )
+    return re, im
+
+
+@njit(inline="always", **_O)
+def _cdot2(ar, ai, br, bi, ln):
+    """``sum_j a[j, ln] b[j, ln]`` (complex, no conjugation): ``(re, im)``."""
+    re = (
+        (ar[0, ln] * br[0, ln] - ai[0, ln] * bi[0, ln])
+        + (ar[1, ln] * br[1, ln] - ai[1, ln] * bi[1, ln])
+        + (ar[2, ln] * br[2, ln] - ai[2, ln] * bi[2, ln])
+        + (ar[3, ln] * br[3, ln] - ai[3, ln] * bi[3, ln])
+        + (ar[4, ln] * br[4, ln] - ai[4, ln] * bi[4, ln])
+        + (ar[5, ln] * br[5, ln] - ai[5, ln] * bi[5, ln])
+        + (ar[6, ln] * br[6, ln] - ai[6, ln] * bi[6, ln])
+        + (ar[7, ln] * br[7, ln] - ai[7, ln] * bi[7, ln])
+    )
+    im = (
+        (ar[0, ln] * bi[0, ln] + ai[0, ln] * br[0, ln])
+        + (ar[1, ln] * bi[1, ln] + ai[1, ln] * br[1, ln])
+        + (ar[2, ln] * bi[2, ln] + ai[2, ln] * br[2, ln])
+        + (ar[3, ln] * bi[3, ln] + ai[3, ln] * br[3, ln])
+        + (ar[4, ln] * bi[4, ln] + ai[4, ln] * br[4, ln])
+        + (ar[5, ln] * bi[5, ln] + ai[5, ln] * br[5, ln])
+        + (ar[6, ln] * bi[6, ln] + ai[6, ln] * br[6, ln])
+        + (ar[7, ln] * bi[7, ln] + ai[7, ln] * br[7, ln])
+    )
+    return re, im
+
+
 @njit(**_O)
-def qtimes(q, cr, ci, vr, vi, yr, yi, n):
-    """``y[m, :, ln] = Q_m(c_l) v_l`` for lanes ``ln < n``; ``q = (ptr, col, val, ...)``: the real
-    quadrics without leg constants in compressed rows (row ``8 m + i``)."""
-    ptr, col, val = q[0], q[1], q[2]
+def qtimes(Q, cr, ci, vr, vi, yr, yi, scale, n):
+    """``y[m, :, ln] = scale Q_m(c_ln) v_ln`` for lanes ``ln < n``: ``Q`` (7, 8, 8) the real
+    quadrics without leg constants, ``c`` (6, L) each lane's leg constants (on the ``e`` block's
+    diagonal of quadrics 1..6)."""
     for m in range(7):
         for i in range(8):
-            row = 8 * m + i
-            for ln in range(n):
-                yr[m, i, ln] = 0.0
-                yi[m, i, ln] = 0.0
-            for k in range(ptr[row], ptr[row + 1]):
-                v = val[k]
-                j = col[k]
-                for ln in range(n):
-                    yr[m, i, ln] += v * vr[j, ln]
-                    yi[m, i, ln] += v * vi[j, ln]
             if m >= 1 and i < 4:
                 for ln in range(n):
                     a, b = cr[m - 1, ln], ci[m - 1, ln]
-                    yr[m, i, ln] += a * vr[i, ln] - b * vi[i, ln]
-                    yi[m, i, ln] += a * vi[i, ln] + b * vr[i, ln]
+                    yr[m, i, ln] = scale * (_row(Q, m, i, vr, ln) + a * vr[i, ln] - b * vi[i, ln])
+                    yi[m, i, ln] = scale * (_row(Q, m, i, vi, ln) + a * vi[i, ln] + b * vr[i, ln])
+            else:
+                for ln in range(n):
+                    yr[m, i, ln] = scale * _row(Q, m, i, vr, ln)
+                    yi[m, i, ln] = scale * _row(Q, m, i, vi, ln)
 
 
 @njit(**_O)
-def qvalues(q, cr, ci, vr, vi, pr, pi, hr, hi, n):
-    """``h[m] = v^T Q_m(c) v`` (m < 7) from the 36 products ``v_i v_j`` (i <= j, scratch
-    ``pr, pi`` (36, L)) and each quadric's upper-triangle nonzeros ``q[3:6]``."""
-    hptr, hidx, hval = q[3], q[4], q[5]
-    k = 0
-    for i in range(8):
-        for j in range(i, 8):
+def qdot(Q, cr, ci, ur, ui, vr, vi, hr, hi, scale, add, n):
+    """``h[m] (+)= scale u^T Q_m(c) v`` (m < 7): the quadrics' bilinear forms."""
+    for m in range(7):
+        if not add:
             for ln in range(n):
-                pr[k, ln] = vr[i, ln] * vr[j, ln] - vi[i, ln] * vi[j, ln]
-                pi[k, ln] = vr[i, ln] * vi[j, ln] + vi[i, ln] * vr[j, ln]
-            k += 1
+                hr[m, ln] = 0.0
+                hi[m, ln] = 0.0
+        for i in range(8):
+            leg = m >= 1 and i < 4
+            for ln in range(n):
+                sr = _row(Q, m, i, vr, ln)
+                si = _row(Q, m, i, vi, ln)
+                if leg:
+                    a, b = cr[m - 1, ln], ci[m - 1, ln]
+                    sr += a * vr[i, ln] - b * vi[i, ln]
+                    si += a * vi[i, ln] + b * vr[i, ln]
+                hr[m, ln] += scale * (ur[i, ln] * sr - ui[i, ln] * si)
+                hi[m, ln] += scale * (ur[i, ln] * si + ui[i, ln] * sr)
+
+
+@njit(**_O)
+def rows_dot(yr, yi, ur, ui, outr, outi, scale, add, n):
+    """``out[m] (+)= scale u . y[m]`` for m < 7 (``y`` (7 or 8, 8, L))."""
     for m in range(7):
         for ln in range(n):
-            hr[m, ln] = 0.0
-            hi[m, ln] = 0.0
-        for k in range(hptr[m], hptr[m + 1]):
-            v = hval[k]
-            s = hidx[k]
-            for ln in range(n):
-                hr[m, ln] += v * pr[s, ln]
-                hi[m, ln] += v * pi[s, ln]
-        if m >= 1:  # c e.e, e.e from the products (0,0), (1,1), (2,2), (3,3)
-            for ln in range(n):
-                er = pr[0, ln] + pr[8, ln] + pr[15, ln] + pr[21, ln]
-                ei = pi[0, ln] + pi[8, ln] + pi[15, ln] + pi[21, ln]
-                hr[m, ln] += cr[m - 1, ln] * er - ci[m - 1, ln] * ei
-                hi[m, ln] += cr[m - 1, ln] * ei + ci[m - 1, ln] * er
+            re, im = _cdot(yr, yi, m, ur, ui, ln)
+            if add:
+                outr[m, ln] += scale * re
+                outi[m, ln] += scale * im
+            else:
+                outr[m, ln] = scale * re
+                outi[m, ln] = scale * im
 
 
 @njit(**_O)
-def lu(ar, ai, piv, dr, di, n):
-    """LU with partial pivoting of the 8x8 matrices of lanes ``ln < n``, in place; ``d`` the
-    reciprocals of the pivots (inf where a pivot is exactly 0: that lane's solves give non-finite
-    values, which its step rejects)."""
-    for k in range(8):
-        for ln in range(n):
-            piv[k, ln] = k
-            dr[k, ln] = (
-                ar[k, k, ln] * ar[k, k, ln] + ai[k, k, ln] * ai[k, k, ln]
-            )  # best |a|^2 so far
-        for i in range(k + 1, 8):
-            for ln in range(n):
+def lu(F, n):
+    """LU with partial pivoting of the 8x8 matrices ``F = (ar, ai, lr, li, piv, dr, di)`` of
+    lanes ``ln < n``, in place: ``a`` becomes the strictly upper part of U (zeros elsewhere),
+    ``l`` the multipliers (strictly lower; its other entries stay 0 from :func:`lu_scratch`),
+    ``d`` the reciprocals of U's diagonal (non-finite where a pivot is exactly 0: that lane's
+    solves give non-finite values, which its step rejects), ``piv[k]`` the row swapped with row
+    ``k`` at step ``k``. One lane at a time: the row swaps and row updates of one array are no
+    SIMD loop over lanes (the compiler cannot separate the rows), so the lane loop is outermost
+    and each lane's loops are short and unrolled."""
+    ar, ai, lr, li, piv, dr, di = F
+    for ln in range(n):
+        for k in range(8):
+            p = k
+            best = ar[k, k, ln] * ar[k, k, ln] + ai[k, k, ln] * ai[k, k, ln]
+            for i in range(k + 1, 8):
                 v = ar[i, k, ln] * ar[i, k, ln] + ai[i, k, ln] * ai[i, k, ln]
-                if v > dr[k, ln]:
-                    dr[k, ln] = v
-                    piv[k, ln] = i
-        for ln in range(n):
-            p = piv[k, ln]
+                if v > best:
+                    best = v
+                    p = i
+            piv[k, ln] = p
             if p != k:
-                for j in range(8):
+                for j in range(k, 8):  # both rows are 0 left of column k
                     ar[k, j, ln], ar[p, j, ln] = ar[p, j, ln], ar[k, j, ln]
                     ai[k, j, ln], ai[p, j, ln] = ai[p, j, ln], ai[k, j, ln]
-        for ln in range(n):
+                for j in range(k):  # the multipliers so far
+                    lr[k, j, ln], lr[p, j, ln] = lr[p, j, ln], lr[k, j, ln]
+                    li[k, j, ln], li[p, j, ln] = li[p, j, ln], li[k, j, ln]
             s = ar[k, k, ln] * ar[k, k, ln] + ai[k, k, ln] * ai[k, k, ln]
-            dr[k, ln] = ar[k, k, ln] / s
-            di[k, ln] = -ai[k, k, ln] / s
-        for i in range(k + 1, 8):
-            for ln in range(n):
-                fr = ar[i, k, ln] * dr[k, ln] - ai[i, k, ln] * di[k, ln]
-                fi = ar[i, k, ln] * di[k, ln] + ai[i, k, ln] * dr[k, ln]
-                ar[i, k, ln] = fr
-                ai[i, k, ln] = fi
-            for j in range(k + 1, 8):
-                for ln in range(n):
-                    fr, fi = ar[i, k, ln], ai[i, k, ln]
+            rr = ar[k, k, ln] / s
+            ri = -ai[k, k, ln] / s
+            dr[k, ln] = rr
+            di[k, ln] = ri
+            ar[k, k, ln] = 0.0
+            ai[k, k, ln] = 0.0
+            for i in range(k + 1, 8):
+                fr = ar[i, k, ln] * rr - ai[i, k, ln] * ri
+                fi = ar[i, k, ln] * ri + ai[i, k, ln] * rr
+                lr[i, k, ln] = fr
+                li[i, k, ln] = fi
+                ar[i, k, ln] = 0.0
+                ai[i, k, ln] = 0.0
+                for j in range(k + 1, 8):
                     ar[i, j, ln] -= fr * ar[k, j, ln] - fi * ai[k, j, ln]
                     ai[i, j, ln] -= fr * ai[k, j, ln] + fi * ar[k, j, ln]
 
 
 @njit(**_O)
-def solve(ar, ai, piv, dr, di, br, bi, outr, outi, n):
-    """``out = A^-1 b`` per lane from :func:`lu`'s factors (``out`` may be ``b``)."""
-    for i in range(8):
-        for ln in range(n):
+def solve(F, br, bi, outr, outi, n):
+    """``out = A^-1 b`` per lane from :func:`lu`'s factors ``F`` (``out`` may be ``b``); one lane
+    at a time, as :func:`lu`."""
+    ar, ai, lr, li, piv, dr, di = F
+    for ln in range(n):
+        for i in range(8):
             outr[i, ln] = br[i, ln]
             outi[i, ln] = bi[i, ln]
-    for k in range(8):
-        for ln in range(n):
+        for k in range(7):
             p = piv[k, ln]
             if p != k:
                 outr[k, ln], outr[p, ln] = outr[p, ln], outr[k, ln]
                 outi[k, ln], outi[p, ln] = outi[p, ln], outi[k, ln]
-    for i in range(1, 8):
-        for j in range(i):
-            for ln in range(n):
-                outr[i, ln] -= ar[i, j, ln] * outr[j, ln] - ai[i, j, ln] * outi[j, ln]
-                outi[i, ln] -= ar[i, j, ln] * outi[j, ln] + ai[i, j, ln] * outr[j, ln]
-    for i in range(7, -1, -1):
-        for j in range(i + 1, 8):
-            for ln in range(n):
-                outr[i, ln] -= ar[i, j, ln] * outr[j, ln] - ai[i, j, ln] * outi[j, ln]
-                outi[i, ln] -= ar[i, j, ln] * outi[j, ln] + ai[i, j, ln] * outr[j, ln]
-        for ln in range(n):
-            r, s = outr[i, ln], outi[i, ln]
-            outr[i, ln] = r * dr[i, ln] - s * di[i, ln]
-            outi[i, ln] = r * di[i, ln] + s * dr[i, ln]
+        for i in range(1, 8):
+            sr = outr[i, ln]
+            si = outi[i, ln]
+            for j in range(i):
+                sr -= lr[i, j, ln] * outr[j, ln] - li[i, j, ln] * outi[j, ln]
+                si -= lr[i, j, ln] * outi[j, ln] + li[i, j, ln] * outr[j, ln]
+            outr[i, ln] = sr
+            outi[i, ln] = si
+        for i in range(7, -1, -1):
+            sr = outr[i, ln]
+            si = outi[i, ln]
+            for j in range(i + 1, 8):
+                sr -= ar[i, j, ln] * outr[j, ln] - ai[i, j, ln] * outi[j, ln]
+                si -= ar[i, j, ln] * outi[j, ln] + ai[i, j, ln] * outr[j, ln]
+            outr[i, ln] = sr * dr[i, ln] - si * di[i, ln]
+            outi[i, ln] = sr * di[i, ln] + si * dr[i, ln]
+
+
+@njit(inline="always", **_O)
+def _sumsq(vr, vi, ln):
+    """``|v_ln|^2`` (8 coordinates)."""
+    return (
+        vr[0, ln] * vr[0, ln]
+        + vi[0, ln] * vi[0, ln]
+        + vr[1, ln] * vr[1, ln]
+        + vi[1, ln] * vi[1, ln]
+        + vr[2, ln] * vr[2, ln]
+        + vi[2, ln] * vi[2, ln]
+        + vr[3, ln] * vr[3, ln]
+        + vi[3, ln] * vi[3, ln]
+        + vr[4, ln] * vr[4, ln]
+        + vi[4, ln] * vi[4, ln]
+        + vr[5, ln] * vr[5, ln]
+        + vi[5, ln] * vi[5, ln]
+        + vr[6, ln] * vr[6, ln]
+        + vi[6, ln] * vi[6, ln]
+        + vr[7, ln] * vr[7, ln]
+        + vi[7, ln] * vi[7, ln]
+    )
 
 
 @njit(**_O)
 def norms(vr, vi, out, n):
-    """``out[ln] = |v_l|`` (2-norm)."""
+    """``out[ln] = |v_ln|`` (2-norm of 8 coordinates)."""
     for ln in range(n):
-        out[ln] = 0.0
-    for i in range(vr.shape[0]):
-        for ln in range(n):
-            out[ln] += vr[i, ln] * vr[i, ln] + vi[i, ln] * vi[i, ln]
-    for ln in range(n):
-        out[ln] = math.sqrt(out[ln])
-
-
-@njit(**_O)
-def jacobian(yr, yi, ar_, ai_, ar, ai, n):
-    """``J = (2 Q_m x, a)`` from ``y = Q x`` and the chart ``a`` (rows ``ar_, ai_`` (8, L))."""
-    for m in range(7):
-        for i in range(8):
-            for ln in range(n):
-                ar[m, i, ln] = 2.0 * yr[m, i, ln]
-                ai[m, i, ln] = 2.0 * yi[m, i, ln]
-    for i in range(8):
-        for ln in range(n):
-            ar[7, i, ln] = ar_[i, ln]
-            ai[7, i, ln] = ai_[i, ln]
+        out[ln] = math.sqrt(_sumsq(vr, vi, ln))
 
 
 @njit(**_O)
@@ -258,20 +342,6 @@ def legc(S, c0r, c0i, tt, cr, ci, cpr, cpi, n):
 
 
 # ------------------------------------------------------------------------------ Taylor predictor
-@njit(**_O)
-def _rows_dot(yr, yi, ur, ui, outr, outi, n, add, scale):
-    """``out[m] (+)= scale * u . y[m]`` for m < 7."""
-    for m in range(7):
-        if not add:
-            for ln in range(n):
-                outr[m, ln] = 0.0
-                outi[m, ln] = 0.0
-        for i in range(8):
-            for ln in range(n):
-                outr[m, ln] += scale * (ur[i, ln] * yr[m, i, ln] - ui[i, ln] * yi[m, i, ln])
-                outi[m, ln] += scale * (ur[i, ln] * yi[m, i, ln] + ui[i, ln] * yr[m, i, ln])
-
-
 @njit(**_O)
 def _edots(T, a, b, c, d, E, row, n):
     """``E[row] + i E[row + 1] = e_a . e_b + e_c . e_d`` of the Taylor coefficients ``T`` per
@@ -340,14 +410,13 @@ def _taylor_rhs(rr, ri, E, k, cpr, cpi, S, n):
 
 
 @njit(**_O)
-def taylor(q, T, S, cr, ci, cpr, cpi, F, W, Y1, Y2, n):
+def taylor(Q, T, S, cr, ci, cpr, cpi, F, W, Y, n):
     """Taylor coefficients ``T[:, 1..4]`` of the path through ``T[:, 0]`` at each lane's ``t``
-    (``c, c'`` there), with the LU ``F = (ar, ai, piv, dr, di)`` of the Jacobian. Order ``k``:
+    (``c, c'`` there), with the LU ``F`` (:func:`lu`) of the Jacobian. Order ``k``:
     ``J x_k = -r_k``, ``r_k = sum_{i+j=k; i,j>=1} x_i^T Q x_j + c' sum_{i+j=k-1} e_i.e_j
     + c''/2 sum_{i+j=k-2} e_i.e_j`` (the coefficient of ``s^k`` in ``H(x(t+s), t+s)``)."""
     Tr, Ti = T[0], T[1]
     rr, ri, E = W[0], W[1], W[2]
-    ar, ai, piv, dr, di = F
     for k in range(1, 5):
         if k == 1:
             for m in range(8):
@@ -355,119 +424,103 @@ def taylor(q, T, S, cr, ci, cpr, cpi, F, W, Y1, Y2, n):
                     rr[m, ln] = 0.0
                     ri[m, ln] = 0.0
         elif k == 2:
-            qtimes(q, cr, ci, Tr[1], Ti[1], Y1[0], Y1[1], n)
-            _rows_dot(Y1[0], Y1[1], Tr[1], Ti[1], rr, ri, n, False, 1.0)
+            qtimes(Q, cr, ci, Tr[1], Ti[1], Y[0], Y[1], 1.0, n)  # Q x_1, kept for k = 3, 4
+            rows_dot(Y[0], Y[1], Tr[1], Ti[1], rr, ri, 1.0, False, n)
         elif k == 3:
-            _rows_dot(Y1[0], Y1[1], Tr[2], Ti[2], rr, ri, n, False, 2.0)
+            rows_dot(Y[0], Y[1], Tr[2], Ti[2], rr, ri, 2.0, False, n)
         else:
-            qtimes(q, cr, ci, Tr[2], Ti[2], Y2[0], Y2[1], n)
-            _rows_dot(Y1[0], Y1[1], Tr[3], Ti[3], rr, ri, n, False, 2.0)
-            _rows_dot(Y2[0], Y2[1], Tr[2], Ti[2], rr, ri, n, True, 1.0)
+            rows_dot(Y[0], Y[1], Tr[3], Ti[3], rr, ri, 2.0, False, n)
+            qdot(Q, cr, ci, Tr[2], Ti[2], Tr[2], Ti[2], rr, ri, 1.0, True, n)
         _e_sums(T, k, E, n)
         _taylor_rhs(rr, ri, E, k, cpr, cpi, S, n)
-        solve(ar, ai, piv, dr, di, rr, ri, Tr[k], Ti[k], n)
+        solve(F, rr, ri, Tr[k], Ti[k], n)
 
 
 @njit(**_O)
 def pade(T, flag, tau, err, n):
     """Per lane: the Padé trust region ``tau = min_i |x_2i / x_3i|`` and the norm ``err`` of the
-    local error coefficient; ``flag[i, ln]`` 1 where coordinate ``i`` uses Padé, 0 Taylor (where
-    ``x_2`` is negligible against ``x_1, x_3``, scaled by ``lambda = max(2^-18, |x_1|)``)."""
+    local error coefficient (``x_4 - x_3^2 / x_2``); ``flag[i, ln]`` 1 where coordinate ``i``
+    uses Padé, 0 the cubic Taylor polynomial (error ``x_4``) where ``x_2`` is negligible against
+    ``x_1, x_3`` scaled by ``lambda = max(2^-18, |x_1|)``. Squared moduli throughout."""
     Tr, Ti = T[0], T[1]
     for ln in range(n):
-        t = math.inf
-        s = 0.0
-        for i in range(8):
-            a1 = math.hypot(Tr[1, i, ln], Ti[1, i, ln])
-            a2 = math.hypot(Tr[2, i, ln], Ti[2, i, ln])
-            a3 = math.hypot(Tr[3, i, ln], Ti[3, i, ln])
-            lam = max(3.814697265625e-6, a1)
-            c1, c2, c3 = a1 / lam, a2 / lam**2, a3 / lam**3
-            x4r, x4i = Tr[4, i, ln], Ti[4, i, ln]
-            if c2 <= 1e-14 * max(c1, c2, c3):
-                flag[i, ln] = 0.0
-                er, ei = x4r, x4i
-            else:
-                flag[i, ln] = 1.0
-                if a2 < t * a3:
-                    t = a2 / a3
-                # x3^2 / x2
-                pr = Tr[3, i, ln] * Tr[3, i, ln] - Ti[3, i, ln] * Ti[3, i, ln]
-                pi = 2.0 * Tr[3, i, ln] * Ti[3, i, ln]
-                d = Tr[2, i, ln] * Tr[2, i, ln] + Ti[2, i, ln] * Ti[2, i, ln]
-                er = x4r - (pr * Tr[2, i, ln] + pi * Ti[2, i, ln]) / d
-                ei = x4i - (pi * Tr[2, i, ln] - pr * Ti[2, i, ln]) / d
-            s += er * er + ei * ei
-        tau[ln] = t
-        err[ln] = math.sqrt(s)
+        tau[ln] = math.inf
+        err[ln] = 0.0
+    for i in range(8):
+        for ln in range(n):
+            x2r, x2i, x3r, x3i = Tr[2, i, ln], Ti[2, i, ln], Tr[3, i, ln], Ti[3, i, ln]
+            a1 = Tr[1, i, ln] * Tr[1, i, ln] + Ti[1, i, ln] * Ti[1, i, ln]
+            a2 = x2r * x2r + x2i * x2i
+            a3 = x3r * x3r + x3i * x3i
+            lam = max(1.4551915228366852e-11, a1)  # lambda^2, 2^-36
+            c1, c2, c3 = a1 / lam, a2 / (lam * lam), a3 / (lam * lam * lam)
+            taylor = c2 <= 1e-28 * max(c1, c2, c3)
+            pr = x3r * x3r - x3i * x3i  # x3^2 / x2 = x3^2 conj(x2) / |x2|^2
+            pi = 2.0 * x3r * x3i
+            er = Tr[4, i, ln] - (0.0 if taylor else (pr * x2r + pi * x2i) / a2)
+            ei = Ti[4, i, ln] - (0.0 if taylor else (pi * x2r - pr * x2i) / a2)
+            flag[i, ln] = 0.0 if taylor else 1.0
+            r = math.inf if taylor else a2 / a3
+            tau[ln] = min(tau[ln], r)
+            err[ln] += er * er + ei * ei
+    for ln in range(n):
+        tau[ln] = math.sqrt(tau[ln])
+        err[ln] = math.sqrt(err[ln])
 
 
 @njit(**_O)
 def predict(T, S, flag, out_r, out_i, n):
-    """The prediction at ``t + dt`` of each lane, rescaled into the chart ``a = conj(x_0)/|x_0|``
-    (stored in ``S``) so that ``a . x = 1``."""
+    """The prediction at ``t + dt`` of each lane, ``x_0 + s (x_1 + s g)`` with
+    ``g = x_2^2 / (x_2 - s x_3)`` (Padé) or ``x_2 + s x_3`` (Taylor), rescaled into the chart
+    ``a = conj(x_0)/|x_0|`` (stored in ``S``) so that ``a . x = 1``."""
     Tr, Ti = T[0], T[1]
     for i in range(8):
         for ln in range(n):
             s = S[_DT, ln]
-            x1r, x1i, x2r, x2i = Tr[1, i, ln], Ti[1, i, ln], Tr[2, i, ln], Ti[2, i, ln]
-            x3r, x3i = Tr[3, i, ln], Ti[3, i, ln]
-            if flag[i, ln] != 0.0:  # x0 + s (x1 + s x2 / (1 - s x3 / x2))
-                d = x2r * x2r + x2i * x2i
-                qr = 1.0 - s * (x3r * x2r + x3i * x2i) / d
-                qi = -s * (x3i * x2r - x3r * x2i) / d
-                d = qr * qr + qi * qi
-                gr = (x2r * qr + x2i * qi) / d
-                gi = (x2i * qr - x2r * qi) / d
-            else:  # x0 + s (x1 + s (x2 + s x3))
-                gr = x2r + s * x3r
-                gi = x2i + s * x3i
-            out_r[i, ln] = Tr[0, i, ln] + s * (x1r + s * gr)
-            out_i[i, ln] = Ti[0, i, ln] + s * (x1i + s * gi)
+            x2r, x2i, x3r, x3i = Tr[2, i, ln], Ti[2, i, ln], Tr[3, i, ln], Ti[3, i, ln]
+            dr, di = x2r - s * x3r, x2i - s * x3i
+            nr, ni = x2r * x2r - x2i * x2i, 2.0 * x2r * x2i
+            d = dr * dr + di * di
+            pade_ = flag[i, ln] != 0.0
+            gr = (nr * dr + ni * di) / d if pade_ else x2r + s * x3r
+            gi = (ni * dr - nr * di) / d if pade_ else x2i + s * x3i
+            out_r[i, ln] = Tr[0, i, ln] + s * (Tr[1, i, ln] + s * gr)
+            out_i[i, ln] = Ti[0, i, ln] + s * (Ti[1, i, ln] + s * gi)
     for ln in range(n):
         nx = 0.0
         for i in range(8):
-            nx += Tr[0, i, ln] ** 2 + Ti[0, i, ln] ** 2
-        nx = math.sqrt(nx)
+            nx += Tr[0, i, ln] * Tr[0, i, ln] + Ti[0, i, ln] * Ti[0, i, ln]
+        nx = 1.0 / math.sqrt(nx)
         sr = 0.0
         si = 0.0
         for i in range(8):
-            S[_PR + i, ln] = Tr[0, i, ln] / nx
-            S[_PI + i, ln] = -Ti[0, i, ln] / nx
-            sr += S[_PR + i, ln] * out_r[i, ln] - S[_PI + i, ln] * out_i[i, ln]
-            si += S[_PR + i, ln] * out_i[i, ln] + S[_PI + i, ln] * out_r[i, ln]
-        d = sr * sr + si * si
+            ar, ai = Tr[0, i, ln] * nx, -Ti[0, i, ln] * nx
+            S[_PR + i, ln] = ar
+            S[_PI + i, ln] = ai
+            sr += ar * out_r[i, ln] - ai * out_i[i, ln]
+            si += ar * out_i[i, ln] + ai * out_r[i, ln]
+        d = 1.0 / (sr * sr + si * si)
         for i in range(8):
-            r, s = out_r[i, ln], out_i[i, ln]
-            out_r[i, ln] = (r * sr + s * si) / d
-            out_i[i, ln] = (s * sr - r * si) / d
+            r, v = out_r[i, ln], out_i[i, ln]
+            out_r[i, ln] = (r * sr + v * si) * d
+            out_i[i, ln] = (v * sr - r * si) * d
 
 
 # ------------------------------------------------------------------------------ corrector
 @njit(**_O)
-def correct(q, S, xr, xi, cr, ci, F, Y, W, P, nrm, n):
-    """Three chord-Newton updates of ``x`` (8, L) with the Jacobian at the predicted ``x`` (its LU
-    left in ``F``); ``nrm[k, ln]`` the norm of update ``k``. ``Y`` (2, 7, 8, L), ``W`` and ``P``
-    scratch."""
-    ar, ai, piv, dr, di = F
-    yr, yi = Y[0], Y[1]
+def correct(Q, S, xr, xi, cr, ci, F, W, nrm, updates, n):
+    """``updates`` chord-Newton updates of ``x`` (8, L) with the Jacobian at the predicted ``x``
+    (its LU left in ``F``); ``nrm[k, ln]`` the norm of update ``k``; ``W`` scratch."""
+    ar, ai = F[0], F[1]
     hr, hi, sr, si = W[0], W[1], W[2], W[3]
-    qtimes(q, cr, ci, xr, xi, yr, yi, n)
-    jacobian(yr, yi, S[_PR : _PR + 8], S[_PI : _PI + 8], ar, ai, n)
-    _rows_dot(yr, yi, xr, xi, hr, hi, n, False, 1.0)  # H = x . Q x: the Jacobian's product reused
-    lu(ar, ai, piv, dr, di, n)
-    for it in range(3):
+    jacobian(Q, cr, ci, xr, xi, S[_PR : _PR + 8], S[_PI : _PI + 8], ar, ai, n)
+    rows_dot(ar, ai, xr, xi, hr, hi, 0.5, False, n)  # H = x . Q x = x . J / 2
+    lu(F, n)
+    for it in range(updates):
         if it:
-            qvalues(q, cr, ci, xr, xi, P[0], P[1], hr, hi, n)
-        for ln in range(n):  # the chart row a . x - 1
-            s = -1.0
-            u = 0.0
-            for i in range(8):
-                s += S[_PR + i, ln] * xr[i, ln] - S[_PI + i, ln] * xi[i, ln]
-                u += S[_PR + i, ln] * xi[i, ln] + S[_PI + i, ln] * xr[i, ln]
-            hr[7, ln] = s
-            hi[7, ln] = u
-        solve(ar, ai, piv, dr, di, hr, hi, sr, si, n)
+            qdot(Q, cr, ci, xr, xi, xr, xi, hr, hi, 1.0, False, n)
+        chart_residual(S[_PR : _PR + 8], S[_PI : _PI + 8], xr, xi, hr, hi, n)
+        solve(F, hr, hi, sr, si, n)
         for i in range(8):
             for ln in range(n):
                 xr[i, ln] -= sr[i, ln]
@@ -475,16 +528,37 @@ def correct(q, S, xr, xi, cr, ci, F, Y, W, P, nrm, n):
         norms(sr, si, nrm[it], n)
 
 
+@njit(**_O)
+def jacobian(Q, cr, ci, xr, xi, par, pai, ar, ai, n):
+    """``J = (2 Q_m(c) x, a)``: the quadrics' gradients and the chart ``a`` (``par, pai``)."""
+    qtimes(Q, cr, ci, xr, xi, ar, ai, 2.0, n)
+    for i in range(8):
+        for ln in range(n):
+            ar[7, i, ln] = par[i, ln]
+            ai[7, i, ln] = pai[i, ln]
+
+
+@njit(**_O)
+def chart_residual(par, pai, xr, xi, hr, hi, n):
+    """``h[7] = a . x - 1`` (the chart's equation)."""
+    for ln in range(n):
+        re, im = _cdot2(par, pai, xr, xi, ln)
+        hr[7, ln] = re - 1.0
+        hi[7, ln] = im
+
+
 # ------------------------------------------------------------------------------ step control
 @njit(**_O)
-def control(S, T, xr, xi, nrm, acc, opts, n):
+def control(S, T, xr, xi, nrm, updates, acc, opts, n):
     """Accept or reject each lane's step (``S[_DT]`` from ``S[_T]``): ``acc[ln]`` 1 or 0. An
     accepted step moves the lane to the corrected point and updates ``omega``; a rejected one
     halves the step and doubles ``omega``."""
     kappa, theta, omega0, end_tol, noise = opts[2], opts[3], opts[4], opts[7], opts[8]
     Tr, Ti = T[0], T[1]
     for ln in range(n):
-        n1, n2, n3 = nrm[0, ln], nrm[1, ln], nrm[2, ln]
+        n1, n2 = nrm[0, ln], nrm[1, ln]
+        n3 = nrm[2, ln] if updates == 3 else 0.0
+        last = nrm[updates - 1, ln]
         scale = 0.0
         for i in range(8):
             scale += xr[i, ln] ** 2 + xi[i, ln] ** 2
@@ -492,14 +566,14 @@ def control(S, T, xr, xi, nrm, acc, opts, n):
         floor = noise * scale
         fresh = S[_FRESH, ln] == 1.0
         if fresh:  # a start solution: no prediction, the corrector only checks it
-            good = math.isfinite(n3) and n1 <= 1e-8 * scale
+            good = math.isfinite(last) and n1 <= 1e-8 * scale
         else:
             good = (
-                math.isfinite(n3)
+                math.isfinite(last)
                 and n1 <= kappa * scale
                 and n2 <= theta * n1 + floor
                 and n3 <= theta * n2 + floor
-                and (S[_T, ln] + S[_DT, ln] < 1.0 or n3 <= end_tol * scale)
+                and (S[_T, ln] + S[_DT, ln] < 1.0 or last <= end_tol * scale)
             )
             S[_STEPS, ln] += 1.0
         if good:
@@ -612,8 +686,21 @@ def _retire(S, T, flag, acc, opts, n, nxt, P, item_k, item_j, starts, dc, bend, 
 
 
 @njit(**_O)
+def lu_scratch(L):
+    """Arrays of :func:`lu`'s factors for ``L`` lanes."""
+    return (
+        np.zeros((8, 8, L)),
+        np.zeros((8, 8, L)),
+        np.zeros((8, 8, L)),
+        np.zeros((8, 8, L)),
+        np.zeros((8, L), np.int64),
+        np.zeros((8, L)),
+        np.zeros((8, L)),
+    )
+
+
+@njit(**_O)
 def _scratch(L):
-    f8 = np.float64
     return (
         np.zeros((_NS, L)),  # S
         np.zeros((2, 5, 8, L)),  # T: Taylor coefficients
@@ -621,17 +708,9 @@ def _scratch(L):
         np.zeros((8, L)),  # flag: Padé (1) or Taylor (0) per coordinate
         np.zeros((2, 8, L)),  # X: predicted / corrected point
         np.zeros((4, 6, L)),  # C: c, c'
-        (
-            np.zeros((8, 8, L)),
-            np.zeros((8, 8, L)),
-            np.zeros((8, L), np.int64),
-            np.zeros((8, L)),
-            np.zeros((8, L)),
-        ),
-        np.zeros((2, 7, 8, L)),  # Y1
-        np.zeros((2, 7, 8, L)),  # Y2
-        np.zeros((8, 8, L), f8),  # W: rhs and small per-lane vectors
-        np.zeros((2, 36, L)),  # P: products
+        lu_scratch(L),  # F
+        np.zeros((2, 7, 8, L)),  # Y: Q x_1
+        np.zeros((8, 8, L)),  # W: rhs and small per-lane vectors
         np.zeros((3, L)),  # nrm
         np.zeros((4, L)),  # per lane: t1, acc, tau, err
     )
@@ -639,7 +718,7 @@ def _scratch(L):
 
 @njit(**_O)
 def track_block(
-    q, c0, starts, dc, bend, item_k, item_j, opts, lanes, patch, out_x, out_ok, out_steps
+    Q, c0, starts, dc, bend, item_k, item_j, opts, lanes, patch, out_x, out_ok, out_steps
 ):
     """Track the paths ``item_j[p]`` (start solution) of inputs ``item_k[p]`` (rows of ``dc``,
     ``bend`` (K, 6) complex) for every queue entry ``p``, ``lanes`` at a time; writes
@@ -647,7 +726,7 @@ def track_block(
     ``out_steps[p]``."""
     P = len(item_k)
     L = max(1, min(lanes, P))
-    S, T, T2, flag, X, C, F, Y1, Y2, W, Pr, nrm, lane = _scratch(L)
+    S, T, T2, flag, X, C, F, Y, W, nrm, lane = _scratch(L)
     c0r, c0i = c0.real.copy(), c0.imag.copy()
     out = (out_x, out_ok, out_steps)
     n = 0
@@ -660,15 +739,19 @@ def track_block(
         for ln in range(n):
             lane[0, ln] = min(S[_T, ln] + S[_DT, ln], 1.0)
         legc(S, c0r, c0i, lane[0], C[0], C[1], C[2], C[3], n)
-        correct(q, S, X[0], X[1], C[0], C[1], F, Y1, W, Pr, nrm, n)
-        control(S, T, X[0], X[1], nrm, lane[1], opts, n)
+        updates = 2  # a third where a lane reaches t = 1 (its endpoint must be accurate)
+        for ln in range(n):
+            if lane[0, ln] >= 1.0:
+                updates = 3
+        correct(Q, S, X[0], X[1], C[0], C[1], F, W, nrm, updates, n)
+        control(S, T, X[0], X[1], nrm, updates, lane[1], opts, n)
         # Taylor coefficients at the new points (the accepted lanes keep them)
         legc(S, c0r, c0i, S[_T], C[0], C[1], C[2], C[3], n)
         for a in range(2):
             for i in range(8):
                 for ln in range(n):
                     T2[a, 0, i, ln] = T[a, 0, i, ln]
-        taylor(q, T2, S, C[0], C[1], C[2], C[3], F, W, Y1, Y2, n)
+        taylor(Q, T2, S, C[0], C[1], C[2], C[3], F, W, Y, n)
         for ln in range(n):
             if lane[1, ln] == 1.0:
                 for a in range(2):
@@ -684,81 +767,59 @@ def track_block(
 
 # ------------------------------------------------------------------------------ certificates
 @njit(**_O)
-def qnorm(q, c):
+def qnorm(Q, c):
     """``sqrt(sum_m |Q_m(c)|_F^2)`` (the bound of Smale's gamma of a quadratic system, with
     :func:`refine_block`'s ``|J^-1|_F``), ``c`` (6,) complex."""
-    ptr, col, val = q[0], q[1], q[2]
     s = 0.0
     for m in range(7):
         for i in range(8):
-            r = 8 * m + i
-            diag = 0.0
-            for k in range(ptr[r], ptr[r + 1]):
-                if col[k] == i:
-                    diag = val[k]
-                else:
-                    s += val[k] * val[k]
-            v = diag + (c[m - 1] if (m >= 1 and i < 4) else 0.0j)
-            s += v.real * v.real + v.imag * v.imag
+            for j in range(8):
+                v = Q[m, i, j] + (c[m - 1] if (m >= 1 and i == j and i < 4) else 0.0j)
+                s += v.real * v.real + v.imag * v.imag
     return math.sqrt(s)
 
 
 @njit(**_O)
-def refine_block(q, patch, c1, qn, item_k, x, iters, lanes, out_x, beta, alpha):
+def refine_block(Q, patch, c1, qn, item_k, x, iters, lanes, out_x, beta, alpha):
     """Newton's method on ``x^T Q_m(c1) x = 0, patch . x = 1`` for every endpoint ``x[p]``
     (input ``item_k[p]``): ``iters`` updates (none where the Jacobian is singular), then
-    ``beta = |J^-1 F|`` and Smale's ``alpha = beta |J^-1|_F qn`` (``qn[k]``: :func:`qnorm`) at the last
-    iterate (inf where singular), as :func:`parakin.mechanisms.stewart66_homotopy.newton_refine`
-    and ``certify``."""
+    ``beta = |J^-1 F|`` and Smale's ``alpha = beta |J^-1|_F qn`` (``qn[k]``: :func:`qnorm`) at
+    the last iterate (inf where singular), as
+    :func:`parakin.mechanisms.stewart66_homotopy.newton_refine` and ``certify``."""
     P = len(item_k)
     L = max(1, min(lanes, P))
-    xr, xi = np.zeros((8, L)), np.zeros((8, L))
-    cr, ci = np.zeros((6, L)), np.zeros((6, L))
-    par, pai = np.zeros((8, L)), np.zeros((8, L))
-    F = (
-        np.zeros((8, 8, L)),
-        np.zeros((8, 8, L)),
-        np.zeros((8, L), np.int64),
-        np.zeros((8, L)),
-        np.zeros((8, L)),
-    )
-    yr, yi = np.zeros((7, 8, L)), np.zeros((7, 8, L))
-    hr, hi, sr, si = np.zeros((8, L)), np.zeros((8, L)), np.zeros((8, L)), np.zeros((8, L))
+    X, C, A = np.zeros((2, 8, L)), np.zeros((2, 6, L)), np.zeros((2, 8, L))
+    F = lu_scratch(L)
+    W = np.zeros((4, 8, L))
     nrm, jn, ok = np.zeros(L), np.zeros(L), np.zeros(L)
     for s0 in range(0, P, L):
         n = min(L, P - s0)
         for ln in range(n):
             k = item_k[s0 + ln]
             for i in range(8):
-                xr[i, ln], xi[i, ln] = x[s0 + ln, i].real, x[s0 + ln, i].imag
-                par[i, ln], pai[i, ln] = patch[i].real, patch[i].imag
+                X[0, i, ln], X[1, i, ln] = x[s0 + ln, i].real, x[s0 + ln, i].imag
+                A[0, i, ln], A[1, i, ln] = patch[i].real, patch[i].imag
             for i in range(6):
-                cr[i, ln], ci[i, ln] = c1[k, i], 0.0
+                C[0, i, ln], C[1, i, ln] = c1[k, i], 0.0
         for it in range(iters + 1):
-            qtimes(q, cr, ci, xr, xi, yr, yi, n)
-            jacobian(yr, yi, par, pai, F[0], F[1], n)
-            _rows_dot(yr, yi, xr, xi, hr, hi, n, False, 1.0)
-            for ln in range(n):
-                s, u = -1.0, 0.0
-                for i in range(8):
-                    s += par[i, ln] * xr[i, ln] - pai[i, ln] * xi[i, ln]
-                    u += par[i, ln] * xi[i, ln] + pai[i, ln] * xr[i, ln]
-                hr[7, ln], hi[7, ln] = s, u
-            lu(F[0], F[1], F[2], F[3], F[4], n)
-            _nonsingular(F[3], F[4], ok, n)
-            solve(F[0], F[1], F[2], F[3], F[4], hr, hi, sr, si, n)
+            jacobian(Q, C[0], C[1], X[0], X[1], A[0], A[1], F[0], F[1], n)
+            rows_dot(F[0], F[1], X[0], X[1], W[0], W[1], 0.5, False, n)
+            chart_residual(A[0], A[1], X[0], X[1], W[0], W[1], n)
+            lu(F, n)
+            _nonsingular(F[5], F[6], ok, n)
+            solve(F, W[0], W[1], W[2], W[3], n)
             if it < iters:
                 for i in range(8):
                     for ln in range(n):
                         if ok[ln] == 1.0:
-                            xr[i, ln] -= sr[i, ln]
-                            xi[i, ln] -= si[i, ln]
-        norms(sr, si, nrm, n)
-        _inverse_norm(F, hr, hi, sr, si, jn, n)
+                            X[0, i, ln] -= W[2, i, ln]
+                            X[1, i, ln] -= W[3, i, ln]
+        norms(W[2], W[3], nrm, n)
+        _inverse_norm(F, W, jn, n)
         for ln in range(n):
             p = s0 + ln
             for i in range(8):
-                out_x[p, i] = complex(xr[i, ln], xi[i, ln])
+                out_x[p, i] = complex(X[0, i, ln], X[1, i, ln])
             b = nrm[ln] if ok[ln] == 1.0 else math.inf
             beta[p] = b
             alpha[p] = b * (jn[ln] if ok[ln] == 1.0 else math.inf) * qn[item_k[p]]
@@ -776,19 +837,18 @@ def _nonsingular(dr, di, ok, n):
 
 
 @njit(**_O)
-def _inverse_norm(F, er, ei, sr, si, out, n):
-    """``out[ln] = |J_l^-1|_F``, column by column from the LU ``F``."""
+def _inverse_norm(F, W, out, n):
+    """``out[ln] = |J_ln^-1|_F``, column by column from the LU ``F`` (``W`` (4, 8, L) scratch)."""
     for ln in range(n):
         out[ln] = 0.0
     for k in range(8):
         for i in range(8):
             for ln in range(n):
-                er[i, ln] = 1.0 if i == k else 0.0
-                ei[i, ln] = 0.0
-        solve(F[0], F[1], F[2], F[3], F[4], er, ei, sr, si, n)
-        for i in range(8):
-            for ln in range(n):
-                out[ln] += sr[i, ln] * sr[i, ln] + si[i, ln] * si[i, ln]
+                W[0, i, ln] = 1.0 if i == k else 0.0
+                W[1, i, ln] = 0.0
+        solve(F, W[0], W[1], W[2], W[3], n)
+        for ln in range(n):
+            out[ln] += _sumsq(W[2], W[3], ln)
     for ln in range(n):
         out[ln] = math.sqrt(out[ln])
 
@@ -819,17 +879,19 @@ def keep_distinct(x, beta, alpha, alpha0, keep):
         nn = 0.0
         for a in range(4):
             ee += x[i, a] * x[i, a]
-            nn += abs(x[i, a]) ** 2
+            nn += x[i, a].real ** 2 + x[i, a].imag ** 2
         keep[i] = abs(ee) > 1e-10 * nn and alpha[i] < alpha0
     for i in range(1, m):
         if not keep[i]:
             continue
         for j in range(i):
             if keep[j]:
+                r = 2 * (beta[i] + beta[j]) + 1e-12
                 d = 0.0
                 for a in range(8):
-                    d += abs(x[i, a] - x[j, a]) ** 2
-                if math.sqrt(d) <= 2 * (beta[i] + beta[j]) + 1e-12:
+                    z = x[i, a] - x[j, a]
+                    d += z.real * z.real + z.imag * z.imag
+                if d <= r * r:
                     keep[i] = False
                     break
 
@@ -997,51 +1059,6 @@ def package_all(x, alpha, keep, joints, geo, out):
 
 
 # ------------------------------------------------------------------------------ geometry
-def compressed(q0: np.ndarray):
-    """:func:`_compressed` of ``q0``, cached by value (a geometry's quadrics are reused by every
-    call)."""
-    q = np.ascontiguousarray(q0, dtype=np.float64)
-    return _compressed_cached(q.tobytes(), q.shape)
-
-
-@lru_cache(maxsize=32)
-def _compressed_cached(data: bytes, shape: tuple):
-    return _compressed(np.frombuffer(data, dtype=np.float64).reshape(shape))
-
-
-def _compressed(q0: np.ndarray):
-    """The real quadrics ``q0`` (7, 8, 8) for the kernels: ``(ptr, col, val)``, their nonzeros by
-    rows ``8 m + i`` (for ``Q_m x``), and ``(hptr, hidx, hval)``, each quadric's nonzeros on and
-    above the diagonal (off-diagonal ones doubled) indexing the 36 products ``x_i x_j``, i <= j
-    (for ``x^T Q_m x``)."""
-    q = np.asarray(q0, dtype=np.float64)
-    rows = q.reshape(56, 8)
-    nz = rows != 0
-    ptr = np.concatenate([[0], np.cumsum(nz.sum(-1))]).astype(np.int64)
-    col = np.nonzero(nz)[1].astype(np.int64)
-    pair = {}
-    for i in range(8):
-        for j in range(i, 8):
-            pair[i, j] = len(pair)
-    hptr, hidx, hval = [0], [], []
-    for m in range(7):
-        for i in range(8):
-            for j in range(i, 8):
-                v = q[m, i, j] if i == j else q[m, i, j] + q[m, j, i]
-                if v != 0:
-                    hidx.append(pair[i, j])
-                    hval.append(v)
-        hptr.append(len(hidx))
-    return (
-        ptr,
-        col,
-        np.ascontiguousarray(rows[nz]),
-        np.array(hptr, dtype=np.int64),
-        np.array(hidx, dtype=np.int64),
-        np.array(hval, dtype=np.float64),
-    )
-
-
 # ------------------------------------------------------------------------------ the batch
 _POOL: list = [None, None]  # [executor, pid]: the block threads, recreated after a fork
 
@@ -1086,8 +1103,29 @@ def _run_pass(G, c1, qn, dc, bend, opts, iters: int, threads: int):
     return out[3].reshape(K, M, 8), out[4].reshape(K, M), out[5].reshape(K, M), steps
 
 
+def geometry(q0, c0, starts, patch, bc, pc, size, base, platform) -> tuple:
+    """A geometry as :func:`fk_all` takes it: ``q0`` (7, 8, 8) real quadrics without leg
+    constants, the start system ``c0`` (6,) and ``starts`` (M, 8), the common ``patch`` (8,),
+    the anchors' centroids ``bc, pc`` (3,), ``size``, ``base`` and ``platform`` (6, 3)."""
+    f8, c16 = np.float64, np.complex128
+    G = (
+        np.ascontiguousarray(np.real(q0), dtype=f8),
+        np.ascontiguousarray(c0, dtype=c16),
+        np.ascontiguousarray(starts, dtype=c16),
+        np.ascontiguousarray(patch, dtype=c16),
+    )
+    geo = (
+        np.ascontiguousarray(bc, dtype=f8),
+        np.ascontiguousarray(pc, dtype=f8),
+        float(size),
+        np.ascontiguousarray(base, dtype=f8),
+        np.ascontiguousarray(platform, dtype=f8),
+    )
+    return G, geo
+
+
 def fk_all(
-    geometry: dict,
+    prepared: tuple,
     c1,
     joints,
     *,
@@ -1097,28 +1135,23 @@ def fk_all(
     iters: int = 3,
     threads: int | None = None,
 ) -> dict:
-    """All forward solutions of a batch, compiled. ``geometry``: ``q0`` (7, 8, 8) real quadrics
-    without leg constants, the start system ``c0`` (6,) and ``starts`` (M, 8), the common
-    ``patch`` (8,), the anchors' centroids ``bc, pc`` (3,), ``size``, ``base`` and ``platform``
-    (6, 3); ``c1`` (n, 6) the inputs' leg constants (centred, scaled anchors), ``joints`` (n, 6)
-    their leg lengths; ``alpha0`` the certificate's threshold. Inputs with fewer certified
-    distinct solutions than ``M`` are retracked along bent paths (up to ``retries`` times).
+    """All forward solutions of a batch, compiled. ``prepared``: :func:`geometry`'s tuple;
+    ``c1`` (n, 6) the inputs' leg constants (centred, scaled anchors), ``joints`` (n, 6) their
+    leg lengths; ``alpha0`` the certificate's threshold. Inputs with fewer certified distinct
+    solutions than start solutions are retracked along bent paths (up to ``retries`` times).
     ``threads``: blocks run side by side (default ``numba.get_num_threads()``).
 
     Returns the arrays of :class:`parakin.mechanisms.stewart66.FKAll` (40 slots per input):
     ``poses, study, rotation, translation, is_real, alpha, n_found, n_real, ik_error, steps,
     retries``."""
+    G, geo = prepared
     c1 = np.ascontiguousarray(c1, dtype=np.float64)
     joints = np.ascontiguousarray(joints, dtype=np.float64)
     threads = numba.get_num_threads() if threads is None else max(1, int(threads))
     opts = options_vector(options)
-    q = compressed(geometry["q0"])
-    c0 = np.ascontiguousarray(geometry["c0"], dtype=np.complex128)
-    starts = np.ascontiguousarray(geometry["starts"], dtype=np.complex128)
-    G = (q, c0, starts, np.ascontiguousarray(geometry["patch"], dtype=np.complex128))
-    n, M = len(c1), len(starts)
-    qn = _qnorms(q, c1)
-    dc = c1 - c0
+    n, M = len(c1), len(G[2])
+    qn = _qnorms(G[0], c1)
+    dc = c1 - G[1]
     x, beta, alpha, steps = _run_pass(G, c1, qn, dc, np.zeros_like(dc), opts, iters, threads)
     keep = np.zeros((n, M), np.bool_)
     certify_all(x, beta, alpha, alpha0, keep)
@@ -1135,25 +1168,6 @@ def fk_all(
         merge_all(x, beta, alpha, keep, bad, x2, b2, a2, alpha0)
         steps[bad] += s2
         retried[bad] += 1
-    out = _packaged(x, alpha, keep, joints, geometry)
-    names = ("poses", "study", "rotation", "translation", "is_real", "alpha")
-    res = dict(zip(names, out[:6]))
-    res.update(
-        n_found=out[6][:, 0], n_real=out[6][:, 1], ik_error=out[7], steps=steps, retries=retried
-    )
-    return res
-
-
-def _packaged(x, alpha, keep, joints, geometry: dict) -> tuple:
-    """:func:`package_all` into fresh NaN-filled arrays of 40 slots per input."""
-    n = len(x)
-    geo = (
-        np.ascontiguousarray(geometry["bc"], dtype=np.float64),
-        np.ascontiguousarray(geometry["pc"], dtype=np.float64),
-        float(geometry["size"]),
-        np.ascontiguousarray(geometry["base"], dtype=np.float64),
-        np.ascontiguousarray(geometry["platform"], dtype=np.float64),
-    )
     cnan = complex(np.nan, np.nan)
     out = (
         np.full((n, 40, 6), np.nan),
@@ -1166,7 +1180,12 @@ def _packaged(x, alpha, keep, joints, geometry: dict) -> tuple:
         np.full(n, np.nan),
     )
     package_all(x, alpha, keep, joints, geo, out)
-    return out
+    names = ("poses", "study", "rotation", "translation", "is_real", "alpha")
+    res = dict(zip(names, out[:6]))
+    res.update(
+        n_found=out[6][:, 0], n_real=out[6][:, 1], ik_error=out[7], steps=steps, retries=retried
+    )
+    return res
 
 
 @lru_cache(maxsize=8)

@@ -88,6 +88,12 @@ TRACK_OPTIONS: dict[str, float] = {
 }
 
 
+def _kernels_on() -> bool:
+    from parakin import kernels
+
+    return kernels.enabled()
+
+
 def _compiled_kernel(q0: np.ndarray):
     """:mod:`parakin.kernels.stewart66_track` where the compiled path is on and the geometry's
     quadrics are real; None otherwise (the numpy path). Imported here, on the first ``fk_all``:
@@ -380,28 +386,32 @@ class Stewart66(Mechanism):
         return {"c": c1, "patch": patch, "solutions": best, "q0": hc.quadrics(b, p, np.zeros(6))}
 
     @cached_property
-    def _kernel_geometry(self) -> dict[str, Any]:
-        """What :func:`parakin.kernels.stewart66_track.fk_all` needs of this geometry."""
+    def _kernel(self):
+        """The compiled kernel module and this geometry prepared for it, or None (numpy path)."""
+        kernel = _compiled_kernel(self.fk_start["q0"])
+        if kernel is None:
+            return None
         st = self.fk_start
         _, _, bc, pc, s = self._scaled
-        return {
-            "q0": st["q0"].real,
-            "c0": st["c"],
-            "starts": st["solutions"],
-            "patch": st["patch"],
-            "bc": bc,
-            "pc": pc,
-            "size": s,
-            "base": self.base_points,
-            "platform": self.platform_points,
-        }
+        prepared = kernel.geometry(
+            st["q0"],
+            st["c"],
+            st["solutions"],
+            st["patch"],
+            bc,
+            pc,
+            s,
+            self.base_points,
+            self.platform_points,
+        )
+        return kernel, prepared
 
     @property
     def root_count(self) -> int:
         """Number of isolated complex forward solutions found for this geometry (40 for a general one)."""
         return len(self.fk_start["solutions"])
 
-    @property
+    @cached_property
     def expected_count(self) -> int:
         """What a complete answer has: 40 (the generic count) unless coincident anchors were allowed,
         then the count of that layout found by :attr:`fk_start` (16 for the 3-6). A general geometry
@@ -478,15 +488,10 @@ class Stewart66(Mechanism):
         self.check_joints(q)
         batch = q.shape[:-1]
         qf = q.reshape(-1, 6)
-        kernel = _compiled_kernel(self.fk_start["q0"])
-        if kernel is not None:  # parakin.kernels.stewart66_track: the whole computation compiled
-            res = kernel.fk_all(
-                self._kernel_geometry,
-                self._target_c(qf),
-                qf,
-                retries=retries,
-                alpha0=hc.ALPHA0,
-            )
+        compiled = self._kernel if _kernels_on() else None
+        if compiled is not None:  # parakin.kernels.stewart66_track: the whole computation compiled
+            kernel, prepared = compiled
+            res = kernel.fk_all(prepared, self._target_c(qf), qf, retries=retries, alpha0=hc.ALPHA0)
             n_found = res.pop("n_found")
             info = FKAll(
                 **res,
