@@ -342,50 +342,33 @@ def legc(S, c0r, c0i, tt, cr, ci, cpr, cpi, n):
 
 
 # ------------------------------------------------------------------------------ Taylor predictor
-@njit(**_O)
-def _edots(T, a, b, c, d, E, row, n):
-    """``E[row] + i E[row + 1] = e_a . e_b + e_c . e_d`` of the Taylor coefficients ``T`` per
-    lane (``c < 0``: the first product only)."""
-    Tr, Ti = T[0], T[1]
-    for ln in range(n):
-        sr = 0.0
-        si = 0.0
-        for i in range(4):
-            sr += Tr[a, i, ln] * Tr[b, i, ln] - Ti[a, i, ln] * Ti[b, i, ln]
-            si += Tr[a, i, ln] * Ti[b, i, ln] + Ti[a, i, ln] * Tr[b, i, ln]
-            if c >= 0:
-                sr += Tr[c, i, ln] * Tr[d, i, ln] - Ti[c, i, ln] * Ti[d, i, ln]
-                si += Tr[c, i, ln] * Ti[d, i, ln] + Ti[c, i, ln] * Tr[d, i, ln]
-        E[row, ln] = sr
-        E[row + 1, ln] = si
+@njit(inline="always", **_O)
+def _ed(Tr, Ti, a, b, ln):
+    """``e_a . e_b`` of lane ``ln``'s Taylor coefficients (complex, no conjugation)."""
+    sr = 0.0
+    si = 0.0
+    for i in range(4):
+        sr += Tr[a, i, ln] * Tr[b, i, ln] - Ti[a, i, ln] * Ti[b, i, ln]
+        si += Tr[a, i, ln] * Ti[b, i, ln] + Ti[a, i, ln] * Tr[b, i, ln]
+    return sr, si
 
 
 @njit(**_O)
 def _e_sums(T, k, E, n):
-    """``E[0:2] = sum_{i+j=k-1} e_i.e_j`` and ``E[2:4] = sum_{i+j=k-2} e_i.e_j`` (ordered pairs)."""
-    if k == 1:
-        _edots(T, 0, 0, -1, 0, E, 0, n)
-    elif k == 2:
-        _edots(T, 0, 1, 0, 1, E, 0, n)
-        _edots(T, 0, 0, -1, 0, E, 2, n)
-    elif k == 3:
-        _edots(T, 0, 2, 0, 2, E, 0, n)
-        _edots(T, 1, 1, -1, 0, E, 4, n)
-        _edots(T, 0, 1, 0, 1, E, 2, n)
-        for ln in range(n):
-            E[0, ln] += E[4, ln]
-            E[1, ln] += E[5, ln]
-    else:
-        _edots(T, 0, 3, 0, 3, E, 0, n)
-        _edots(T, 1, 2, 1, 2, E, 4, n)
-        for ln in range(n):
-            E[0, ln] += E[4, ln]
-            E[1, ln] += E[5, ln]
-        _edots(T, 0, 2, 0, 2, E, 2, n)
-        _edots(T, 1, 1, -1, 0, E, 4, n)
-        for ln in range(n):
-            E[2, ln] += E[4, ln]
-            E[3, ln] += E[5, ln]
+    """``E[0:2] = sum_{i+j=k-1} e_i.e_j`` and ``E[2:4] = sum_{i+j=k-2} e_i.e_j`` (ordered pairs:
+    ``e_0.e_1`` counts twice)."""
+    Tr, Ti = T[0], T[1]
+    for ln in range(n):
+        s1r = s1i = s2r = s2i = 0.0
+        for i in range(k):  # i + j = k - 1
+            r, m = _ed(Tr, Ti, i, k - 1 - i, ln)
+            s1r += r
+            s1i += m
+        for i in range(k - 1):  # i + j = k - 2
+            r, m = _ed(Tr, Ti, i, k - 2 - i, ln)
+            s2r += r
+            s2i += m
+        E[0, ln], E[1, ln], E[2, ln], E[3, ln] = s1r, s1i, s2r, s2i
 
 
 @njit(**_O)
@@ -508,24 +491,36 @@ def predict(T, S, flag, out_r, out_i, n):
 
 # ------------------------------------------------------------------------------ corrector
 @njit(**_O)
-def correct(Q, S, xr, xi, cr, ci, F, W, nrm, updates, n):
-    """``updates`` chord-Newton updates of ``x`` (8, L) with the Jacobian at the predicted ``x``
-    (its LU left in ``F``); ``nrm[k, ln]`` the norm of update ``k``; ``W`` scratch."""
+def correct(Q, S, xr, xi, cr, ci, F, W, nrm, t1, n):
+    """Two chord-Newton updates of ``x`` (8, L) with the Jacobian at the predicted ``x`` (its LU
+    left in ``F``), a third for the lanes whose step reaches ``t1 = 1`` (their endpoint must be
+    accurate; the others keep two, whichever lanes they share the loop with); ``nrm[k, ln]`` the
+    norm of update ``k`` (0 for a third not made). ``W`` scratch."""
     ar, ai = F[0], F[1]
     hr, hi, sr, si = W[0], W[1], W[2], W[3]
     jacobian(Q, cr, ci, xr, xi, S[_PR : _PR + 8], S[_PI : _PI + 8], ar, ai, n)
     rows_dot(ar, ai, xr, xi, hr, hi, 0.5, False, n)  # H = x . Q x = x . J / 2
     lu(F, n)
-    for it in range(updates):
+    final = False
+    for ln in range(n):
+        final |= t1[ln] >= 1.0
+    for it in range(3 if final else 2):
         if it:
             qdot(Q, cr, ci, xr, xi, xr, xi, hr, hi, 1.0, False, n)
         chart_residual(S[_PR : _PR + 8], S[_PI : _PI + 8], xr, xi, hr, hi, n)
         solve(F, hr, hi, sr, si, n)
+        for ln in range(n):
+            if it == 2 and t1[ln] < 1.0:
+                sr[:, ln] = 0.0
+                si[:, ln] = 0.0
         for i in range(8):
             for ln in range(n):
                 xr[i, ln] -= sr[i, ln]
                 xi[i, ln] -= si[i, ln]
         norms(sr, si, nrm[it], n)
+    if not final:
+        for ln in range(n):
+            nrm[2, ln] = 0.0
 
 
 @njit(**_O)
@@ -549,16 +544,15 @@ def chart_residual(par, pai, xr, xi, hr, hi, n):
 
 # ------------------------------------------------------------------------------ step control
 @njit(**_O)
-def control(S, T, xr, xi, nrm, updates, acc, opts, n):
+def control(S, T, xr, xi, nrm, t1, acc, opts, n):
     """Accept or reject each lane's step (``S[_DT]`` from ``S[_T]``): ``acc[ln]`` 1 or 0. An
     accepted step moves the lane to the corrected point and updates ``omega``; a rejected one
     halves the step and doubles ``omega``."""
     kappa, theta, omega0, end_tol, noise = opts[2], opts[3], opts[4], opts[7], opts[8]
     Tr, Ti = T[0], T[1]
     for ln in range(n):
-        n1, n2 = nrm[0, ln], nrm[1, ln]
-        n3 = nrm[2, ln] if updates == 3 else 0.0
-        last = nrm[updates - 1, ln]
+        n1, n2, n3 = nrm[0, ln], nrm[1, ln], nrm[2, ln]
+        last = n3 if t1[ln] >= 1.0 else n2
         scale = 0.0
         for i in range(8):
             scale += xr[i, ln] ** 2 + xi[i, ln] ** 2
@@ -573,7 +567,7 @@ def control(S, T, xr, xi, nrm, updates, acc, opts, n):
                 and n1 <= kappa * scale
                 and n2 <= theta * n1 + floor
                 and n3 <= theta * n2 + floor
-                and (S[_T, ln] + S[_DT, ln] < 1.0 or last <= end_tol * scale)
+                and (t1[ln] < 1.0 or last <= end_tol * scale)
             )
             S[_STEPS, ln] += 1.0
         if good:
@@ -739,12 +733,8 @@ def track_block(
         for ln in range(n):
             lane[0, ln] = min(S[_T, ln] + S[_DT, ln], 1.0)
         legc(S, c0r, c0i, lane[0], C[0], C[1], C[2], C[3], n)
-        updates = 2  # a third where a lane reaches t = 1 (its endpoint must be accurate)
-        for ln in range(n):
-            if lane[0, ln] >= 1.0:
-                updates = 3
-        correct(Q, S, X[0], X[1], C[0], C[1], F, W, nrm, updates, n)
-        control(S, T, X[0], X[1], nrm, updates, lane[1], opts, n)
+        correct(Q, S, X[0], X[1], C[0], C[1], F, W, nrm, lane[0], n)
+        control(S, T, X[0], X[1], nrm, lane[0], lane[1], opts, n)
         # Taylor coefficients at the new points (the accepted lanes keep them)
         legc(S, c0r, c0i, S[_T], C[0], C[1], C[2], C[3], n)
         for a in range(2):
@@ -1040,11 +1030,14 @@ def _package(i, x, alpha, keep, joints, geo, out):
             is_real[i, j] = True
             z[j] = -cand[j, 5]
             worst = max(worst, err)
-    order = np.argsort(z, kind="mergesort")
     nr = 0
-    for j in order:
+    for j in range(M):  # stable insertion by Z descending (few solutions)
         if z[j] < np.inf:
-            poses[i, nr] = cand[j]
+            slot = nr
+            while slot > 0 and -poses[i, slot - 1, 5] > z[j]:
+                poses[i, slot] = poses[i, slot - 1]
+                slot -= 1
+            poses[i, slot] = cand[j]
             nr += 1
     counts[i, 0] = keep[i].sum()
     counts[i, 1] = nr
