@@ -367,3 +367,25 @@ def test_numpy_path_when_kernels_are_off(mech, monkeypatch):
     monkeypatch.setenv("PARAKIN_KERNELS", "1")
     q0 = mech.fk_start["q0"].astype(complex) * (1 + 1e-3j)  # a complex geometry: numpy
     assert s66._compiled_kernel(q0) is None
+
+
+# ------------------------------------------------------------------------- peers
+def test_peer_bench_with_bertini():
+    """``parakin bench --peers``: Bertini 2 (optional wheel) tracks the same parameter homotopy to
+    the same 40 solutions on Dietmaier's input; our rows report complete inputs."""
+    pytest.importorskip("bertini")
+    pytest.importorskip("numba")
+    from parakin.mechanisms import stewart66_peers as peers
+
+    df = peers.bench_peers(n_inputs=2, n_bertini=1, double=False)
+    assert list(df["solver"].str.contains("parakin")) == [True, True, False]
+    assert df.loc[0, "agree"] == 2 and df.loc[2, "agree"] == 1 and df.loc[2, "inputs"] == 1
+    assert "finite solutions per input: [40]" in df.loc[2, "note"]
+    assert "| Bertini 2 parameter homotopy, adaptive precision |" in peers.format_peers(df)
+
+
+def test_peer_elimination_template_needs_its_repository(tmp_path):
+    from parakin.mechanisms import stewart66_peers as peers
+
+    with pytest.raises(FileNotFoundError, match="martyushev/fkSGP"):
+        peers.martyushev_solver(tmp_path)

@@ -50,6 +50,9 @@ import numba
 import numpy as np
 from numba import njit
 
+if "NUMBA_THREADING_LAYER" not in os.environ:  # fork-safe, as parakin.kernels.build: the thread
+    numba.config.THREADING_LAYER = "workqueue"  # count read below launches numba's thread pool
+
 __all__ = [
     "geometry",
     "track_block",
@@ -65,11 +68,14 @@ _O = dict(cache=True, error_model="numpy", nogil=True)
 LANES = 32
 #: the smallest block of paths worth a thread of its own
 MIN_BLOCK = 16
+#: from this many active lanes on, LU and solves run vectorised over the lanes (below, one lane at
+#: a time: a vector loop's set-up costs more than a few lanes' work)
+VECTOR_LANES = 12
 
 #: tracking options, in the order of the compiled options vector (:func:`options_vector`)
 OPTIONS: dict[str, float] = {
     "a": 0.005,  # predictor error target, in units of the Newton radius 1/omega
-    "beta_tau": 0.5,  # fraction of the Padé trust region (pole distance) a step may use
+    "beta_tau": 0.75,  # fraction of the Padé trust region (pole distance) a step may use
     "kappa": 0.25,  # first corrector update at most kappa |x|
     "theta": 0.25,  # each corrector update at most theta times the previous one
     "omega0": 1.0,  # Newton constant before the first step's estimate
@@ -171,6 +177,9 @@ def qtimes(Q, cr, ci, vr, vi, yr, yi, scale, n):
     """``y[m, :, ln] = scale Q_m(c_ln) v_ln`` for lanes ``ln < n``: ``Q`` (7, 8, 8) the real
     quadrics without leg constants, ``c`` (6, L) each lane's leg constants (on the ``e`` block's
     diagonal of quadrics 1..6)."""
+    if n < VECTOR_LANES:
+        _qtimes_each(Q, cr, ci, vr, vi, yr, yi, scale, n)
+        return
     for m in range(7):
         for i in range(8):
             if m >= 1 and i < 4:
@@ -185,8 +194,26 @@ def qtimes(Q, cr, ci, vr, vi, yr, yi, scale, n):
 
 
 @njit(**_O)
+def _qtimes_each(Q, cr, ci, vr, vi, yr, yi, scale, n):
+    """:func:`qtimes` one lane at a time (few lanes; the same arithmetic)."""
+    for ln in range(n):
+        for m in range(7):
+            for i in range(8):
+                if m >= 1 and i < 4:
+                    a, b = cr[m - 1, ln], ci[m - 1, ln]
+                    yr[m, i, ln] = scale * (_row(Q, m, i, vr, ln) + a * vr[i, ln] - b * vi[i, ln])
+                    yi[m, i, ln] = scale * (_row(Q, m, i, vi, ln) + a * vi[i, ln] + b * vr[i, ln])
+                else:
+                    yr[m, i, ln] = scale * _row(Q, m, i, vr, ln)
+                    yi[m, i, ln] = scale * _row(Q, m, i, vi, ln)
+
+
+@njit(**_O)
 def qdot(Q, cr, ci, ur, ui, vr, vi, hr, hi, scale, add, n):
     """``h[m] (+)= scale u^T Q_m(c) v`` (m < 7): the quadrics' bilinear forms."""
+    if n < VECTOR_LANES:
+        _qdot_each(Q, cr, ci, ur, ui, vr, vi, hr, hi, scale, add, n)
+        return
     for m in range(7):
         if not add:
             for ln in range(n):
@@ -208,6 +235,9 @@ def qdot(Q, cr, ci, ur, ui, vr, vi, hr, hi, scale, add, n):
 @njit(**_O)
 def rows_dot(yr, yi, ur, ui, outr, outi, scale, add, n):
     """``out[m] (+)= scale u . y[m]`` for m < 7 (``y`` (7 or 8, 8, L))."""
+    if n < VECTOR_LANES:
+        _rows_dot_each(yr, yi, ur, ui, outr, outi, scale, add, n)
+        return
     for m in range(7):
         for ln in range(n):
             re, im = _cdot(yr, yi, m, ur, ui, ln)
@@ -220,16 +250,57 @@ def rows_dot(yr, yi, ur, ui, outr, outi, scale, add, n):
 
 
 @njit(**_O)
+def _qdot_each(Q, cr, ci, ur, ui, vr, vi, hr, hi, scale, add, n):
+    """:func:`qdot` one lane at a time (few lanes; the same arithmetic)."""
+    for ln in range(n):
+        for m in range(7):
+            if not add:
+                hr[m, ln] = 0.0
+                hi[m, ln] = 0.0
+            for i in range(8):
+                sr = _row(Q, m, i, vr, ln)
+                si = _row(Q, m, i, vi, ln)
+                if m >= 1 and i < 4:
+                    a, b = cr[m - 1, ln], ci[m - 1, ln]
+                    sr += a * vr[i, ln] - b * vi[i, ln]
+                    si += a * vi[i, ln] + b * vr[i, ln]
+                hr[m, ln] += scale * (ur[i, ln] * sr - ui[i, ln] * si)
+                hi[m, ln] += scale * (ur[i, ln] * si + ui[i, ln] * sr)
+
+
+@njit(**_O)
+def _rows_dot_each(yr, yi, ur, ui, outr, outi, scale, add, n):
+    """:func:`rows_dot` one lane at a time (few lanes; the same arithmetic)."""
+    for ln in range(n):
+        for m in range(7):
+            re, im = _cdot(yr, yi, m, ur, ui, ln)
+            if add:
+                outr[m, ln] += scale * re
+                outi[m, ln] += scale * im
+            else:
+                outr[m, ln] = scale * re
+                outi[m, ln] = scale * im
+
+
+@njit(**_O)
 def lu(F, n):
-    """LU with partial pivoting of the 8x8 matrices ``F = (ar, ai, lr, li, piv, dr, di)`` of
-    lanes ``ln < n``, in place: ``a`` becomes the strictly upper part of U (zeros elsewhere),
-    ``l`` the multipliers (strictly lower; its other entries stay 0 from :func:`lu_scratch`),
-    ``d`` the reciprocals of U's diagonal (non-finite where a pivot is exactly 0: that lane's
-    solves give non-finite values, which its step rejects), ``piv[k]`` the row swapped with row
-    ``k`` at step ``k``. One lane at a time: the row swaps and row updates of one array are no
-    SIMD loop over lanes (the compiler cannot separate the rows), so the lane loop is outermost
-    and each lane's loops are short and unrolled."""
-    ar, ai, lr, li, piv, dr, di = F
+    """LU with partial pivoting of the 8x8 matrices ``F = (ar, ai, lr, li, piv, dr, di, wr, wi)`` of
+    lanes ``ln < n`` (:func:`_lu_lanes` for many lanes, :func:`_lu_each` for a few): ``a``
+    becomes the strictly upper part of U (zeros elsewhere), ``l`` the multipliers (strictly
+    lower; its other entries stay 0 from :func:`lu_scratch`), ``d`` the reciprocals of U's
+    diagonal (non-finite where a pivot is exactly 0: that lane's solves give non-finite values,
+    which its step rejects), ``piv[k]`` the row swapped with row ``k`` at step ``k``; ``w``
+    scratch. Both give the same bits (the same operations in the same order per lane)."""
+    if n >= VECTOR_LANES:
+        _lu_lanes(F, n)
+    else:
+        _lu_each(F, n)
+
+
+@njit(**_O)
+def _lu_each(F, n):
+    """:func:`lu` one lane at a time (the lane loop outermost, short unrolled loops inside)."""
+    ar, ai, lr, li, piv, dr, di = F[:7]
     for ln in range(n):
         for k in range(8):
             p = k
@@ -268,9 +339,18 @@ def lu(F, n):
 
 @njit(**_O)
 def solve(F, br, bi, outr, outi, n):
-    """``out = A^-1 b`` per lane from :func:`lu`'s factors ``F`` (``out`` may be ``b``); one lane
-    at a time, as :func:`lu`."""
-    ar, ai, lr, li, piv, dr, di = F
+    """``out = A^-1 b`` per lane from :func:`lu`'s factors ``F`` (``out`` not ``b``); as
+    :func:`lu`, vectorised over many lanes, one lane at a time for a few (the same bits)."""
+    if n >= VECTOR_LANES:
+        _solve_lanes(F, br, bi, outr, outi, n)
+    else:
+        _solve_each(F, br, bi, outr, outi, n)
+
+
+@njit(**_O)
+def _solve_each(F, br, bi, outr, outi, n):
+    """:func:`solve` one lane at a time."""
+    ar, ai, lr, li, piv, dr, di = F[:7]
     for ln in range(n):
         for i in range(8):
             outr[i, ln] = br[i, ln]
@@ -296,6 +376,92 @@ def solve(F, br, bi, outr, outi, n):
                 si -= ar[i, j, ln] * outi[j, ln] + ai[i, j, ln] * outr[j, ln]
             outr[i, ln] = sr * dr[i, ln] - si * di[i, ln]
             outi[i, ln] = sr * di[i, ln] + si * dr[i, ln]
+
+
+@njit(**_O)
+def _lu_lanes(F, n):
+    """:func:`lu` with the lanes innermost. The compiler vectorises a lane loop only where it can
+    tell that its stores do not overlap its loads: each loop here writes one row of one array and
+    reads other arrays (the pivot row is copied into ``w`` first) or the same element it writes."""
+    ar, ai, lr, li, piv, dr, di, wr, wi = F
+    for k in range(8):
+        for ln in range(n):
+            piv[k, ln] = k
+            dr[k, ln] = ar[k, k, ln] * ar[k, k, ln] + ai[k, k, ln] * ai[k, k, ln]  # best |a|^2
+        for i in range(k + 1, 8):
+            for ln in range(n):
+                v = ar[i, k, ln] * ar[i, k, ln] + ai[i, k, ln] * ai[i, k, ln]
+                if v > dr[k, ln]:
+                    dr[k, ln] = v
+                    piv[k, ln] = i
+        for ln in range(n):
+            p = piv[k, ln]
+            if p != k:
+                for j in range(k, 8):  # both rows are 0 left of column k
+                    ar[k, j, ln], ar[p, j, ln] = ar[p, j, ln], ar[k, j, ln]
+                    ai[k, j, ln], ai[p, j, ln] = ai[p, j, ln], ai[k, j, ln]
+                for j in range(k):  # the multipliers so far
+                    lr[k, j, ln], lr[p, j, ln] = lr[p, j, ln], lr[k, j, ln]
+                    li[k, j, ln], li[p, j, ln] = li[p, j, ln], li[k, j, ln]
+        for ln in range(n):
+            s = ar[k, k, ln] * ar[k, k, ln] + ai[k, k, ln] * ai[k, k, ln]
+            dr[k, ln] = ar[k, k, ln] / s
+            di[k, ln] = -ai[k, k, ln] / s
+            ar[k, k, ln] = 0.0
+            ai[k, k, ln] = 0.0
+        for j in range(k + 1, 8):
+            for ln in range(n):
+                wr[j, ln] = ar[k, j, ln]
+                wi[j, ln] = ai[k, j, ln]
+        for i in range(k + 1, 8):
+            for ln in range(n):
+                fr = ar[i, k, ln] * dr[k, ln] - ai[i, k, ln] * di[k, ln]
+                fi = ar[i, k, ln] * di[k, ln] + ai[i, k, ln] * dr[k, ln]
+                lr[i, k, ln] = fr
+                li[i, k, ln] = fi
+                ar[i, k, ln] = 0.0
+                ai[i, k, ln] = 0.0
+            for j in range(k + 1, 8):
+                for ln in range(n):
+                    fr, fi = lr[i, k, ln], li[i, k, ln]
+                    ar[i, j, ln] -= fr * wr[j, ln] - fi * wi[j, ln]
+                    ai[i, j, ln] -= fr * wi[j, ln] + fi * wr[j, ln]
+
+
+@njit(**_O)
+def _solve_lanes(F, br, bi, outr, outi, n):
+    """:func:`solve` with the lanes innermost; finished rows are copied into ``w`` and read from
+    there (see :func:`_lu_lanes`)."""
+    ar, ai, lr, li, piv, dr, di, wr, wi = F
+    for i in range(8):
+        for ln in range(n):
+            outr[i, ln] = br[i, ln]
+            outi[i, ln] = bi[i, ln]
+    for k in range(7):
+        for ln in range(n):
+            p = piv[k, ln]
+            if p != k:
+                outr[k, ln], outr[p, ln] = outr[p, ln], outr[k, ln]
+                outi[k, ln], outi[p, ln] = outi[p, ln], outi[k, ln]
+    for i in range(8):
+        for j in range(i):
+            for ln in range(n):
+                outr[i, ln] -= lr[i, j, ln] * wr[j, ln] - li[i, j, ln] * wi[j, ln]
+                outi[i, ln] -= lr[i, j, ln] * wi[j, ln] + li[i, j, ln] * wr[j, ln]
+        for ln in range(n):
+            wr[i, ln] = outr[i, ln]
+            wi[i, ln] = outi[i, ln]
+    for i in range(7, -1, -1):
+        for j in range(i + 1, 8):
+            for ln in range(n):
+                outr[i, ln] -= ar[i, j, ln] * wr[j, ln] - ai[i, j, ln] * wi[j, ln]
+                outi[i, ln] -= ar[i, j, ln] * wi[j, ln] + ai[i, j, ln] * wr[j, ln]
+        for ln in range(n):
+            r, v = outr[i, ln], outi[i, ln]
+            outr[i, ln] = r * dr[i, ln] - v * di[i, ln]
+            outi[i, ln] = r * di[i, ln] + v * dr[i, ln]
+            wr[i, ln] = outr[i, ln]
+            wi[i, ln] = outi[i, ln]
 
 
 @njit(inline="always", **_O)
@@ -681,13 +847,15 @@ def _retire(S, T, flag, acc, opts, n, nxt, P, item_k, item_j, starts, dc, bend, 
 
 @njit(**_O)
 def lu_scratch(L):
-    """Arrays of :func:`lu`'s factors for ``L`` lanes."""
+    """Arrays of :func:`lu`'s factors for ``L`` lanes (and its scratch rows)."""
     return (
         np.zeros((8, 8, L)),
         np.zeros((8, 8, L)),
         np.zeros((8, 8, L)),
         np.zeros((8, 8, L)),
         np.zeros((8, L), np.int64),
+        np.zeros((8, L)),
+        np.zeros((8, L)),
         np.zeros((8, L)),
         np.zeros((8, L)),
     )
