@@ -727,6 +727,13 @@ def fk_all_row(p, q, ts, tw, steps, out, iinfo, finfo):
             if d < 1e-7:
                 poses[j, :] = math.nan
                 break
+    _sorted_out(p, q, poses, out, iinfo, finfo, fr, jr, lengths)
+
+
+@njit(**_O)
+def _sorted_out(p, q, poses, out, iinfo, finfo, fr, jr, lengths):
+    """The kept ``poses`` (16, 6) into ``out`` sorted by Z descending (stable, NaN last) and their
+    counts and IK error into ``iinfo[1:3]``, ``finfo[0]``."""
     # stable sort by -Z (NaN last)
     key = np.empty(16)
     order = np.empty(16, dtype=np.int64)

@@ -1306,6 +1306,7 @@ def fk_all(
     ``poses, study, rotation, translation, is_real, alpha, n_found, n_real, ik_error, steps,
     retries``."""
     G, geo = prepared
+    _loaded()
     c1 = np.ascontiguousarray(c1, dtype=np.float64)
     joints = np.ascontiguousarray(joints, dtype=np.float64)
     threads = numba.get_num_threads() if threads is None else max(1, int(threads))
@@ -1347,6 +1348,15 @@ def fk_all(
         n_found=out[6][:, 0], n_real=out[6][:, 1], ik_error=out[7], steps=steps, retries=retried
     )
     return res
+
+
+@lru_cache(maxsize=1)
+def _loaded() -> None:
+    """Load (or compile) the rarely used retry merge once, on the first call, so that no later
+    call pays for it."""
+    z = np.zeros((1, 1, 8), np.complex128)
+    r = np.zeros((1, 1))
+    merge_all(z, r, r, np.ones((1, 1), np.bool_), np.zeros(1, np.int64), z, r, r, 0.0)
 
 
 @lru_cache(maxsize=8)

@@ -305,9 +305,18 @@ class Stewart36(Mechanism):
             )
             par = kernels.use_parallel(n, None)
             out, info = stewart36_all.fk_all(p, qf, int(newton_steps), parallel=par)
-            self._complete_by_homotopy(qf, out, info, np.flatnonzero(info.pop("unresolved")))
-            out = out.reshape(*batch, 16, 6)
-            return (out, {k: v.reshape(batch) for k, v in info.items()}) if return_info else out
+            unresolved = np.flatnonzero(info.pop("unresolved"))
+        else:
+            out, info, unresolved = self._fk_all_numpy(qf, newton_steps)
+        self._complete_by_homotopy(qf, out, info, unresolved)
+        out = out.reshape(*batch, 16, 6)
+        if return_info:
+            return out, {k: v.reshape(batch) for k, v in info.items()}
+        return out
+
+    def _fk_all_numpy(self, qf: Array, newton_steps: int) -> tuple[Array, dict, Array]:
+        """:meth:`fk_all` of flat inputs by numpy: ``(poses (n, 16, 6), info, unresolved rows)``."""
+        n = len(qf)
         c, r, u = self.circles(qf)
         ok = np.all(np.isfinite(r), axis=-1)
         out = np.full((n, 16, 6), np.nan)
@@ -370,11 +379,7 @@ class Stewart36(Mechanism):
                     -np.inf,
                 )
             info["ik_error"][idx] = np.where(fin.any(-1), e.max(-1), np.nan)
-        self._complete_by_homotopy(qf, out, info, unresolved)
-        out = out.reshape(*batch, 16, 6)
-        if return_info:
-            return out, {k: v.reshape(batch) for k, v in info.items()}
-        return out
+        return out, info, unresolved
 
     @cached_property
     def as_stewart66(self):
