@@ -268,6 +268,7 @@ def test_independent_check_by_bertini2(mech):
     """Bertini 2 (the ``bertini2`` wheel, import name ``bertini``), total-degree homotopy on the same
     Study system of Dietmaier's input (dehomogenised by e0 = 1): the same 40 solutions, all real."""
     b = pytest.importorskip("bertini")
+    b.recording(False)  # bertini2 records every solve in ./bertini_output unless told not to
     bs, ps, *_ = mech._scaled
     q = hc.quadrics(bs, ps, mech._target_c(np.asarray(DIETMAIER_LENGTHS)[None])[0]).real
     names = ["e1", "e2", "e3", "g0", "g1", "g2", "g3"]
@@ -292,13 +293,24 @@ def test_independent_check_by_bertini2(mech):
     assert len(theirs) == 40 and np.all(d.min(0) < 1e-6) and np.all(d.min(1) < 1e-6)
 
 
-# ------------------------------------------------------------------------- compiled tracker
-def test_compiled_tracker_same_as_numpy(mech, random_mechs, monkeypatch):
-    """parakin.kernels.stewart66_track: the same paths, certificates and solutions as the numpy
-    tracker (rounding apart); serial and parallel drivers identical."""
+# ------------------------------------------------------------------------- compiled fk_all
+def _solution_sets_agree(a, b, i, tol=1e-9):
+    """Input ``i``'s certified solutions in ``a`` and ``b`` (FKAll) are the same set."""
+    sa = a.study[i][np.isfinite(a.study[i, :, 0])]
+    sb = b.study[i][np.isfinite(b.study[i, :, 0])]
+    if len(sa) != len(sb):
+        return False
+    # e.e = 1 fixes the projective scale up to sign
+    d = np.minimum(np.abs(sa[:, None] - sb[None]).max(-1), np.abs(sa[:, None] + sb[None]).max(-1))
+    return bool(np.all(d.min(0) < tol) and np.all(d.min(1) < tol))
+
+
+def test_compiled_fk_all_same_solutions_as_numpy(mech, random_mechs, monkeypatch):
+    """parakin.kernels.stewart66_track (the whole fk_all compiled: Taylor/Padé tracker in lanes,
+    certificates, poses) finds the same certified solution sets, real poses and counts as the
+    numpy path."""
     pytest.importorskip("numba")
     from parakin import kernels
-    from parakin.kernels import stewart66_track as tk
 
     if not kernels.enabled():
         pytest.skip("compiled kernels switched off")
@@ -309,26 +321,71 @@ def test_compiled_tracker_same_as_numpy(mech, random_mechs, monkeypatch):
         with monkeypatch.context() as mp:
             mp.setenv("PARAKIN_KERNELS", "0")
             ref = m.fk_all(q, return_info=True)
-        for k in ("n_found", "n_real", "complete", "is_real"):
+        for k in ("n_found", "n_real", "complete"):
             assert np.array_equal(getattr(got, k), getattr(ref, k)), k
         assert np.array_equal(np.isnan(got.poses), np.isnan(ref.poses))
         assert np.nanmax(np.abs(_wrap(got.poses - ref.poses))) < 1e-9
-        assert np.nanmax(np.abs(got.study - ref.study)) < 1e-9
-        assert np.nanmax(got.alpha) < hc.ALPHA0
-    st = mech.fk_start
+        assert all(_solution_sets_agree(got, ref, i) for i in range(len(q)))
+        assert np.nanmax(got.alpha) < hc.ALPHA0 and np.nanmax(got.ik_error) < 1e-12
+        # the complex solutions as rotations (R^T R = I, no conjugation) and origins satisfy the legs
+        rot, o = got.rotation[:, :40], got.translation[:, :40]
+        v = np.einsum("...ij,kj->...ki", rot, m.platform_points) + o[..., None, :] - m.base_points
+        ok = np.isfinite(v[..., 0, 0])
+        legs = np.broadcast_to(q[:, None, :], ok.shape + (6,))
+        assert np.allclose(np.sum(v * v, -1)[ok], legs[ok] ** 2, atol=1e-7)
+
+
+def test_compiled_fk_all_is_deterministic(mech):
+    """The same bits whatever the batch around an input and the number of threads: each path's
+    arithmetic does not depend on its lane, block or thread."""
+    pytest.importorskip("numba")
+    from parakin import kernels
+
+    if not kernels.enabled():
+        pytest.skip("compiled kernels switched off")
+    from parakin.kernels import stewart66_track as tk
+
+    rng = np.random.default_rng(13)
+    q = mech.ik(study.random_pose(rng, 7, mech))
+    kernel, prepared = mech._kernel
     c1 = mech._target_c(q)
-    x0 = np.repeat(st["solutions"][None], len(q), 0).reshape(-1, 8)
-    cc = np.repeat(c1, len(st["solutions"]), 0)
-    args = (st["q0"].real, st["patch"], st["c"], cc, None, x0, {"h0": 0.2, "hmax": 1.0})
-    a, b = tk.track(*args, parallel=False), tk.track(*args, parallel=True)
-    assert all(np.array_equal(u, v) for u, v in zip(a, b))
+    one = tk.fk_all(prepared, c1, q, alpha0=hc.ALPHA0, threads=1)
+    two = tk.fk_all(prepared, c1, q, alpha0=hc.ALPHA0, threads=2)
+    alone = tk.fk_all(prepared, c1[3:4], q[3:4], alpha0=hc.ALPHA0, threads=2)
+    for k in one:
+        assert np.array_equal(one[k], two[k], equal_nan=True), k
+        assert np.array_equal(one[k][3:4], alone[k], equal_nan=True), k
+    with pytest.raises(ValueError, match="unknown tracking option"):
+        tk.options_vector({"tau": 1.0})
 
 
-def test_numpy_tracker_when_kernels_are_off(mech, monkeypatch):
+def test_numpy_path_when_kernels_are_off(mech, monkeypatch):
     from parakin.mechanisms import stewart66 as s66
 
     monkeypatch.setenv("PARAKIN_KERNELS", "0")
-    assert s66._compiled_tracker(mech.fk_start["q0"]) is None
+    assert s66._compiled_kernel(mech.fk_start["q0"]) is None
     monkeypatch.setenv("PARAKIN_KERNELS", "1")
     q0 = mech.fk_start["q0"].astype(complex) * (1 + 1e-3j)  # a complex geometry: numpy
-    assert s66._compiled_tracker(q0) is None
+    assert s66._compiled_kernel(q0) is None
+
+
+# ------------------------------------------------------------------------- peers
+def test_peer_bench_with_bertini():
+    """``parakin bench --peers``: Bertini 2 (optional wheel) tracks the same parameter homotopy to
+    the same 40 solutions on Dietmaier's input; our rows report complete inputs."""
+    pytest.importorskip("bertini")
+    pytest.importorskip("numba")
+    from parakin.mechanisms import stewart66_peers as peers
+
+    df = peers.bench_peers(n_inputs=2, n_bertini=1, double=False)
+    assert list(df["solver"].str.contains("parakin")) == [True, True, False]
+    assert df.loc[0, "agree"] == 2 and df.loc[2, "agree"] == 1 and df.loc[2, "inputs"] == 1
+    assert "finite solutions per input: [40]" in df.loc[2, "note"]
+    assert "| Bertini 2 parameter homotopy, adaptive precision |" in peers.format_peers(df)
+
+
+def test_peer_elimination_template_needs_its_repository(tmp_path):
+    from parakin.mechanisms import stewart66_peers as peers
+
+    with pytest.raises(FileNotFoundError, match="martyushev/fkSGP"):
+        peers.martyushev_solver(tmp_path)

@@ -639,6 +639,16 @@ def cmd_bench(args) -> int:
     from parakin.papers import PAPERS
     from parakin.studies import solver_atlas as extras
 
+    if args.peers is not None:  # the 6-6 all-solutions FK against Bertini 2 / fkSGP (docs/peers.md)
+        from parakin.mechanisms import stewart66_peers as peers
+
+        table = peers.bench_peers(
+            fksgp=args.peers or None,
+            n_inputs=11 if args.quick else 31,
+            progress=lambda s: print(f"parakin bench --peers: {s} ...", file=sys.stderr),
+        )
+        print(table.to_json(orient="records") if args.json else peers.format_peers(table))
+        return 0
     config = load_run_config([QUICK_CONFIG] if args.quick else [])
     root = Path(args.outdir) if args.outdir else Path(config["figures_dir"])
     names = args.name or ["atlas", "kernels", *BENCHES]
@@ -1096,6 +1106,15 @@ def _add_bench(sub) -> None:
         help="figures folder (default: figures_dir of the config)",
     )
     p.add_argument("--json", action="store_true", help="print the tables as JSON records")
+    p.add_argument(
+        "--peers",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="FKSGP_DIR",
+        help="the 6-6 all-solutions FK against Bertini 2 (if installed) and, given a local copy "
+        "of martyushev/fkSGP, its elimination-template solver: same inputs, one run",
+    )
     p.set_defaults(func=cmd_bench)
 
 

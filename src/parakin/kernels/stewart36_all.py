@@ -37,9 +37,11 @@ _O = dict(cache=True, error_model="numpy", nogil=True)
 SAMPLES = 32
 #: as ``parakin.mechanisms.stewart36.RECOVER_WIDTH, RECOVER_POINTS`` (checked by the tests)
 RECOVER_WIDTH, RECOVER_POINTS = 0.05, 4001
+#: as ``parakin.mechanisms.stewart36.CONVERGED, DISTINCT`` (checked by the tests)
+CONVERGED, DISTINCT = 1e-10, 1e-6
 #: Aberth-Ehrlich: at most this many sweeps; a root is done when its step is below ABERTH_TOL * (1 + |z|)
 ABERTH_MAXIT, ABERTH_TOL = 80, 1e-13
-# info columns: ints (n_complex, n_real, n_above), floats (ik_error, tail)
+# info columns: ints (n_complex, n_real, n_above, unresolved), floats (ik_error, tail)
 
 
 def params(top: np.ndarray, base: np.ndarray, a: float, home: np.ndarray) -> np.ndarray:
@@ -313,71 +315,77 @@ def _back_substitute(g, t1, out):
 
 
 @njit(**_O)
-def _newton_t(g, t, steps, jac, f):
-    """Complex Newton on ``(E12(t1,t2), E23(t2,t3), E13(t1,t3)) = 0`` for one triple, in place;
-    a step is taken only where the Jacobian is finite with ``|det| > 1e-300``."""
-    for _ in range(steps):
-        for row in range(3):
-            i = 1 if row == 1 else 0
-            j = 1 if row == 0 else 2
-            ti, tj = t[i], t[j]
-            pi1, pi2 = ti, ti * ti
-            pj1, pj2 = tj, tj * tj
-            fv = 0.0j
-            di = 0.0j
-            dj = 0.0j
-            for a in range(3):
-                pa = 1.0 if a == 0 else (pi1 if a == 1 else pi2)
-                da = 0.0 if a == 0 else (1.0 if a == 1 else 2 * pi1)
-                for b in range(3):
-                    gab = g[row, a, b]
-                    pb = 1.0 if b == 0 else (pj1 if b == 1 else pj2)
-                    db = 0.0 if b == 0 else (1.0 if b == 1 else 2 * pj1)
-                    fv += gab * pa * pb
-                    di += gab * da * pb
-                    dj += gab * pa * db
-            f[row] = fv
+def _newton_update(g, t, jac, f):
+    """One complex Newton update of triple ``t`` on ``(E12(t1,t2), E23(t2,t3), E13(t1,t3)) = 0``
+    into ``f``; False (no update) where the Jacobian is not finite or ``|det| <= 1e-300``."""
+    for row in range(3):
+        i = 1 if row == 1 else 0
+        j = 1 if row == 0 else 2
+        ti, tj = t[i], t[j]
+        pi1, pi2 = ti, ti * ti
+        pj1, pj2 = tj, tj * tj
+        fv = 0.0j
+        di = 0.0j
+        dj = 0.0j
+        for a in range(3):
+            pa = 1.0 if a == 0 else (pi1 if a == 1 else pi2)
+            da = 0.0 if a == 0 else (1.0 if a == 1 else 2 * pi1)
+            for b in range(3):
+                gab = g[row, a, b]
+                pb = 1.0 if b == 0 else (pj1 if b == 1 else pj2)
+                db = 0.0 if b == 0 else (1.0 if b == 1 else 2 * pj1)
+                fv += gab * pa * pb
+                di += gab * da * pb
+                dj += gab * pa * db
+        f[row] = fv
+        for col in range(3):
+            jac[row, col] = 0.0
+        jac[row, i] = di
+        jac[row, j] = dj
+    for row in range(3):
+        if not _cfinite(f[row]):
+            return False
+        for col in range(3):
+            if not _cfinite(jac[row, col]):
+                return False
+    # LU with partial pivoting; |det| from the pivots
+    det = 1.0
+    for k in range(3):
+        piv = k
+        best = abs(jac[k, k])
+        for i in range(k + 1, 3):
+            a = abs(jac[i, k])
+            if a > best:
+                best, piv = a, i
+        det *= best
+        if best == 0.0:
+            break
+        if piv != k:
             for col in range(3):
-                jac[row, col] = 0.0
-            jac[row, i] = di
-            jac[row, j] = dj
-        fin = True
-        for row in range(3):
-            if not _cfinite(f[row]):
-                fin = False
-            for col in range(3):
-                if not _cfinite(jac[row, col]):
-                    fin = False
-        if not fin:
-            continue
-        # LU with partial pivoting; |det| from the pivots
-        det = 1.0
-        for k in range(3):
-            piv = k
-            best = abs(jac[k, k])
-            for i in range(k + 1, 3):
-                a = abs(jac[i, k])
-                if a > best:
-                    best, piv = a, i
-            det *= best
-            if best == 0.0:
-                break
-            if piv != k:
-                for col in range(3):
-                    jac[k, col], jac[piv, col] = jac[piv, col], jac[k, col]
-                f[k], f[piv] = f[piv], f[k]
-            for i in range(k + 1, 3):
-                m = jac[i, k] / jac[k, k]
-                for col in range(k + 1, 3):
-                    jac[i, col] -= m * jac[k, col]
-                f[i] -= m * f[k]
-        if not (det > 1e-300):
-            continue
-        for k in range(2, -1, -1):
-            acc = f[k]
+                jac[k, col], jac[piv, col] = jac[piv, col], jac[k, col]
+            f[k], f[piv] = f[piv], f[k]
+        for i in range(k + 1, 3):
+            m = jac[i, k] / jac[k, k]
             for col in range(k + 1, 3):
-                acc -= jac[k, col] * f[col]
-            f[k] = acc / jac[k, k]
+                jac[i, col] -= m * jac[k, col]
+            f[i] -= m * f[k]
+    if not (det > 1e-300):
+        return False
+    for k in range(2, -1, -1):
+        acc = f[k]
+        for col in range(k + 1, 3):
+            acc -= jac[k, col] * f[col]
+        f[k] = acc / jac[k, k]
+    return True
+
+
+@njit(**_O)
+def _newton_t(g, t, steps, jac, f):
+    """Complex Newton (:func:`_newton_update`) on one triple, in place, at most ``steps``
+    updates."""
+    for _ in range(steps):
+        if not _newton_update(g, t, jac, f):
+            continue
         small = True
         for k in range(3):
             t[k] -= f[k]
@@ -385,6 +393,37 @@ def _newton_t(g, t, steps, jac, f):
                 small = False
         if small:  # converged: further steps change t by rounding only
             break
+
+
+@njit(**_O)
+def _unresolved(g, t, nroot, jac, f):
+    """As ``parakin.mechanisms.stewart36._unresolved`` for one input: whether the finite refined
+    triples are not all converged (one more nonsingular Newton update below ``CONVERGED``) and
+    pairwise distinct (by ``DISTINCT``)."""
+    one = np.empty(3, dtype=np.complex128)
+    scale = np.empty(nroot)
+    fin = np.empty(nroot, dtype=np.bool_)
+    for j in range(nroot):
+        fin[j] = _cfinite(t[j, 0]) and _cfinite(t[j, 1]) and _cfinite(t[j, 2])
+        scale[j] = 1.0 + _nmax(_nmax(abs(t[j, 0]), abs(t[j, 1])), abs(t[j, 2]))
+    for j in range(nroot):
+        if not fin[j]:
+            continue
+        for k in range(3):
+            one[k] = t[j, k]
+        if not _newton_update(g, one, jac, f):
+            return True
+        moved = _nmax(_nmax(abs(f[0]), abs(f[1])), abs(f[2])) / scale[j]
+        if not (moved < CONVERGED):
+            return True
+        for i in range(j):
+            if fin[i]:
+                d = _nmax(
+                    _nmax(abs(t[j, 0] - t[i, 0]), abs(t[j, 1] - t[i, 1])), abs(t[j, 2] - t[i, 2])
+                )
+                if d < DISTINCT * _nmax(scale[i], scale[j]):
+                    return True
+    return False
 
 
 @njit(**_O)
@@ -595,7 +634,8 @@ def _solve6(a, b):
 @njit(**_O)
 def fk_all_row(p, q, ts, tw, steps, out, iinfo, finfo):
     """Every real forward solution of one input ``q`` (6) into ``out`` (16, 6), NaN-padded, sorted
-    by Z descending; ``iinfo = (n_complex, n_real, n_above)``, ``finfo = (ik_error, tail)``."""
+    by Z descending; ``iinfo = (n_complex, n_real, n_above, unresolved)`` (:func:`_unresolved`:
+    the caller completes those inputs), ``finfo = (ik_error, tail)``."""
     out[:] = math.nan
     iinfo[:] = 0
     finfo[:] = math.nan
@@ -649,6 +689,7 @@ def fk_all_row(p, q, ts, tw, steps, out, iinfo, finfo):
         for k in range(3):
             t[j + 1, k] = -t[j, k]
     _recover(g, t, deg, steps, jac, f)
+    iinfo[3] = _unresolved(g, t, deg, jac, f)
     poses = np.full((16, 6), math.nan)
     fr = np.empty(6)
     jr = np.empty((6, 6))
@@ -686,6 +727,13 @@ def fk_all_row(p, q, ts, tw, steps, out, iinfo, finfo):
             if d < 1e-7:
                 poses[j, :] = math.nan
                 break
+    _sorted_out(p, q, poses, out, iinfo, finfo, fr, jr, lengths)
+
+
+@njit(**_O)
+def _sorted_out(p, q, poses, out, iinfo, finfo, fr, jr, lengths):
+    """The kept ``poses`` (16, 6) into ``out`` sorted by Z descending (stable, NaN last) and their
+    counts and IK error into ``iinfo[1:3]``, ``finfo[0]``."""
     # stable sort by -Z (NaN last)
     key = np.empty(16)
     order = np.empty(16, dtype=np.int64)
@@ -744,7 +792,7 @@ def fk_all(p: np.ndarray, joints: np.ndarray, steps: int = 8, parallel: bool = T
     q = np.ascontiguousarray(joints, dtype=np.float64).reshape(-1, 6)
     n = len(q)
     out = np.empty((n, 16, 6))
-    iinfo = np.zeros((n, 3), dtype=np.int64)
+    iinfo = np.zeros((n, 4), dtype=np.int64)
     finfo = np.empty((n, 2))
     fn = fk_all_parallel if parallel else fk_all_serial
     fn(np.ascontiguousarray(p, dtype=np.float64), q, _TS, _TW, int(steps), out, iinfo, finfo)
@@ -754,5 +802,6 @@ def fk_all(p: np.ndarray, joints: np.ndarray, steps: int = 8, parallel: bool = T
         "n_above": iinfo[:, 2].copy(),
         "ik_error": finfo[:, 0].copy(),
         "tail": finfo[:, 1].copy(),
+        "unresolved": iinfo[:, 3] == 1,
     }
     return out, info

@@ -256,7 +256,14 @@ class Stewart36(Mechanism):
         if ``max |IK(pose) - L| <= 1e-9``. With ``return_info`` also a dict of per-input arrays:
         ``n_complex`` (roots of the polynomial), ``n_real``, ``n_above`` (Z > 0), ``ik_error``
         (max over the real solutions), ``tail`` (relative size of the interpolated coefficients
-        above degree 16: the certificate that the degree is 16).
+        above degree 16: the certificate that the degree is 16), ``homotopy`` (see below).
+
+        Completeness: where the refined roots are not 16 distinct converged solutions of the
+        biquadratics (:func:`_unresolved`: the polynomial's roots clustered, so that root finding
+        lost some; about 7 % of inputs drawn over the whole pose box, rare near home), the input is
+        also solved by the certified parameter homotopy of the 6-6 platform
+        (:class:`parakin.mechanisms.stewart66.Stewart66` with this platform's anchors, 16 roots)
+        and the real solutions of both, each checked by the IK, are merged (``homotopy`` True).
 
         Where the compiled kernels are on (:func:`parakin.kernels.enabled`), the same steps run
         compiled, in parallel for large batches (:mod:`parakin.kernels.stewart36_all`; the roots
@@ -278,8 +285,18 @@ class Stewart36(Mechanism):
             )
             par = kernels.use_parallel(n, None)
             out, info = stewart36_all.fk_all(p, qf, int(newton_steps), parallel=par)
-            out = out.reshape(*batch, 16, 6)
-            return (out, {k: v.reshape(batch) for k, v in info.items()}) if return_info else out
+            unresolved = np.flatnonzero(info.pop("unresolved"))
+        else:
+            out, info, unresolved = self._fk_all_numpy(qf, newton_steps)
+        self._complete_by_homotopy(qf, out, info, unresolved)
+        out = out.reshape(*batch, 16, 6)
+        if return_info:
+            return out, {k: v.reshape(batch) for k, v in info.items()}
+        return out
+
+    def _fk_all_numpy(self, qf: Array, newton_steps: int) -> tuple[Array, dict, Array]:
+        """:meth:`fk_all` of flat inputs by numpy: ``(poses (n, 16, 6), info, unresolved rows)``."""
+        n = len(qf)
         c, r, u = self.circles(qf)
         ok = np.all(np.isfinite(r), axis=-1)
         out = np.full((n, 16, 6), np.nan)
@@ -289,8 +306,10 @@ class Stewart36(Mechanism):
             "n_above": np.zeros(n, int),
             "ik_error": np.full(n, np.nan),
             "tail": np.full(n, np.nan),
+            "homotopy": np.zeros(n, bool),
         }
         idx = np.flatnonzero(ok)
+        unresolved = np.zeros(0, dtype=int)
         if idx.size:
             coef = self.fk_poly(qf[idx])
             scale = np.max(np.abs(coef[:, :17]), axis=-1)
@@ -301,6 +320,7 @@ class Stewart36(Mechanism):
             t = _back_substitute(g, roots)  # (m, 16, 3) complex
             t = _newton_t(g, t, newton_steps)
             t = _recover_merged(g, t, newton_steps)
+            unresolved = idx[_unresolved(g, t)]
             real = np.all(np.abs(t.imag) <= 1e-6 * (1 + np.abs(t)), axis=-1) & np.all(
                 np.isfinite(t), -1
             )
@@ -339,10 +359,38 @@ class Stewart36(Mechanism):
                     -np.inf,
                 )
             info["ik_error"][idx] = np.where(fin.any(-1), e.max(-1), np.nan)
-        out = out.reshape(*batch, 16, 6)
-        if return_info:
-            return out, {k: v.reshape(batch) for k, v in info.items()}
-        return out
+        return out, info, unresolved
+
+    @cached_property
+    def as_stewart66(self):
+        """This platform as a general 6-6 (coincident top anchors allowed): its certified
+        all-solutions FK (:meth:`parakin.mechanisms.stewart66.Stewart66.fk_all`, 16 roots)."""
+        from parakin.mechanisms.stewart66 import Stewart66
+
+        return Stewart66(
+            base=self.base_points, platform=self.top_points[LEG_TOP], allow_coincident=True
+        )
+
+    def _complete_by_homotopy(self, qf: Array, out: Array, info: dict, rows: Array) -> None:
+        """Merge the real solutions of :attr:`as_stewart66`'s certified homotopy into inputs
+        ``rows`` of ``out`` (n, 16, 6) and their ``info`` counts, in place (each solution checked by
+        the IK, duplicates removed, sorted by Z descending)."""
+        info.setdefault("homotopy", np.zeros(len(qf), bool))
+        if not len(rows):
+            return
+        extra = self.as_stewart66.fk_all(qf[rows])  # (k, 40, 6): certified real, IK-checked
+        extra[..., :3] = (extra[..., :3] + np.pi) % (2 * np.pi) - np.pi  # as this path wraps
+        poses = _dedupe(np.concatenate([out[rows], extra], axis=1))
+        key = np.where(np.isfinite(poses[..., 5]), -poses[..., 5], np.inf)
+        poses = np.take_along_axis(poses, np.argsort(key, -1, kind="stable")[..., None], 1)
+        out[rows] = poses[:, :16]
+        fin = np.isfinite(out[rows][..., 0])
+        with np.errstate(invalid="ignore"):
+            e = np.max(np.abs(self.ik(np.nan_to_num(out[rows])) - qf[rows][:, None]), axis=-1)
+        info["n_real"][rows] = fin.sum(-1)
+        info["n_above"][rows] = (fin & (np.nan_to_num(out[rows][..., 5]) > 0)).sum(-1)
+        info["ik_error"][rows] = np.where(fin.any(-1), np.where(fin, e, -np.inf).max(-1), np.nan)
+        info["homotopy"][rows] = True
 
     def pose_from_points(self, pts: ArrayLike) -> Array:
         """Pose (..., 6) of the platform whose vertices A1, A2, A3 are ``pts`` (..., 3, 3) (docs/li2017_stewart36.md#s1.5):
@@ -493,31 +541,33 @@ def _back_substitute(g: Array, roots: Array) -> Array:
     return out
 
 
-def _newton_t(g: Array, t: Array, steps: int) -> Array:
-    """Complex Newton on (E12(t1,t2), E23(t2,t3), E13(t1,t3)) = 0, batched over (m, 16)."""
+def _newton_update(g: Array, t: Array) -> tuple[Array, Array]:
+    """One complex Newton update on (E12(t1,t2), E23(t2,t3), E13(t1,t3)) = 0, batched over the
+    leading axes of ``t`` (..., 3): ``(step, ok)``, ``ok`` False (step 0) where the Jacobian is not
+    finite or singular."""
     gg = g[:, None]
     pw = np.arange(3)
+    with np.errstate(all="ignore"):
+        p = t[..., None] ** pw  # (m, 16, 3, 3): variable, power
+        dp = np.concatenate([np.zeros_like(p[..., :1]), p[..., :1], 2 * p[..., 1:2]], axis=-1)
+        f = np.zeros(t.shape, dtype=complex)
+        jac = np.zeros(t.shape + (3,), dtype=complex)
+        for row, (i, j, k) in enumerate(((0, 1, 0), (1, 2, 1), (0, 2, 2))):
+            gk = gg[..., k, :, :]
+            f[..., row] = np.einsum("...pq,...p,...q->...", gk, p[..., i, :], p[..., j, :])
+            jac[..., row, i] = np.einsum("...pq,...p,...q->...", gk, dp[..., i, :], p[..., j, :])
+            jac[..., row, j] = np.einsum("...pq,...p,...q->...", gk, p[..., i, :], dp[..., j, :])
+        fin = np.all(np.isfinite(jac), axis=(-1, -2)) & np.all(np.isfinite(f), -1)
+        ok = fin & (np.abs(np.linalg.det(np.where(fin[..., None, None], jac, np.eye(3)))) > 1e-300)
+        jj = np.where(ok[..., None, None], jac, np.eye(3))
+        step = np.linalg.solve(jj, np.where(ok[..., None], f, 0)[..., None])[..., 0]
+    return step, ok
+
+
+def _newton_t(g: Array, t: Array, steps: int) -> Array:
+    """Complex Newton on (E12(t1,t2), E23(t2,t3), E13(t1,t3)) = 0, batched over (m, 16)."""
     for _ in range(steps):
-        with np.errstate(all="ignore"):
-            p = t[..., None] ** pw  # (m, 16, 3, 3): variable, power
-            dp = np.concatenate([np.zeros_like(p[..., :1]), p[..., :1], 2 * p[..., 1:2]], axis=-1)
-            f = np.zeros(t.shape, dtype=complex)
-            jac = np.zeros(t.shape + (3,), dtype=complex)
-            for row, (i, j, k) in enumerate(((0, 1, 0), (1, 2, 1), (0, 2, 2))):
-                gk = gg[..., k, :, :]
-                f[..., row] = np.einsum("...pq,...p,...q->...", gk, p[..., i, :], p[..., j, :])
-                jac[..., row, i] = np.einsum(
-                    "...pq,...p,...q->...", gk, dp[..., i, :], p[..., j, :]
-                )
-                jac[..., row, j] = np.einsum(
-                    "...pq,...p,...q->...", gk, p[..., i, :], dp[..., j, :]
-                )
-            fin = np.all(np.isfinite(jac), axis=(-1, -2)) & np.all(np.isfinite(f), -1)
-            ok = fin & (
-                np.abs(np.linalg.det(np.where(fin[..., None, None], jac, np.eye(3)))) > 1e-300
-            )
-            jj = np.where(ok[..., None, None], jac, np.eye(3))
-            step = np.linalg.solve(jj, np.where(ok[..., None], f, 0)[..., None])[..., 0]
+        step, ok = _newton_update(g, t)
         t = np.where(ok[..., None], t - step, t)
     return t
 
@@ -599,6 +649,29 @@ def _recover_merged(g: Array, t: Array, steps: int) -> Array:
                     break
         t[i] = ti
     return t
+
+
+#: a refined (t1, t2, t3) is converged when one more Newton step moves it less than CONVERGED, and
+#: two are distinct when they differ by at least DISTINCT (both relative, times 1 + |t|)
+CONVERGED, DISTINCT = 1e-10, 1e-6
+
+
+def _unresolved(g: Array, t: Array) -> Array:
+    """Inputs (rows of ``t`` (m, 16, 3)) whose finite refined roots are not all converged (one more
+    Newton step, with a nonsingular Jacobian, below ``CONVERGED``) and pairwise distinct (by
+    ``DISTINCT``) solutions of the biquadratics: where the degree-16 polynomial's roots cluster,
+    root finding and Newton lose some (two converge to one, or one stalls at a near-singular
+    point), and the real solutions found may be fewer than the real ones there are."""
+    step, ok = _newton_update(g, t)
+    scale = 1 + np.max(np.abs(np.nan_to_num(t)), axis=-1)  # (m, 16)
+    fin = np.all(np.isfinite(t), axis=-1)
+    with np.errstate(invalid="ignore"):
+        moved = np.max(np.abs(step), axis=-1) / scale
+        d = np.max(np.abs(t[:, :, None] - t[:, None, :]), axis=-1)
+    converged = np.all(~fin | (ok & (moved < CONVERGED)), axis=-1)
+    pair = fin[:, :, None] & fin[:, None, :] & ~np.eye(t.shape[1], dtype=bool)
+    far = d >= DISTINCT * np.maximum(scale[:, :, None], scale[:, None, :])
+    return ~(converged & np.all(~pair | far, axis=(-1, -2)))
 
 
 def _dedupe(poses: Array, tol: float = 1e-7) -> Array:

@@ -77,6 +77,8 @@ DIETMAIER_LENGTHS = (1.0, 0.645275, 1.086284, 1.503439, 1.281933, 0.771071)
 
 #: seed of the random complex leg constants of each geometry's own start system (a module constant)
 FIBER_SEED = 66
+#: height of :meth:`Stewart66.home`'s platform centroid above the base's, in units of ``size``
+HOME_HEIGHT = 1.5
 #: retries (with a fresh random bend of the parameter path) of inputs not complete after the first pass
 RETRIES = 3
 #: step control of the once-per-geometry tracking from the stored generic start (cautious)
@@ -91,9 +93,16 @@ TRACK_OPTIONS: dict[str, float] = {
 }
 
 
-def _compiled_tracker(q0: np.ndarray):
+def _kernels_on() -> bool:
+    from parakin import kernels
+
+    return kernels.enabled()
+
+
+def _compiled_kernel(q0: np.ndarray):
     """:mod:`parakin.kernels.stewart66_track` where the compiled path is on and the geometry's
-    quadrics are real; None otherwise (the numpy tracker)."""
+    quadrics are real; None otherwise (the numpy path). Imported here, on the first ``fk_all``:
+    importing the mechanism compiles nothing."""
     from parakin import kernels
 
     if not kernels.enabled() or np.any(np.imag(q0) != 0):
@@ -103,12 +112,6 @@ def _compiled_tracker(q0: np.ndarray):
     return stewart66_track
 
 
-def _use_parallel(n_paths: int) -> bool:
-    from parakin import kernels
-
-    return kernels.use_parallel(n_paths, None)
-
-
 def load_start() -> dict[str, np.ndarray]:
     """The stored generic start system (``base``, ``platform``, ``c``, ``patch``, ``solutions``)."""
     with (
@@ -116,6 +119,16 @@ def load_start() -> dict[str, np.ndarray]:
     ):
         with np.load(fh) as z:
             return {k: z[k] for k in z.files}
+
+
+def _central_c(b: np.ndarray) -> np.ndarray:
+    """Mean leg constants ``c_i = |p_i|^2 + |b_i|^2 - L_i^2`` (centred anchors, units of
+    ``size``) over poses with a uniformly random orientation and the platform centroid normal
+    around :meth:`Stewart66.home`'s with unit variance per axis: ``E|t|^2 = h^2 + 3`` and
+    ``E[t] = (0, 0, h)`` give ``2 h b_iz - h^2 - 3``. The start system sits there (plus a random
+    imaginary part): the paths to typical inputs are short."""
+    h = HOME_HEIGHT
+    return 2 * h * b[:, 2] - (h * h + 3.0)
 
 
 def _as_points(value: Any, what: str) -> tuple[tuple[float, float, float], ...]:
@@ -250,7 +263,7 @@ class Stewart66(Mechanism):
         o = (
             self.base_points.mean(0)
             - self.platform_points.mean(0)
-            + np.array([0.0, 0.0, 1.5 * self.size])
+            + np.array([0.0, 0.0, HOME_HEIGHT * self.size])
         )
         return np.concatenate([np.zeros(3), o])
 
@@ -350,9 +363,7 @@ class Stewart66(Mechanism):
         st = load_start()
         b, p, *_ = self._scaled
         rng = np.random.default_rng(FIBER_SEED)
-        c1 = (rng.normal(size=6) + 1j * rng.normal(size=6)) * 0.5 + (
-            np.sum(b * b, -1) + np.sum(p * p, -1) - 2.0
-        )
+        c1 = _central_c(b) + 1j * rng.normal(size=6)
         m = len(st["solutions"])
         q1 = hc.quadrics(b, p, c1)
         best = np.zeros((0, 8), dtype=complex)
@@ -385,12 +396,33 @@ class Stewart66(Mechanism):
                 break
         return {"c": c1, "patch": patch, "solutions": best, "q0": hc.quadrics(b, p, np.zeros(6))}
 
+    @cached_property
+    def _kernel(self):
+        """The compiled kernel module and this geometry prepared for it, or None (numpy path)."""
+        kernel = _compiled_kernel(self.fk_start["q0"])
+        if kernel is None:
+            return None
+        st = self.fk_start
+        _, _, bc, pc, s = self._scaled
+        prepared = kernel.geometry(
+            st["q0"],
+            st["c"],
+            st["solutions"],
+            st["patch"],
+            bc,
+            pc,
+            s,
+            self.base_points,
+            self.platform_points,
+        )
+        return kernel, prepared
+
     @property
     def root_count(self) -> int:
         """Number of isolated complex forward solutions found for this geometry (40 for a general one)."""
         return len(self.fk_start["solutions"])
 
-    @property
+    @cached_property
     def expected_count(self) -> int:
         """What a complete answer has: 40 (the generic count) unless coincident anchors were allowed,
         then the count of that layout found by :attr:`fk_start` (16 for the 3-6). A general geometry
@@ -406,7 +438,8 @@ class Stewart66(Mechanism):
         return np.sum(b * b, -1) + np.sum(p * p, -1) - (q / s) ** 2
 
     def _solve_fiber(self, c1: Array, bend_seed: int | None):
-        """Track all start solutions to every target ``c1`` (n, 6); refine, certify; per-input arrays."""
+        """Track all start solutions to every target ``c1`` (n, 6); refine, certify; per-input
+        arrays (the numpy path)."""
         st = self.fk_start
         m = len(st["solutions"])
         n = len(c1)
@@ -423,25 +456,16 @@ class Stewart66(Mechanism):
             )
             patch = (rng.normal(size=8) + 1j * rng.normal(size=8)) / 4
             x0 = x0 / (x0 @ patch)[:, None]
-        ck = _compiled_tracker(st["q0"])
-        par = ck is not None and _use_parallel(len(x0))
-        if ck is not None:  # parakin.kernels.stewart66_track: the same tracker, compiled
-            x, ok, steps = ck.track(st["q0"].real, patch, c0, cc, bend, x0, TRACK_OPTIONS, par)
-        else:
-            hom = hc.FiberHomotopy(st["q0"], patch, c0, cc, bend)
-            x, ok, steps = hc.track(hom, x0, **TRACK_OPTIONS)
+        hom = hc.FiberHomotopy(st["q0"], patch, c0, cc, bend)
+        x, ok, steps = hc.track(hom, x0, **TRACK_OPTIONS)
         if bend_seed is not None:
             with np.errstate(all="ignore"):
                 x = x / (x @ st["patch"])[:, None]  # back to the common patch
             x = np.where(np.isfinite(x), x, 0)
-        if ck is not None:
-            cq = np.repeat(np.asarray(c1, dtype=complex), m, axis=0)
-            x, beta, jn, alpha = ck.refine(st["q0"].real, cq, st["patch"], x, 3, par)
-        else:
-            q = np.broadcast_to(self._quadrics_for(c1)[:, None], (n, m, 7, 8, 8))
-            q = q.reshape(-1, 7, 8, 8)
-            x, beta, jn = hc.newton_refine(q, st["patch"], x, iters=3)
-            alpha = hc.certify(q, beta, jn)
+        q = np.broadcast_to(self._quadrics_for(c1)[:, None], (n, m, 7, 8, 8))
+        q = q.reshape(-1, 7, 8, 8)
+        x, beta, jn = hc.newton_refine(q, st["patch"], x, iters=3)
+        alpha = hc.certify(q, beta, jn)
         return (
             x.reshape(n, m, 8),
             beta.reshape(n, m),
@@ -475,6 +499,30 @@ class Stewart66(Mechanism):
         self.check_joints(q)
         batch = q.shape[:-1]
         qf = q.reshape(-1, 6)
+        compiled = self._kernel if _kernels_on() else None
+        if compiled is not None:  # parakin.kernels.stewart66_track: the whole computation compiled
+            kernel, prepared = compiled
+            res = kernel.fk_all(prepared, self._target_c(qf), qf, retries=retries, alpha0=hc.ALPHA0)
+            n_found = res.pop("n_found")
+            info = FKAll(
+                **res,
+                n_found=n_found,
+                n_expected=self.expected_count,
+                complete=n_found == self.expected_count,
+            )
+        else:
+            info = self._fk_all_numpy(qf, retries)
+        if return_info:
+            return FKAll(
+                **{
+                    k: (v.reshape(batch + v.shape[1:]) if isinstance(v, np.ndarray) else v)
+                    for k, v in dataclasses.asdict(info).items()
+                }
+            )
+        return info.poses.reshape(batch + info.poses.shape[1:])
+
+    def _fk_all_numpy(self, qf: Array, retries: int) -> FKAll:
+        """:meth:`fk_all` on flat inputs with the numpy tracker (kernels off or unavailable)."""
         n = len(qf)
         m = self.root_count
         c1 = self._target_c(qf)
@@ -497,15 +545,7 @@ class Stewart66(Mechanism):
             beta[bad] = np.take_along_axis(bb, order, 1)
             alpha[bad] = np.take_along_axis(aa, order, 1)
             keep[bad] = np.take_along_axis(kk, order, 1)
-        info = self._package(qf, x, alpha, keep, steps, retried)
-        if return_info:
-            return FKAll(
-                **{
-                    k: (v.reshape(batch + v.shape[1:]) if isinstance(v, np.ndarray) else v)
-                    for k, v in dataclasses.asdict(info).items()
-                }
-            )
-        return info.poses.reshape(batch + info.poses.shape[1:])
+        return self._package(qf, x, alpha, keep, steps, retried)
 
     @staticmethod
     def _keep(x, beta, alpha):

@@ -18,6 +18,7 @@ Timing columns end in ``_s`` / ``_per_s`` and never decide anything.
 
 from __future__ import annotations
 
+import contextlib
 import time
 from pathlib import Path
 from typing import Any
@@ -165,6 +166,7 @@ def real_counts_data(config: dict | None = None) -> pd.DataFrame:
     c = _cfg(config)
     rng = np.random.default_rng(c["seed"])
     rows = []
+    Stewart66().fk_all(DIETMAIER_LENGTHS)  # warm-up: the compiled kernel loaded outside wall_s
     for i in range(int(c["n_platforms"])):
         m = random_platform(rng)
         pose = random_pose(rng, 1, m)
@@ -240,10 +242,10 @@ def real_counts_draw(frame: pd.DataFrame, path: str | Path) -> Path:
 
 # ------------------------------------------------------------------------------------ timing
 def timing_data(config: dict | None = None) -> pd.DataFrame:
-    """Wall time of all solutions per input: ``fk_all`` one input per call (median of 5), ``fk_all``
-    on a batch of ``n_timing`` inputs, and batched Newton (``solve_fk``) from 40 random starts per
-    input (starts uniform in :meth:`Stewart66.pose_bounds`), with the distinct real solutions each
-    finds. Threads are whatever the process has (set ``OMP_NUM_THREADS=1`` for single-threaded)."""
+    """Wall time of all solutions per input: ``fk_all`` one input per call on one thread (median of
+    up to 20), ``fk_all`` on a batch of ``n_timing`` inputs (the compiled kernel's threads), and
+    batched Newton (``solve_fk``) from 40 random starts per input (starts uniform in
+    :meth:`Stewart66.pose_bounds`), with the distinct real solutions each finds."""
     from parakin.solvers import solve_fk
 
     c = _cfg(config)
@@ -254,13 +256,15 @@ def timing_data(config: dict | None = None) -> pd.DataFrame:
     q = m.ik(random_pose(rng, n, m))
     rows = []
     single = []
-    for i in range(5):
-        t0 = time.perf_counter()
-        r1 = m.fk_all(q[i], return_info=True)
-        single.append(time.perf_counter() - t0)
+    m.fk_all(q[0])  # warm-up: the compiled kernel loaded
+    with _one_thread():
+        for i in range(min(n, 20)):
+            t0 = time.perf_counter()
+            r1 = m.fk_all(q[i], return_info=True)
+            single.append(time.perf_counter() - t0)
     rows.append(
         {
-            "method": "fk_all, one input per call",
+            "method": "fk_all, one input per call (1 thread)",
             "inputs": 1,
             "per_input_s": float(np.median(single)),
             "inputs_per_s": 1 / float(np.median(single)),
@@ -310,6 +314,22 @@ def timing_data(config: dict | None = None) -> pd.DataFrame:
     df = pd.DataFrame(rows)
     df["x_newton_time"] = df["per_input_s"] / (wall_n / n)
     return df
+
+
+@contextlib.contextmanager
+def _one_thread():
+    """numba's thread count set to 1 inside the block (the compiled fk_all's blocks), restored."""
+    try:
+        import numba
+    except ImportError:  # the numpy path: one thread anyway
+        yield
+        return
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(threads)
 
 
 def _count_distinct(m: Stewart66, x: np.ndarray) -> int:
