@@ -88,7 +88,7 @@ def test_artefacts_and_claims(outputs):
     )
     prec = {c.variant.split(":")[0]: c for c in claims if c.quantity == "pso_all_inputs_precise"}
     assert prec["PSO as_printed"].differs and prec["PSO as_printed"].ours == 0.0
-    fig2 = {c.variant.split(",")[0]: c for c in claims if c.quantity == "iterations_to_threshold"}
+    fig2 = {c.variant.split(":")[0]: c for c in claims if c.quantity == "iterations_to_threshold"}
     assert fig2["PSO as_printed"].differs
     assert {("text_intro", "analytic_fk_cost"), ("text_intro", "newton_failure_from_home")} <= set(
         q
