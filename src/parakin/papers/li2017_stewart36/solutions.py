@@ -680,60 +680,7 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
         whole = pd.read_csv(whole_path).set_index("row")
         sols = pd.read_csv(sols_path)
         sols = sols[sols["above_base"].astype(bool)].reset_index(drop=True)
-        fcols = [col for col in t.columns if col.startswith("F_b")]
-        scale = np.array(
-            [np.pi / 180] * 3 + [1.0] * 3
-        )  # angles compared in radians, positions as they are
-        for _, r in t.iterrows():
-            row = int(r["row"])
-            p = r[list(POSE_COLS)].to_numpy(float)
-            k = int(
-                np.argmin(
-                    np.sum(((sols[list(POSE_COLS)].to_numpy(float) - p) * scale) ** 2, axis=1)
-                )
-            )
-            near = sols.iloc[k]
-            j = int(np.argmin([r[col] for col in fcols]))
-            leg = float(r[f"max_leg_err_b{fcols[j][3:]}"])
-            note = f"; {r['note']}" if isinstance(r["note"], str) and r["note"] else ""
-            for q in POSE_COLS:
-                quantity = f"row{row}.{q}"
-                if row == 1:
-                    out.append(
-                        Claim(
-                            KEY,
-                            "table3",
-                            quantity,
-                            printed_value(ref, "table3", quantity),
-                            float(near[q]),
-                            "deg" if q in ("alpha", "beta", "gamma") else "1",
-                            variant=f"certified FK solution of L = IK(row 1) (b = {near['b']:g})",
-                            basis="the lost FK input is reconstructed as IK(row 1) (docs/li2017_stewart36.md#g1), "
-                            "so row 1 is a solution by construction",
-                        )
-                    )
-                    continue
-                w = whole.loc[row]
-                out.append(
-                    Claim(
-                        KEY,
-                        "table3",
-                        quantity,
-                        printed_value(ref, "table3", quantity),
-                        float(near[q]),
-                        "deg" if q in ("alpha", "beta", "gamma") else "1",
-                        variant=f"nearest certified above-base solution over the b sweep (b = {near['b']:g}, "
-                        f"solution {int(near['solution'])}); the row judged as a whole",
-                        whole_agrees=bool(w["within_rounding_for_some_b"]),
-                        evidence=f"{KEY}/extra_table3_rows.md",
-                        reason=f"judged as a whole, row {row} must have row 1's six leg lengths: for every b of "
-                        f"the fine sweep a leg is off by at least {w['min_mismatch']:.3g} (at b = {w['at_b']:g}; "
-                        f"printing allows {w['rounding_allowance_there']:.2g} there); under the reconstructed "
-                        f"input F (eq. 4) >= {float(r[fcols[j]]):.2g}, a leg off by {leg:.3g}; no "
-                        "layout/Euler reading tried makes the 19 rows solutions of one input "
-                        f"(docs/li2017_stewart36.md#s4.2){note}",
-                    )
-                )
+        out += _table3_row_claims(t, sols, whole, ref)
         outside = int((~t["inside_sec4_ranges"].astype(bool)).sum())
         out.append(
             Claim(
@@ -750,6 +697,67 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 "no computation of ours)",
             )
         )
+    return out
+
+
+def _table3_row_claims(
+    t: pd.DataFrame, sols: pd.DataFrame, whole: pd.DataFrame, ref: pd.DataFrame
+) -> list[Claim]:
+    """Each coordinate of Table 3 against the nearest certified above-base solution; rows 2-19
+    judged as wholes (``whole``: extra_table3_rows), row 1 a solution by construction."""
+    out: list[Claim] = []
+    fcols = [col for col in t.columns if col.startswith("F_b")]
+    scale = np.array(
+        [np.pi / 180] * 3 + [1.0] * 3
+    )  # angles compared in radians, positions as they are
+    for _, r in t.iterrows():
+        row = int(r["row"])
+        p = r[list(POSE_COLS)].to_numpy(float)
+        k = int(
+            np.argmin(np.sum(((sols[list(POSE_COLS)].to_numpy(float) - p) * scale) ** 2, axis=1))
+        )
+        near = sols.iloc[k]
+        j = int(np.argmin([r[col] for col in fcols]))
+        leg = float(r[f"max_leg_err_b{fcols[j][3:]}"])
+        note = f"; {r['note']}" if isinstance(r["note"], str) and r["note"] else ""
+        for q in POSE_COLS:
+            quantity = f"row{row}.{q}"
+            if row == 1:
+                out.append(
+                    Claim(
+                        KEY,
+                        "table3",
+                        quantity,
+                        printed_value(ref, "table3", quantity),
+                        float(near[q]),
+                        "deg" if q in ("alpha", "beta", "gamma") else "1",
+                        variant=f"certified FK solution of L = IK(row 1) (b = {near['b']:g})",
+                        basis="the lost FK input is reconstructed as IK(row 1) (docs/li2017_stewart36.md#g1), "
+                        "so row 1 is a solution by construction",
+                    )
+                )
+                continue
+            w = whole.loc[row]
+            out.append(
+                Claim(
+                    KEY,
+                    "table3",
+                    quantity,
+                    printed_value(ref, "table3", quantity),
+                    float(near[q]),
+                    "deg" if q in ("alpha", "beta", "gamma") else "1",
+                    variant=f"nearest certified above-base solution over the b sweep (b = {near['b']:g}, "
+                    f"solution {int(near['solution'])}); the row judged as a whole",
+                    whole_agrees=bool(w["within_rounding_for_some_b"]),
+                    evidence=f"{KEY}/extra_table3_rows.md",
+                    reason=f"judged as a whole, row {row} must have row 1's six leg lengths: for every b of "
+                    f"the fine sweep a leg is off by at least {w['min_mismatch']:.3g} (at b = {w['at_b']:g}; "
+                    f"printing allows {w['rounding_allowance_there']:.2g} there); under the reconstructed "
+                    f"input F (eq. 4) >= {float(r[fcols[j]]):.2g}, a leg off by {leg:.3g}; no "
+                    "layout/Euler reading tried makes the 19 rows solutions of one input "
+                    f"(docs/li2017_stewart36.md#s4.2){note}",
+                )
+            )
     return out
 
 

@@ -237,8 +237,8 @@ TABLE5_ASSUMED = (
 MATCH_MM = 0.01  #: "basically coincides" in Fig. 8's text: |composite - exact| < 0.01 mm (ASSUMED)
 #: the two readings of Fig. 8's sentence and the one its wording supports (fig08_match_steps)
 READINGS = {
-    "first within": f"first iteration with |composite - exact| < {MATCH_MM:g} mm",
-    "stays within": f"first iteration from which |composite - exact| stays < {MATCH_MM:g} mm",
+    "first within": f"the first iteration within {MATCH_MM:g} mm of the exact composite length",
+    "stays within": f"the first iteration from which it stays within {MATCH_MM:g} mm",
 }
 PAPER_READING = "first within"
 
