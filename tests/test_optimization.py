@@ -91,7 +91,8 @@ def small_config():
         "loop_poses": 20,
     }
     cfg["zhao2017_3p4s"]["optimization"] = {
-        "seeds": [1, 2],
+        "runs": 30,
+        "paper_box_runs": 2,
         "population": 12,
         "generations": 5,
         "elite": 2,
@@ -137,7 +138,14 @@ def test_section_artefacts_write_their_files(small_config, tmp_path):
         "extra_index_benchmark.csv",
     } <= set(written)
     t3 = pd.read_csv(tmp_path / "table3.csv")
-    assert {"ours seed 1", "ours seed 2", "paper before", "paper after"} <= set(t3["design"])
+    assert {"ours: best of 30 runs", "paper before", "paper after"} <= set(t3["design"])
+    runs = pd.read_csv(tmp_path / "extra_ga_runs.csv")
+    assert len(runs) == 30 and runs["run"].tolist() == list(range(1, 31))
+    summary = pd.read_csv(tmp_path / "extra_ga_summary.csv")
+    assert (summary["runs"] == 30).all()
+    assert (summary["min"] <= summary["ci_low"]).all() and (
+        summary["ci_high"] <= summary["max"]
+    ).all()
     ref = load_reference("zhao2017_3p4s")
     claims = op.claims(tmp_path, ref)
     quantities = {c.quantity for c in claims}

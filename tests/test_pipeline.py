@@ -156,8 +156,7 @@ def test_long_jobs_declare_resources_and_report_progress():
     found = artefacts()
     for key in (
         "zhao2017_3p4s:train",
-        "zhao2017_3p4s:fig14",
-        "zhao2017_3p4s:table3",
+        "zhao2017_3p4s:ga_runs",
         "zhao2017_3p4s:pareto",
         "zhao2017_3p4s:ga_paper_box",
         "extra:solver_atlas",

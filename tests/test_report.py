@@ -235,3 +235,17 @@ def test_no_claim_carries_a_tolerance_typed_in_code():
                     if kw.arg in ("tol", "kind", "margin")
                 ]
     assert not typed, typed
+
+
+@pytest.mark.parametrize("key", list(PAPERS))
+def test_no_verdict_rests_on_a_wall_clock_time(key):
+    """Issue 28: a claim whose number is a time (ms, s, µs) is never judged; a speed claim is judged on
+    iterations or on a ratio of two computations timed in the same run (unit 1)."""
+    from parakin.report import paper_claims
+
+    ref, claims = paper_claims(key, ROOT / "figures")
+    times = ref[ref["unit"].isin(["ms", "s", "µs", "us"]) & (ref["role"] == "result")]
+    assert times.empty, times[["artefact", "quantity"]].values.tolist()
+    for c in claims:
+        if c.unit in ("ms", "s", "µs", "us"):
+            assert c.verdict == NOT_COMPARABLE, (c.artefact, c.quantity, c.verdict)

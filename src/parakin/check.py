@@ -10,7 +10,11 @@ Every output file of every artefact gets one status:
 - ``not compared``: declared so (a chaotic trajectory, a timing table), with the reason.
 
 Figures (PNG) and the Markdown views of CSV tables are judged through the data they are drawn
-from; timing columns (:func:`parakin.io.is_timing_column`) never decide anything.
+from; timing columns (:func:`parakin.io.is_timing_column`) never decide anything. What a number
+is decides how it is compared: closed forms and converged solves within ``(rtol, atol)``;
+condition numbers by class near a singularity (:class:`parakin.registry.ConditionNumber`: the
+round-off digits of a singular matrix are never compared); the statistics of a chaotic computation
+(GA, PSO, network training over independent runs) by the overlap of their confidence intervals.
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ import numpy as np
 import pandas as pd
 
 from parakin.io import atomic_write_text, is_timing_column, markdown_table, write_csv
-from parakin.registry import Artefact
+from parakin.registry import Artefact, ConditionNumber
 
 __all__ = ["FileCheck", "compare_file", "check_artefact", "check_all", "write_check", "STATUSES"]
 
@@ -59,35 +63,71 @@ def _compare_frames(rec: pd.DataFrame, new: pd.DataFrame, tol) -> tuple[str, str
     if len(rec) != len(new):
         return "differs", "", math.inf, f"{len(new)} rows != record {len(rec)}"
     worst = ("within tolerance", "", 0.0, "")
+    interval_cols = {c for pair in tol.intervals for c in pair}
+    for low, high in tol.intervals:
+        if low in rec.columns and high in rec.columns:
+            found = _compare_intervals(rec[[low, high]], new[[low, high]])
+            if found is not None:
+                return ("differs", *found)
     for col in rec.columns:
-        if is_timing_column(col) or col in tol.skip:
+        if is_timing_column(col) or col in tol.skip or col in interval_cols:
             continue
         a, b = rec[col], new[col]
         numeric = pd.api.types.is_numeric_dtype(a) and pd.api.types.is_numeric_dtype(b)
         if numeric and tol.kind == "statistical" and col not in tol.columns:
             continue  # a chaotic computation: only the columns it declares stable are compared
         if numeric:
-            x, y = a.to_numpy(float), b.to_numpy(float)
-            same_nan = np.isnan(x) & np.isnan(y)
-            same_inf = np.isinf(x) & (x == y)
-            rtol, atol = tol.limits(col)
-            with np.errstate(invalid="ignore"):
-                allowed = atol + rtol * np.abs(x)
-                gap = np.abs(y - x)
-            bad = ~(same_nan | same_inf) & ~(gap <= allowed)
-            if bad.any():
-                excess = float(
-                    np.nanmax(np.where(bad, gap / np.where(allowed > 0, allowed, np.inf), 0))
-                )
-                i = int(np.argmax(bad))
-                excess = excess if math.isfinite(excess) else math.inf
-                detail = f"row {i}: {y[i]:.6g} vs record {x[i]:.6g} (rtol {rtol:g}, atol {atol:g})"
-                if excess > worst[2] or worst[0] != "differs":
-                    worst = ("differs", col, excess, detail)
+            found = _compare_numbers(a.to_numpy(float), b.to_numpy(float), tol.limits(col))
+            if found is not None and (found[0] > worst[2] or worst[0] != "differs"):
+                worst = ("differs", col, *found)
         elif not a.astype(str).equals(b.astype(str)):
             i = int(np.argmax((a.astype(str) != b.astype(str)).to_numpy()))
             return "differs", col, math.inf, f"row {i}: {b.iloc[i]!r} vs record {a.iloc[i]!r}"
     return worst
+
+
+def _compare_numbers(x: np.ndarray, y: np.ndarray, limit) -> tuple[float, str] | None:
+    """``(excess, detail)`` of the worst cell of run ``y`` against record ``x``, or None if all agree."""
+    same_nan = np.isnan(x) & np.isnan(y)
+    same_inf = np.isinf(x) & (x == y)
+    if isinstance(limit, ConditionNumber):
+        bad = ~(same_nan | same_inf) & ~limit.agree(x, y)
+        if not bad.any():
+            return None
+        i = int(np.argmax(bad))
+        return math.inf, (
+            f"row {i}: condition number {y[i]:.6g} vs record {x[i]:.6g} (not the same class "
+            f"at n = {limit.n}: singular when k kappa >= 1/2, k = {limit.k:.2g})"
+        )
+    rtol, atol = limit
+    with np.errstate(invalid="ignore"):
+        allowed = atol + rtol * np.abs(x)
+        gap = np.abs(y - x)
+    bad = ~(same_nan | same_inf) & ~(gap <= allowed)
+    if not bad.any():
+        return None
+    excess = float(np.nanmax(np.where(bad, gap / np.where(allowed > 0, allowed, np.inf), 0)))
+    i = int(np.argmax(bad))
+    excess = excess if math.isfinite(excess) else math.inf
+    return excess, f"row {i}: {y[i]:.6g} vs record {x[i]:.6g} (rtol {rtol:g}, atol {atol:g})"
+
+
+def _compare_intervals(rec: pd.DataFrame, new: pd.DataFrame) -> tuple[str, float, str] | None:
+    """``(column, excess, detail)`` of the first row whose interval ``[low, high]`` (the two
+    columns) does not overlap the record's, or None."""
+    (lo0, hi0), (lo1, hi1) = rec.to_numpy(float).T, new.to_numpy(float).T
+    with np.errstate(invalid="ignore"):
+        apart = (lo1 > hi0) | (hi1 < lo0)
+    apart &= ~(np.isnan(lo0) & np.isnan(lo1))
+    if not apart.any():
+        return None
+    i = int(np.argmax(apart))
+    return (
+        f"{rec.columns[0]}..{rec.columns[1]}",
+        math.inf,
+        f"row {i}: interval [{lo1[i]:.6g}, {hi1[i]:.6g}] does not overlap the record's "
+        f"[{lo0[i]:.6g}, {hi0[i]:.6g}]",
+    )
 
 
 def compare_file(

@@ -21,6 +21,18 @@ The verdicts (:data:`VERDICTS`), from the strongest:
 - *not comparable*: the published number is lost, qualitative, or a wall-clock time of another
   machine (the reason says which);
 - *input*: a set-up value the paper gives (geometry, masses, solver settings), not a result.
+
+A chaotic computation (a genetic algorithm, a particle swarm, a network's training) is judged by
+the distribution of independent runs, never by one trajectory (:meth:`Claim.from_runs`): ours is
+the median of the runs, shown with its confidence interval (:func:`run_summary`) and the runs'
+range, and the comparison asks whether the paper's number lies in that range (within the declared
+tolerance; an order of magnitude: whether the range reaches within half a decade of it). A bound is
+met when the median run meets it (a typical run; the share of runs that meet it is shown). The
+paper reports one run: a number inside our runs' range is one our runs can give.
+
+A number that is one part of a result judged as a whole (a coordinate of a pose that must solve the
+paper's input as a whole) cannot agree on its own: ``whole_agrees=False`` makes it differ whatever
+its own value (a single coordinate within rounding of a row that is no solution is a coincidence).
 """
 
 from __future__ import annotations
@@ -29,6 +41,7 @@ import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from parakin.config import ROOT
@@ -57,6 +70,8 @@ __all__ = [
     "reference_row",
     "row_verdicts",
     "ROLES",
+    "run_summary",
+    "CI_LEVEL",
 ]
 
 REFERENCE_DIR = ROOT / "data" / "reference"
@@ -103,8 +118,49 @@ def half_ulp(printed: str) -> float:
 KINDS = ("value", "upper", "lower", "order")
 
 
+#: confidence level of the interval of the median over independent runs (report and check alike)
+CI_LEVEL = 0.99
+
+
+def run_summary(values, level: float = CI_LEVEL) -> dict[str, float]:
+    """``runs, median, ci_low, ci_high, min, max`` of independent runs of a chaotic computation.
+
+    The interval is the distribution-free confidence interval of the median by order statistics
+    (the ``j``-th smallest and largest of ``n`` runs, ``j`` the largest with ``P(Binom(n, 1/2) < j)
+    <= (1 - level) / 2``); with too few runs for ``level`` it is the whole range. Non-finite runs
+    (a run that failed) count as runs: they sort above every finite value."""
+    from scipy.stats import binom
+
+    x = np.sort(np.where(np.isfinite(v := np.asarray(values, dtype=float)), v, np.inf))
+    n = len(x)
+    if n == 0:
+        raise ValueError("run_summary needs at least one run")
+    j = 1
+    while j < n // 2 and binom.cdf(j, n, 0.5) <= (1 - level) / 2:
+        j += 1  # P(Binom < j + 1) <= alpha/2: the (j+1)-th order statistics still cover
+    return {
+        "runs": n,
+        "median": float(np.median(x)) if np.isfinite(np.median(x)) else math.inf,
+        "ci_low": float(x[j - 1]),
+        "ci_high": float(x[n - j]),
+        "min": float(x[0]),
+        "max": float(x[-1]),
+    }
+
+
+def _gap(printed: float, spread: tuple[float, float]) -> float:
+    """Distance from the printed value to the runs' range (0 inside)."""
+    lo, hi = spread
+    return max(lo - printed, printed - hi, 0.0)
+
+
 def judge(
-    printed: str, ours: float, tol: float | None = None, kind: str = "value", margin: float = 1.0
+    printed: str,
+    ours: float,
+    tol: float | None = None,
+    kind: str = "value",
+    margin: float = 1.0,
+    spread: tuple[float, float] | None = None,
 ) -> str:
     """The raw outcome of comparing our value with the printed one.
 
@@ -113,20 +169,27 @@ def judge(
     (not for a tolerance declared exact, ``tol = 0``), ``differs`` otherwise. ``kind="upper"`` / ``"lower"``: the paper states a bound: ``bound
     satisfied`` when ours meets it with the declared ``margin`` (``ours * margin <= paper`` for an
     upper bound). ``kind="order"``: an order of magnitude ("10^-4 level"): ``reproduced`` within
-    half a decade.
+    half a decade. ``spread = (min, max)`` of independent runs (``ours`` their median): a value
+    or an order is judged by the printed number's distance to that range, a bound by the median.
     """
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} must be one of {KINDS}")
-    if not math.isfinite(float(ours)):
+    if not math.isfinite(float(ours)) and (spread is None or kind in ("upper", "lower")):
         return DIFFERS
     if kind == "upper":
         return BOUND if float(ours) * margin <= float(printed) else DIFFERS
     if kind == "lower":
         return BOUND if float(ours) >= float(printed) * margin else DIFFERS
     if kind == "order":
-        ok = float(ours) > 0 and abs(math.log10(float(ours) / float(printed))) <= 0.5
-        return REPRODUCED if ok else DIFFERS
-    diff = abs(float(ours) - float(printed))
+        lo, hi = spread if spread is not None else (float(ours), float(ours))
+        p = float(printed)
+        ok = (
+            hi > 0
+            and math.log10(p) - 0.5 <= math.log10(hi)
+            and (lo <= 0 or math.log10(lo) <= math.log10(p) + 0.5)
+        )
+        return REPRODUCED if ok and math.isfinite(lo) else DIFFERS
+    diff = _gap(float(printed), spread) if spread is not None else abs(float(ours) - float(printed))
     if tol is not None and diff <= tol:
         return REPRODUCED
     if tol == 0.0:  # declared exact (counts, symbolic results, a printed zero width): no rounding
@@ -194,13 +257,19 @@ class Claim:
     )
     margin: float = 1.0  #: a bound must be met this many times over
     tolerance: str = ""  #: the declared tolerance as written in the reference CSV (set by resolve)
+    #: the range (min, max) of the independent runs whose median ``ours`` is (see :meth:`from_runs`)
+    spread: tuple[float, float] | None = None
+    #: False: one part of a result judged as a whole that does not agree (see the module's notes)
+    whole_agrees: bool | None = None
     outcome: str = field(
         init=False
     )  #: raw comparison: reproduced / within rounding / bound satisfied / differs
     verdict: str = field(init=False)
 
     def __post_init__(self) -> None:
-        outcome = judge(self.printed, self.ours, self.tol, self.kind, self.margin)
+        outcome = judge(self.printed, self.ours, self.tol, self.kind, self.margin, self.spread)
+        if self.whole_agrees is False:
+            outcome = DIFFERS
         object.__setattr__(self, "outcome", outcome)
         if not self.comparable:
             verdict = NOT_COMPARABLE
@@ -211,6 +280,40 @@ class Claim:
         else:
             verdict = outcome
         object.__setattr__(self, "verdict", verdict)
+
+    @classmethod
+    def from_runs(
+        cls,
+        paper: str,
+        artefact: str,
+        quantity: str,
+        printed: str,
+        runs,
+        unit: str,
+        variant: str = "",
+        *,
+        what: str = "runs",
+        **fields,
+    ) -> Claim:
+        """The claim judged on independent runs of a chaotic computation: ours = their median, the
+        variant names how many ``what`` (e.g. "GA seeds"), the confidence interval of the median
+        (:func:`run_summary`) and the range, which the printed number is judged against."""
+        s = run_summary(runs)
+        text = (
+            f"median of {s['runs']} {what} {_fmt(s['median'])}, {100 * CI_LEVEL:g} % CI "
+            f"[{_fmt(s['ci_low'])}, {_fmt(s['ci_high'])}], range [{_fmt(s['min'])}, {_fmt(s['max'])}]"
+        )
+        return cls(
+            paper,
+            artefact,
+            quantity,
+            printed,
+            s["median"],
+            unit,
+            f"{variant}: {text}" if variant else text,
+            spread=(s["min"], s["max"]),
+            **fields,
+        )
 
     @property
     def diff(self) -> float:

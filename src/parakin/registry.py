@@ -29,6 +29,7 @@ from pathlib import Path
 
 __all__ = [
     "Tolerance",
+    "ConditionNumber",
     "Artefact",
     "artefact",
     "figure",
@@ -47,17 +48,60 @@ __all__ = [
 
 
 @dataclass(frozen=True)
+class ConditionNumber:
+    """A column limit for condition numbers of ``n x n`` (or smaller) matrices formed and
+    decomposed in double precision, where round-off is all there is to compare near a singularity.
+
+    Forming ``J`` rounds each entry (``|E|_2 <= sqrt(n) eps |J|_2``) and a backward-stable SVD adds
+    ``n eps |J|_2``, so the computed smallest singular value is off by at most ``k sigma_max`` with
+    ``k = (n + sqrt(n)) eps``: ``kappa`` is off by the relative amount ``k kappa / (1 - k kappa)``.
+    Two values agree when both are *singular to working precision* (``k kappa >= 1/2``: the smallest
+    singular value is within a factor two of the round-off) or when they differ by at most the sum
+    of both bounds, ``2 k kappa / (1 - k kappa)`` with the larger ``kappa`` (relative): the class of
+    a singular matrix is compared, never its round-off digits. Declared with issue 28, after a
+    fresh run on another CPU moved Ye's singular home pose from 2.840e17 to 2.830e17.
+    """
+
+    n: int
+
+    def __post_init__(self):
+        if not (isinstance(self.n, int) and self.n >= 1):
+            raise ValueError(f"ConditionNumber n = {self.n!r} must be an integer >= 1")
+
+    @property
+    def k(self) -> float:
+        return (self.n + self.n**0.5) * 2.220446049250313e-16
+
+    def agree(self, record, run):
+        """Element-wise agreement of two arrays of condition numbers (``inf``: exactly singular)."""
+        import numpy as np
+
+        a = np.abs(np.asarray(record, dtype=float))
+        b = np.abs(np.asarray(run, dtype=float))
+        big = np.fmax(a, b)
+        with np.errstate(invalid="ignore", over="ignore"):
+            singular = (self.k * a >= 0.5) & (self.k * b >= 0.5)
+            allowed = 2 * self.k * big / (1 - self.k * big)
+            close = (self.k * big < 0.5) & (np.abs(a - b) <= allowed * big + 1e-300)
+        return singular | close | (np.isnan(a) & np.isnan(b))
+
+
+@dataclass(frozen=True)
 class Tolerance:
     """How closely a rerun must agree with the committed record, and why.
 
     Numeric table cells agree when ``|ours - record| <= atol + rtol * |record|``; columns named in
     ``columns`` get their own ``(rtol, atol)`` (for ``kind="statistical"`` only they are compared:
-    a chaotic computation lists what is stable); columns in ``skip`` are not compared (a chaotic
-    trajectory, a round-off residual), each reason stated in ``reason``. Timing columns
+    a chaotic computation lists what is stable) or a :class:`ConditionNumber` (condition numbers,
+    compared by class near a singularity: :meth:`condition`); columns in ``skip`` are not compared
+    (a chaotic trajectory, a round-off residual), each reason stated in ``reason``. Timing columns
     (:func:`parakin.io.is_timing_column`) are never compared and never decide anything.
     ``files`` names output files that are not compared at all (e.g. one seed's trajectory of a
     genetic algorithm), and ``rows`` keeps, for every CSV, only the rows where the given column
-    has one of the given values (e.g. the final generation).
+    has one of the given values (e.g. the final generation). ``intervals``: pairs of columns
+    ``(low, high)`` holding a confidence interval (of the median over independent runs of a chaotic
+    computation); a rerun agrees when its interval overlaps the record's (for two 99 % intervals of
+    one distribution, apart by chance about 3 times in 10^4).
     """
 
     kind: str
@@ -68,6 +112,7 @@ class Tolerance:
     skip: tuple[str, ...] = ()
     files: tuple[str, ...] = ()
     rows: tuple[str, tuple] | None = None
+    intervals: tuple[tuple[str, str], ...] = ()
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -77,9 +122,14 @@ class Tolerance:
         if not self.reason.strip():
             raise ValueError("a tolerance needs its reason")
 
-    def limits(self, column: str) -> tuple[float, float]:
-        """``(rtol, atol)`` of one column."""
+    def limits(self, column: str) -> tuple[float, float] | ConditionNumber:
+        """``(rtol, atol)`` of one column, or its :class:`ConditionNumber` rule."""
         return self.columns.get(column, (self.rtol, self.atol))
+
+    @staticmethod
+    def condition(n: int) -> ConditionNumber:
+        """The column limit of condition numbers of matrices up to ``n x n`` (:class:`ConditionNumber`)."""
+        return ConditionNumber(n)
 
     def but(self, reason: str | None = None, **changes) -> Tolerance:
         """A copy with some fields changed (and a reason that says why)."""

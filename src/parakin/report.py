@@ -94,7 +94,14 @@ VERDICT_TEXT = """Verdicts (one per published number; a number with several comp
 - **not judged yet**: a published result no artefact judges (should be none).
 
 Every row of `data/reference/<paper>.csv` has exactly one verdict, listed in `report.csv` beside this file
-(paper value, ours, difference, tolerance, reason, evidence). Nothing here is typed in by hand."""
+(paper value, ours, difference, tolerance, reason, evidence). Nothing here is typed in by hand.
+
+A number a chaotic computation produces (the GA, the PSO runs, a network's training) is judged on independent
+runs, never on one: ours is the median of the runs (at least 30 seeds; 10 trainings per region), shown with its
+99 % confidence interval and the runs' range, and the comparison asks whether the paper's number (one run of its
+own) lies in that range, within the declared tolerance; a bound must be met by the median run. No verdict rests
+on a wall-clock time: a time of another machine is not comparable, and a speed claim is judged on iterations or
+on the ratio of two computations timed in the same run."""
 
 
 def _evidence_files(key: str, figdir: Path) -> dict[str, str]:

@@ -41,7 +41,7 @@ ATLAS = Tolerance(
     "and round-off errors not compared",
     columns={
         "n": (0.0, 0.0),
-        "home_cond": (1e-6, 0.0),
+        "home_cond": Tolerance.condition(6),  # a singular home pose (stewart12): compared by class
         "median_cond": (1e-6, 0.0),
         "success_rate": (0.0, 0.05),
         "wrong_assembly_rate": (0.0, 0.05),

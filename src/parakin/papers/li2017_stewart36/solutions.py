@@ -87,6 +87,149 @@ def table3_artefact(config: dict, outdir: Path) -> list[Path]:
     )
 
 
+# ---------------------------------------------------------------------------------- Table 3 as a whole
+def _rounding_bound(m, rows: np.ndarray, half: np.ndarray) -> np.ndarray:
+    """Per row and leg, how far printing the row's six coordinates (half a unit of each printed
+    digit, ``half``, paper units) can move its leg lengths: ``sum_j |dl_i/dp_j| h_j`` by central
+    differences (the legs are smooth there; the step is far below the print)."""
+    out = np.zeros((len(rows), 6))
+    for j in range(6):
+        step = np.zeros(6)
+        step[j] = 1e-6
+        dl = (m.ik(pose_from_paper(rows + step)) - m.ik(pose_from_paper(rows - step))) / 2e-6
+        out += np.abs(dl) * half[:, j : j + 1]
+    return out
+
+
+def table3_mismatch(config: dict, bs: np.ndarray) -> dict[str, np.ndarray]:
+    """For every base side ``b`` in ``bs`` and every Table 3 row: the largest of the six legs'
+    mismatch |l_i(row) - l_i(row 1)| (row 1 defines the input, so nothing is assumed but the
+    layout), and by how much it exceeds what printing both rows to their digits allows (``excess``
+    <= 0: the row is an assembly of row 1's leg lengths within rounding)."""
+    from parakin.claims import half_ulp
+
+    ref = load_reference(KEY)
+    t = table3(ref)
+    rows = t[list(POSE_COLS)].to_numpy(float)
+    half = np.array(
+        [
+            [half_ulp(printed_value(ref, "table3", f"row{k}.{c}")) for c in POSE_COLS]
+            for k in t["row"]
+        ]
+    )
+    mismatch = np.full((len(bs), len(rows)), np.inf)
+    excess = np.full((len(bs), len(rows)), np.inf)
+    for i, b in enumerate(bs):
+        m = mech(config, b)
+        with np.errstate(invalid="ignore"):
+            legs = m.ik(pose_from_paper(rows))
+            bound = _rounding_bound(m, rows, half)
+            gap = np.abs(legs - legs[0])
+            ok = np.all(np.isfinite(legs), axis=-1)
+            mismatch[i] = np.where(ok, gap.max(axis=-1), np.inf)
+            excess[i] = np.where(ok, (gap - bound - bound[0]).max(axis=-1), np.inf)
+    return {"rows": t["row"].to_numpy(), "mismatch": mismatch, "excess": excess}
+
+
+def draw_table3_consistency(frame: pd.DataFrame, path: Path) -> Path:
+    """extra_table3_consistency from its CSV: per b the largest leg mismatch of each of rows 2-19
+    with row 1's leg lengths (thin), their largest and smallest (bold)."""
+    cols = [c for c in frame.columns if c.startswith("mismatch_row")]
+    b = frame["b"].to_numpy()
+    fig, ax = new_figure((6.4, 3.4))
+    ax.semilogy(b, frame[cols].to_numpy(float), color="0.75", lw=0.6)
+    ax.semilogy(b, frame["largest_mismatch"], color="C3", lw=1.4, label="largest over rows 2-19")
+    ax.semilogy(b, frame["smallest_mismatch"], color="C0", lw=1.4, label="smallest over rows 2-19")
+    ax.semilogy(
+        b,
+        frame["rounding_allowance"],
+        color="k",
+        ls=":",
+        lw=1.0,
+        label="what printing allows (largest)",
+    )
+    ax.set_xlabel("base side b (platform side a = 1)")
+    ax.set_ylabel("max |l_i(row) - l_i(row 1)| over the six legs")
+    ax.set_title(
+        "Table 3: do rows 2-19 assemble with row 1's leg lengths, for any b?", fontsize="small"
+    )
+    ax.legend(fontsize="x-small")
+    return save_figure(fig, path)
+
+
+@artefact(
+    "table3_consistency",
+    outputs=[
+        "extra_table3_consistency.csv",
+        "extra_table3_consistency.png",
+        "extra_table3_rows.csv",
+        "extra_table3_rows.md",
+    ],
+    config=[KEY],
+    tolerance=ROOTS,
+    caption="Table 3 judged row by row as a whole: rows 2-19 against row 1's leg lengths for every b",
+    draws=[
+        ("extra_table3_consistency.png", "extra_table3_consistency.csv", draw_table3_consistency)
+    ],
+)
+def table3_consistency(config: dict, outdir: Path) -> list[Path]:
+    """Table 3 needs no assumed input to be checked against itself: its rows claim to be forward
+    solutions of one input, so each must have row 1's six leg lengths. For every base side b of a
+    fine sweep: each row's largest leg mismatch with row 1, and whether it is within what printing
+    both rows allows (per row: the smallest mismatch over b, where, and its rounding allowance)."""
+    lo, hi, n = cfg(config)["consistency"]["b_range"] + [cfg(config)["consistency"]["steps"]]
+    bs = np.linspace(lo, hi, int(n))
+    r = table3_mismatch(config, bs)
+    mis, exc, rows = r["mismatch"], r["excess"], r["rows"]
+    allow = mis - exc  # what printing allows, per (b, row)
+    per_b = pd.DataFrame({"b": bs})
+    for k, row in enumerate(rows[1:], start=1):
+        per_b[f"mismatch_row{row}"] = mis[:, k]
+    per_b["largest_mismatch"] = mis[:, 1:].max(axis=1)
+    per_b["smallest_mismatch"] = mis[:, 1:].min(axis=1)
+    per_b["rounding_allowance"] = np.where(np.isfinite(allow[:, 1:]), allow[:, 1:], np.nan).max(
+        axis=1
+    )
+    per_b["rows_within_rounding"] = (exc[:, 1:] <= 0).sum(axis=1)
+    best = np.argmin(mis, axis=0)
+    per_row = pd.DataFrame(
+        {
+            "row": rows,
+            "min_mismatch": mis[best, np.arange(len(rows))],
+            "at_b": bs[best],
+            "rounding_allowance_there": allow[best, np.arange(len(rows))],
+            "within_rounding_for_some_b": (exc <= 0).any(axis=0),
+        }
+    ).iloc[1:]
+    whole = int(np.argmin(per_b["largest_mismatch"]))
+    notes = (
+        f"b swept over [{lo:g}, {hi:g}] in {int(n)} steps (platform side a = 1, the layout of docs/li2017_stewart36.md#s1). "
+        "Row 1 defines the input (its own leg lengths, no reconstruction needed); a row is an assembly of that "
+        "input when all six of its legs match row 1's within what printing both rows to their digits allows "
+        "(sum of |dl/dp| times half a printed digit, both rows). Smallest over b of the largest mismatch over "
+        f"rows 2-19: {per_b['largest_mismatch'].iloc[whole]:.3g} at b = {bs[whole]:g}. Rows within rounding for "
+        f"some b: {int(per_row['within_rounding_for_some_b'].sum())} of {len(per_row)}"
+        + (
+            "; the table contradicts itself for every b."
+            if not per_row["within_rounding_for_some_b"].any()
+            else "."
+        )
+        + " Per b: extra_table3_consistency.csv."
+    )
+    return write_and_draw(
+        per_b,
+        outdir / "extra_table3_consistency.csv",
+        draw_table3_consistency,
+        outdir / "extra_table3_consistency.png",
+    ) + write_table(
+        per_row,
+        outdir / "extra_table3_rows",
+        floatfmt=".4g",
+        title="Table 3's rows 2-19 against row 1's leg lengths, over every b",
+        notes=notes,
+    )
+
+
 @artefact(
     "extra_solutions",
     outputs=[
@@ -531,60 +674,13 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 )
             )
     path, sols_path = figdir / "table3.csv", figdir / "extra_solutions.csv"
-    if path.exists() and sols_path.exists():
+    whole_path = figdir / "extra_table3_rows.csv"
+    if path.exists() and sols_path.exists() and whole_path.exists():
         t = pd.read_csv(path)
+        whole = pd.read_csv(whole_path).set_index("row")
         sols = pd.read_csv(sols_path)
         sols = sols[sols["above_base"].astype(bool)].reset_index(drop=True)
-        fcols = [col for col in t.columns if col.startswith("F_b")]
-        scale = np.array(
-            [np.pi / 180] * 3 + [1.0] * 3
-        )  # angles compared in radians, positions as they are
-        for _, r in t.iterrows():
-            row = int(r["row"])
-            p = r[list(POSE_COLS)].to_numpy(float)
-            k = int(
-                np.argmin(
-                    np.sum(((sols[list(POSE_COLS)].to_numpy(float) - p) * scale) ** 2, axis=1)
-                )
-            )
-            near = sols.iloc[k]
-            j = int(np.argmin([r[col] for col in fcols]))
-            leg = float(r[f"max_leg_err_b{fcols[j][3:]}"])
-            note = f"; {r['note']}" if isinstance(r["note"], str) and r["note"] else ""
-            for q in POSE_COLS:
-                quantity = f"row{row}.{q}"
-                if row == 1:
-                    out.append(
-                        Claim(
-                            KEY,
-                            "table3",
-                            quantity,
-                            printed_value(ref, "table3", quantity),
-                            float(near[q]),
-                            "deg" if q in ("alpha", "beta", "gamma") else "1",
-                            variant=f"certified FK solution of L = IK(row 1) (b = {near['b']:g})",
-                            basis="the lost FK input is reconstructed as IK(row 1) (docs/li2017_stewart36.md#g1), "
-                            "so row 1 is a solution by construction",
-                        )
-                    )
-                    continue
-                out.append(
-                    Claim(
-                        KEY,
-                        "table3",
-                        quantity,
-                        printed_value(ref, "table3", quantity),
-                        float(near[q]),
-                        "deg" if q in ("alpha", "beta", "gamma") else "1",
-                        variant=f"nearest certified above-base solution over the b sweep (b = {near['b']:g}, "
-                        f"solution {int(near['solution'])})",
-                        evidence=f"{KEY}/table3.md",
-                        reason=f"row {row} is not a solution of the reconstructed input for any b of the sweep: "
-                        f"F (eq. 4) >= {float(r[fcols[j]]):.2g}, a leg off by {leg:.3g} (printing to 3 "
-                        "decimals moves a leg by ~1e-3 at most); no layout/Euler reading tried makes the "
-                        f"19 rows solutions of one input (docs/li2017_stewart36.md#s4.2){note}",
-                    )
-                )
+        out += _table3_row_claims(t, sols, whole, ref)
         outside = int((~t["inside_sec4_ranges"].astype(bool)).sum())
         out.append(
             Claim(
@@ -601,6 +697,67 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 "no computation of ours)",
             )
         )
+    return out
+
+
+def _table3_row_claims(
+    t: pd.DataFrame, sols: pd.DataFrame, whole: pd.DataFrame, ref: pd.DataFrame
+) -> list[Claim]:
+    """Each coordinate of Table 3 against the nearest certified above-base solution; rows 2-19
+    judged as wholes (``whole``: extra_table3_rows), row 1 a solution by construction."""
+    out: list[Claim] = []
+    fcols = [col for col in t.columns if col.startswith("F_b")]
+    scale = np.array(
+        [np.pi / 180] * 3 + [1.0] * 3
+    )  # angles compared in radians, positions as they are
+    for _, r in t.iterrows():
+        row = int(r["row"])
+        p = r[list(POSE_COLS)].to_numpy(float)
+        k = int(
+            np.argmin(np.sum(((sols[list(POSE_COLS)].to_numpy(float) - p) * scale) ** 2, axis=1))
+        )
+        near = sols.iloc[k]
+        j = int(np.argmin([r[col] for col in fcols]))
+        leg = float(r[f"max_leg_err_b{fcols[j][3:]}"])
+        note = f"; {r['note']}" if isinstance(r["note"], str) and r["note"] else ""
+        for q in POSE_COLS:
+            quantity = f"row{row}.{q}"
+            if row == 1:
+                out.append(
+                    Claim(
+                        KEY,
+                        "table3",
+                        quantity,
+                        printed_value(ref, "table3", quantity),
+                        float(near[q]),
+                        "deg" if q in ("alpha", "beta", "gamma") else "1",
+                        variant=f"certified FK solution of L = IK(row 1) (b = {near['b']:g})",
+                        basis="the lost FK input is reconstructed as IK(row 1) (docs/li2017_stewart36.md#g1), "
+                        "so row 1 is a solution by construction",
+                    )
+                )
+                continue
+            w = whole.loc[row]
+            out.append(
+                Claim(
+                    KEY,
+                    "table3",
+                    quantity,
+                    printed_value(ref, "table3", quantity),
+                    float(near[q]),
+                    "deg" if q in ("alpha", "beta", "gamma") else "1",
+                    variant=f"nearest certified above-base solution over the b sweep (b = {near['b']:g}, "
+                    f"solution {int(near['solution'])}); the row judged as a whole",
+                    whole_agrees=bool(w["within_rounding_for_some_b"]),
+                    evidence=f"{KEY}/extra_table3_rows.md",
+                    reason=f"judged as a whole, row {row} must have row 1's six leg lengths: for every b of "
+                    f"the fine sweep a leg is off by at least {w['min_mismatch']:.3g} (at b = {w['at_b']:g}; "
+                    f"printing allows {w['rounding_allowance_there']:.2g} there); under the reconstructed "
+                    f"input F (eq. 4) >= {float(r[fcols[j]]):.2g}, a leg off by {leg:.3g}; no "
+                    "layout/Euler reading tried makes the 19 rows solutions of one input "
+                    f"(docs/li2017_stewart36.md#s4.2){note}",
+                )
+            )
     return out
 
 

@@ -14,6 +14,7 @@ eq. (33) lost: P = (max - min) / mean of d_max over the structures (``p_definiti
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -672,7 +673,7 @@ def _spearman(x: np.ndarray, y: np.ndarray) -> float:
     return float(np.corrcoef(rx, ry)[0, 1])
 
 
-def _claims_steps(figdir: Path) -> list[Claim]:
+def _claims_steps(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     """C8 (rest), C9, C10 from the Fig. 10 / 11 CSVs; the paper's statements are qualitative, so the
     printed side is the statement's encoding (given in each reason)."""
     out: list[Claim] = []
@@ -692,7 +693,7 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 KEY,
                 "text_s4.1",
                 "tol_sensitive.top3_in_R0R1R3",
-                "3",
+                printed_value(ref, "text_s4.1", "tol_sensitive.top3_in_R0R1R3"),
                 float(len(set(top3) & {0, 1, 3})),
                 "1",
                 reason=why
@@ -704,7 +705,7 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 KEY,
                 "text_s4.1",
                 "tol_sensitive.nr_most_R",
-                "0",
+                printed_value(ref, "text_s4.1", "tol_sensitive.nr_most_R"),
                 float(w["nr"].idxmax()),
                 "1",
                 reason="C9: the mode whose N-R steps grow most from tol 1e-6 to 1e-9 (paper: R = 0). N-R "
@@ -718,7 +719,7 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 KEY,
                 "text_s4.1",
                 "least_initial_dependence_R",
-                "3",
+                printed_value(ref, "text_s4.1", "least_initial_dependence_R"),
                 float(both.idxmin()),
                 "1",
                 reason=(
@@ -732,7 +733,7 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 KEY,
                 "text_s4.1",
                 "broyden.most_initial_dependence_R",
-                "1",
+                printed_value(ref, "text_s4.1", "broyden.most_initial_dependence_R"),
                 float(rise["broyden"].idxmax()),
                 "1",
                 reason=(
@@ -744,13 +745,22 @@ def _claims_steps(figdir: Path) -> list[Claim]:
     p = figdir / "fig10_steps_tol1e-6.csv"
     if p.exists():
         df = pd.read_csv(p)
-        dec, near, rho = {}, [], []
+        dec, near, rho, drops = {}, [], [], {}
         for key in ("nr", "broyden"):
-            n_dec = 0
-            for _, g in df[(df["method"] == key) & (df["steps"] > 0)].groupby("R"):
+            n_dec, drops[key] = 0, []
+            for r, g in df[(df["method"] == key) & (df["steps"] > 0)].groupby("R"):
                 g = g.sort_values("deviation_pct")
                 drop = np.diff(g["steps"].to_numpy()) < 0
                 n_dec += int(drop.sum())
+                drops[key] += [
+                    f"R{r}: {int(a)} -> {int(b)} steps at d = {d0:g} -> {d1:g} % (d_max {g['d_max_pct'].iloc[0]:g} %)"
+                    for a, b, d0, d1 in zip(
+                        g["steps"].to_numpy()[:-1][drop],
+                        g["steps"].to_numpy()[1:][drop],
+                        g["deviation_pct"].to_numpy()[:-1][drop],
+                        g["deviation_pct"].to_numpy()[1:][drop],
+                    )
+                ]
                 if key == "broyden":
                     near += list(g["deviation_pct"].to_numpy()[1:][drop] / g["d_max_pct"].iloc[0])
                     rho.append(_spearman(g["deviation_pct"].to_numpy(), g["steps"].to_numpy()))
@@ -761,10 +771,11 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 KEY,
                 "fig10",
                 "nr.step_drops",
-                "0",
+                printed_value(ref, "fig10", "nr.step_drops"),
                 float(dec["nr"]),
                 "1",
-                reason=base + " (paper: N-R 'varies smoothly', read as 0 drops; +-1)",
+                reason=base + " (paper: N-R 'varies smoothly', read as 0 drops; counts compared "
+                "exactly): " + (", ".join(drops["nr"]) or "none"),
             )
         )
         out.append(
@@ -772,7 +783,7 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 KEY,
                 "fig10",
                 "broyden.step_drops",
-                "1",
+                printed_value(ref, "fig10", "broyden.step_drops"),
                 float(dec["broyden"]),
                 "1",
                 reason=base + " (paper: Broyden 'fluctuates', read as >= 1 drop)",
@@ -784,7 +795,7 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 KEY,
                 "fig10",
                 "broyden.drops_near_dmax",
-                "0.5",
+                printed_value(ref, "fig10", "broyden.drops_near_dmax"),
                 frac,
                 "1",
                 reason="C10: share of Broyden's drops at d >= d_max/2 (paper: fluctuations 'near d_max')",
@@ -795,7 +806,7 @@ def _claims_steps(figdir: Path) -> list[Claim]:
                 KEY,
                 "fig10",
                 "broyden.trend_spearman",
-                "0",
+                printed_value(ref, "fig10", "broyden.trend_spearman"),
                 float(min(rho)),
                 "1",
                 reason="C10: smallest Spearman rank correlation of Broyden's steps with d over the modes "
@@ -805,7 +816,7 @@ def _claims_steps(figdir: Path) -> list[Claim]:
     return out
 
 
-def _claims_structures(figdir: Path) -> list[Claim]:
+def _claims_structures(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     """C11 from the Fig. 12 CSV: Spearman correlation of d_max with n and with L over the structures,
     per (R, method); the median of the 12 is compared with the sign the paper states."""
     out: list[Claim] = []
@@ -833,7 +844,7 @@ def _claims_structures(figdir: Path) -> list[Claim]:
                 KEY,
                 "fig12",
                 f"dmax_vs_{var[0]}.spearman",
-                "0",
+                printed_value(ref, "fig12", f"dmax_vs_{var[0]}.spearman"),
                 float(np.median(r)),
                 "1",
                 reason=(
@@ -863,7 +874,7 @@ def _claims_odd_even(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 KEY,
                 "table6",
                 f"odd_even_ratio.{key}",
-                "1",
+                printed_value(ref, "table6", f"odd_even_ratio.{key}"),
                 ratio,
                 "1",
                 reason=(
@@ -1047,7 +1058,28 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                 reason="C13: L of the largest mean d_max (over n), R = 0, N-R; +-1 grid step",
             )
         )
-    return out + _claims_steps(figdir) + _claims_structures(figdir) + _claims_odd_even(figdir, ref)
+    out += (
+        _claims_steps(figdir, ref) + _claims_structures(figdir, ref) + _claims_odd_even(figdir, ref)
+    )
+    return [replace(c, basis="; ".join(_assumed(c))) for c in out]
+
+
+#: what every drive-mode result rests on, and what P-based ones rest on besides (both lost)
+PASSIVE_ASSUMED = (
+    "the passive legs of each drive mode (Fig. 9 lost; nested sets assumed, "
+    "docs/ye_stewart12.md#s5.5)"
+)
+P_ASSUMED = (
+    "P = (max - min)/mean of d_max over the structures (eq. 33 lost; assumed, "
+    "docs/ye_stewart12.md#s5.12)"
+)
+
+
+def _assumed(c: Claim) -> list[str]:
+    """The assumptions a drive-mode claim rests on: the passive sets, and the definition of P for
+    Table 6's indices and what is chosen by them."""
+    uses_p = (c.artefact == "table6") or c.quantity in ("composite_ratio", "best_R.realtime_robust")
+    return [x for x in (c.basis, PASSIVE_ASSUMED, P_ASSUMED if uses_p else "") if x]
 
 
 def summary(figdir: Path, ref: pd.DataFrame) -> str:

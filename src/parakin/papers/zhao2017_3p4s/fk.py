@@ -15,12 +15,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from parakin.claims import REPRODUCED, Claim, judge, printed_value
+from parakin.claims import CI_LEVEL, REPRODUCED, Claim, judge, printed_value, run_summary
 from parakin.config import rng, seed_for
 from parakin.errors import ConfigError
 from parakin.io import atomic_write_text, atomic_writer, write_and_draw, write_csv, write_table
 from parakin.mechanisms import P3P4S
 from parakin.nn.bp import plateau_epoch
+from parakin.papers.runs import map_runs
 from parakin.papers.zhao2017_3p4s.common import KEY, artefact
 from parakin.papers.zhao2017_3p4s.kinematics import table1_inputs
 from parakin.registry import EXACT, ITERATIVE, Tolerance
@@ -48,10 +49,11 @@ TRAINING = Tolerance(
 )
 #: the hybrid's quasi-Newton refinement converges to the same root from any nearby network guess
 HYBRID = ITERATIVE.but(
-    "the network's guess differs with the training (not compared); the refined pose "
-    "converges to eps = 1e-7 in the step, far below 1e-9 m in the pose",
+    "the network's guess differs with the training (not compared, nor the iterates from it); the "
+    "refined pose converges to eps = 1e-7 in the step, far below 1e-9 m in the pose",
     skip=("guess_x", "guess_y", "guess_z", "e3_guess", "e3"),
     columns={"iterations": (0.0, 1.0)},
+    files=("table2_iterates.csv", "table2_iterates.md"),
 )
 #: solver statistics over seeded random inputs; PSO rows are chaotic searches
 SOLVER_STATS = Tolerance(
@@ -254,16 +256,18 @@ def _training_figure(log: pd.DataFrame, outdir: Path) -> list[Path]:
 
 
 # ---------------------------------------------------------------------------------- convergence
-#: per region only what is stable is compared: how many runs converged and the median test error
-#: of the converged networks within a factor of two; each run's curve is one chaotic trajectory
-#: (another BLAS kernel, another number of epochs) and is not compared
+#: per region only what is stable is compared: the set-up exactly, the 99 % confidence interval of
+#: the median test error over the restarts by overlap and the median p95 / E_3 within a factor of
+#: two; each run's curve is one chaotic trajectory (another BLAS kernel, another number of epochs)
+#: and is not compared, nor is how many runs converged (a run near the rule's threshold may stop
+#: an epoch window later on another machine)
 CONVERGENCE = Tolerance(
     "statistical",
     0.0,
     0.0,
     "network training to convergence: the per-epoch curves are chaotic trajectories (not "
-    "compared); per region the sample count, the number of converged runs and the median "
-    "test error within a factor of two are",
+    "compared); per region the set-up, the overlap of the 99 % confidence intervals of the "
+    "median test error over the restarts and the median p95 and E_3 within a factor of two are",
     columns={
         "samples": (0.0, 0.0),
         "hidden": (0.0, 0.0),
@@ -272,11 +276,10 @@ CONVERGENCE = Tolerance(
         "window": (0.0, 0.0),
         "min_improvement": (0.0, 0.0),
         "max_epochs": (0.0, 0.0),
-        "converged_runs": (0.0, 0.0),
-        "test_rms_median_m": (1.0, 0.0),
         "test_p95_median_m": (1.0, 0.0),
         "test_e3_median_m": (1.0, 0.0),
     },
+    intervals=(("test_rms_ci_low_m", "test_rms_ci_high_m"),),
     files=("extra_bp_convergence_curves.csv", "extra_bp_convergence.png"),
 )
 #: the region of the pipeline's own network (the mechanism's workspace box)
@@ -342,6 +345,42 @@ def draw_bp_convergence(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
+def _convergence_run(config_json: str, name: str, k: int) -> dict:
+    """One training to convergence of the 3-10-3 network on region ``name`` from seed ``k`` (the
+    region's samples are the same for every ``k``): its summary and its per-epoch curve."""
+    from parakin.nn import train_lm
+
+    config = json.loads(config_json)
+    cfg, fk_cfg, mech = convergence_settings(config), config[KEY]["fk"], _mech()
+    lo, hi = cfg["regions"][name]
+    poses = sample_reachable(
+        mech, cfg["samples"], rng(config, f"{KEY}.convergence.samples.{name}"), bounds=(lo, hi)
+    )
+    net, log, s = train_lm(
+        mech.ik(poses),
+        poses,
+        hidden=fk_cfg["hidden"],
+        seed=seed_for(config, f"{KEY}.convergence.train.{name}.{k}"),
+        max_epochs=cfg["max_epochs"],
+        max_fail=cfg["max_epochs"] + 1,  # MATLAB's val_fail stop off: the rule decides
+        val_fraction=fk_cfg["val_fraction"],
+        test_fraction=fk_cfg["test_fraction"],
+        plateau_window=cfg["window"],
+        plateau_improvement=cfg["min_improvement"],
+        num_threads=1,
+    )
+    curve = {
+        "restart": k,
+        "epoch": log["epoch"].tolist(),
+        "train_rms_m": log["train_rms_m"].tolist(),
+        "val_rms_m": log["val_rms_m"].tolist(),
+        "test_rms_m": log["test_rms_m"].tolist(),
+        "best": (log["epoch"] == s["best_epoch"]).tolist(),
+        "stop_reason": s["stop_reason"],
+    }
+    return {"summary": s, "curve": curve, "samples": len(poses), "weights": net.n_weights}
+
+
 @artefact(
     "network_convergence",
     outputs=[
@@ -352,7 +391,8 @@ def draw_bp_convergence(frame: pd.DataFrame, path: Path) -> Path:
     ],
     config=["zhao2017_3p4s.fk", "zhao2017_3p4s.network_convergence"],
     tolerance=CONVERGENCE,
-    resources={"runtime": 10, "mem_mb": 2000},
+    threads=2,
+    resources={"runtime": 20, "mem_mb": 2000},
     caption="the BP network trained to convergence on each sampling region (§1.1's 1e-4 level)",
     draws=[("extra_bp_convergence.png", "extra_bp_convergence_curves.csv", draw_bp_convergence)],
 )
@@ -363,54 +403,26 @@ def network_convergence(config: dict, outdir: Path) -> list[Path]:
     ``max_epochs`` is a cap a converged run never reaches). Shows whether the network-accuracy gap
     (§1.1: "1e-4 level") comes from the epoch limit of the pipeline's training or from the region
     sampled (docs/zhao2017_3p4s.md#s4.5)."""
-    from parakin.nn import train_lm
-
     cfg = convergence_settings(config)
     fk_cfg = config[KEY]["fk"]
-    mech = _mech()
     printed = printed_value(_ref(), "text_s1.1", "network_accuracy")
+    tasks = [
+        (json.dumps(config, sort_keys=True, default=list), name, k)
+        for name in cfg["regions"]
+        for k in range(cfg["restarts"])
+    ]
+    results = map_runs(_convergence_run, tasks, label="network_convergence: trainings")
     rows, curves = [], []
     for name, (lo, hi) in cfg["regions"].items():
-        poses = sample_reachable(
-            mech, cfg["samples"], rng(config, f"{KEY}.convergence.samples.{name}"), bounds=(lo, hi)
-        )
-        runs = []
-        for k in range(cfg["restarts"]):
-            print(
-                f"  network_convergence: {name}, run {k + 1}/{cfg['restarts']} ({len(poses)} samples)",
-                file=sys.stderr,
-                flush=True,
-            )
-            net, log, s = train_lm(
-                mech.ik(poses),
-                poses,
-                hidden=fk_cfg["hidden"],
-                seed=seed_for(config, f"{KEY}.convergence.train.{name}.{k}"),
-                max_epochs=cfg["max_epochs"],
-                max_fail=cfg["max_epochs"] + 1,  # MATLAB's val_fail stop off: the rule decides
-                val_fraction=fk_cfg["val_fraction"],
-                test_fraction=fk_cfg["test_fraction"],
-                plateau_window=cfg["window"],
-                plateau_improvement=cfg["min_improvement"],
-            )
-            runs.append(s)
-            curves.append(
-                pd.DataFrame(
-                    {
-                        "region": name,
-                        "restart": k,
-                        "epoch": log["epoch"],
-                        "train_rms_m": log["train_rms_m"],
-                        "val_rms_m": log["val_rms_m"],
-                        "test_rms_m": log["test_rms_m"],
-                        "best": log["epoch"] == s["best_epoch"],
-                        "stop_reason": s["stop_reason"],
-                        "paper_accuracy_m": float(printed),
-                    }
-                )
-            )
+        mine = [r for (_, region, _), r in zip(tasks, results) if region == name]
+        runs = [r["summary"] for r in mine]
+        curves += [
+            pd.DataFrame({"region": name, **r["curve"], "paper_accuracy_m": float(printed)})
+            for r in mine
+        ]
         rms = np.array([s["test_rms_m"] for s in runs])
         e3 = float(np.median([s["test_mean_abs_axis_m"] for s in runs]))
+        stats = run_summary(rms)
         role = (
             "ours (the pipeline's network)"
             if name == OURS
@@ -424,21 +436,25 @@ def network_convergence(config: dict, outdir: Path) -> list[Path]:
                 "role": role,
                 "low": _fmt_box(lo),
                 "high": _fmt_box(hi),
-                "samples": len(poses),
-                "hidden": net.hidden,
-                "weights": net.n_weights,
+                "samples": mine[0]["samples"],
+                "hidden": fk_cfg["hidden"],
+                "weights": mine[0]["weights"],
                 "restarts": len(runs),
                 "window": cfg["window"],
                 "min_improvement": cfg["min_improvement"],
                 "max_epochs": cfg["max_epochs"],
                 "converged_runs": sum(s["stop_reason"] != "max_epochs" for s in runs),
                 "epochs_median": float(np.median([s["epochs"] for s in runs])),
-                "test_rms_median_m": float(np.median(rms)),
-                "test_rms_min_m": float(rms.min()),
-                "test_rms_max_m": float(rms.max()),
+                "test_rms_median_m": stats["median"],
+                "test_rms_ci_low_m": stats["ci_low"],
+                "test_rms_ci_high_m": stats["ci_high"],
+                "test_rms_min_m": stats["min"],
+                "test_rms_max_m": stats["max"],
                 "test_p95_median_m": float(np.median([s["test_p95_m"] for s in runs])),
                 "test_e3_median_m": e3,
-                "median_at_paper_level": judge(printed, float(np.median(rms)), kind="order")
+                "range_at_paper_level": judge(
+                    printed, stats["median"], kind="order", spread=(stats["min"], stats["max"])
+                )
                 == REPRODUCED,
                 "e3_median_at_paper_level": judge(printed, e3, kind="order") == REPRODUCED,
             }
@@ -453,10 +469,13 @@ def network_convergence(config: dict, outdir: Path) -> list[Path]:
         f"{cfg['min_improvement']:.0%} over the last {cfg['window']} epochs ('mu_max' and 'min_grad' also mean no "
         f"further progress); a run reaching the cap of {cfg['max_epochs']} epochs has not converged. Errors: "
         "|predicted - true| platform position (m, 3-D) of each best-validation network on its test set; median, "
-        "min and max over the runs; test_e3_median_m: median over the runs of the mean absolute coordinate "
+        f"its {100 * CI_LEVEL:g} % confidence interval (order statistics; with 10 runs the whole range), min and max "
+        "over the runs; test_e3_median_m: median over the runs of the mean absolute coordinate "
         "error (Table 2's E_3 averaged over the test set). The paper (§1.1) claims a "
-        f"'{printed} level' without stating the region or the error measure; *_at_paper_level: the median "
-        "within half a decade of it (the reference CSV's tolerance)."
+        f"'{printed} level' without stating the region or the error measure; range_at_paper_level: some run "
+        "within half a decade of it (the reference CSV's tolerance; the paper reports one training), "
+        "e3_median_at_paper_level: the median E_3 within half a decade. Runs side by side on the job's "
+        "cores, each on one thread from its own seed."
     )
     paths = write_table(
         tab,
@@ -486,7 +505,7 @@ def _median_time_ms(fn, repeats: int) -> float:
 
 @artefact(
     "table2",
-    outputs=["table2.csv", "table2.md"],
+    outputs=["table2.csv", "table2.md", "table2_iterates.csv", "table2_iterates.md"],
     needs=["zhao2017_3p4s:train"],
     config=["zhao2017_3p4s.fk"],
     tolerance=HYBRID,
@@ -552,9 +571,42 @@ def table2(config: dict, outdir: Path) -> list[Path]:
             }
         )
     tab = pd.DataFrame(rows)
+    iterates = _iterates(mech, net, poses, cfg)
+    wide = _table2_markdown(tab)
+    notes = (
+        f"Hybrid FK: BP network guess, then Broyden's quasi-Newton method until the step is below eps = {cfg['epsilon']:g} m "
+        "(the paper's 'iteration error'). Inputs: the exact IK strokes of each Table 1 pose (stated geometry). "
+        "E_3 = mean |pose error| over x, y, z. Times: median of single solves on this machine "
+        "(the paper: < 20 ms at 3.2 GHz; its per-row times are lost in the extraction)."
+    )
+    return write_table(
+        tab,
+        outdir / "table2",
+        title="Table 2 — hybrid forward kinematics",
+        notes=notes,
+        markdown=wide,
+    ) + write_table(
+        iterates,
+        outdir / "table2_iterates",
+        title="Table 2 — E_3 of every iterate of the hybrid's refinement",
+        notes=(
+            f"Each case: the iterates of Broyden's method from the network's guess (iteration 0) until the "
+            f"paper's rule stops it (step below eps = {cfg['epsilon']:g} m). E_3 = mean |pose error| over x, y, z "
+            "of that iterate; step_m: the length of the step that produced it. The printed E_3 is the error "
+            "of the paper's stopped iterate: it depends on where its (unprinted) solver stood when its step "
+            "fell below eps, anywhere from about eps down to round-off (ours, a step later, is at round-off). "
+            "What compares across solvers is the accuracy the rule guarantees: E_3 at most the printed value "
+            "(a bound; data/reference)."
+        ),
+        floatfmt=".3g",
+    )
+
+
+def _table2_markdown(tab: pd.DataFrame) -> pd.DataFrame:
+    """Table 2's Markdown view: ours beside the paper's printed E_3 and iterations."""
     ref_e3 = [printed_value(_ref(), "table2", f"case{k}.e3") for k in range(1, 6)]
     ref_it = [printed_value(_ref(), "table2", f"case{k}.iterations") for k in range(1, 6)]
-    wide = pd.DataFrame(
+    return pd.DataFrame(
         {
             "case": tab["case"],
             "target (x, y, z) / m": [
@@ -571,19 +623,31 @@ def table2(config: dict, outdir: Path) -> list[Path]:
             "time / ms (ours)": [f"{v:.3f}" for v in tab["time_ms"]],
         }
     )
-    notes = (
-        f"Hybrid FK: BP network guess, then Broyden's quasi-Newton method until the step is below eps = {cfg['epsilon']:g} m "
-        "(the paper's 'iteration error'). Inputs: the exact IK strokes of each Table 1 pose (stated geometry). "
-        "E_3 = mean |pose error| over x, y, z. Times: median of single solves on this machine "
-        "(the paper: < 20 ms at 3.2 GHz; its per-row times are lost in the extraction)."
-    )
-    return write_table(
-        tab,
-        outdir / "table2",
-        title="Table 2 — hybrid forward kinematics",
-        notes=notes,
-        markdown=wide,
-    )
+
+
+def _iterates(mech: P3P4S, net, poses: np.ndarray, cfg: dict) -> pd.DataFrame:
+    """E_3 of every iterate of the hybrid's refinement for each pose (the solve stopped after
+    0, 1, ... iterations, until it stops by itself)."""
+    rows = []
+    for case, pose in enumerate(poses, start=1):
+        q, prev, k = mech.ik(pose), None, 0
+        while True:
+            res = solve_fk(
+                mech, q, method="hybrid", network=net, eps=cfg["epsilon"], tol=0.0, maxiter=k
+            )
+            rows.append(
+                {
+                    "case": case,
+                    "iteration": k,
+                    "e3_m": float(np.mean(np.abs(res.x - pose))),
+                    "step_m": float(np.linalg.norm(res.x - prev)) if prev is not None else np.nan,
+                    "stopped_by_rule": bool(res.success),
+                }
+            )
+            if res.success or k >= cfg["maxiter"]:
+                break
+            prev, k = res.x, k + 1
+    return pd.DataFrame(rows)
 
 
 def _ref() -> pd.DataFrame:
@@ -681,45 +745,265 @@ def fk_benchmark(config: dict, outdir: Path) -> list[Path]:
     )
 
 
-# ---------------------------------------------------------------------------------- report
-def network_accuracy_cause(
-    accuracy: pd.DataFrame, log: pd.DataFrame | None, conv: pd.DataFrame | None, printed: str
-) -> tuple[str, str]:
-    """``(reason, evidence)`` of the network-accuracy claim, from extra_bp_accuracy
-    (``accuracy``; row 0 is the pipeline's network), that network's training log (extra_bp_training, ``log``) and
-    extra_bp_convergence (``conv``), with the convergence rule that table records (fixed before the
-    runs, docs/zhao2017_3p4s.md#s4.5). The two candidate causes, each shown when the median of its
-    converged runs reaches the paper's level (within half a decade, the reference CSV's tolerance):
-    the epoch limit (our box trained to convergence) and the sampling region (the paper's working
-    poses). Neither reaching it, or a run that did not converge, leaves the cause unknown (no
-    evidence); the reason then says what was ruled out. Table 2's E_3 measure is reported, not
-    judged: it was looked at after the runs."""
-    at_level = lambda v: judge(printed, float(v), kind="order") == REPRODUCED  # noqa: E731
-    acc = accuracy.iloc[0]
-    stopped = (
-        f"the pipeline's training stopped by {acc['stop_reason']} (best epoch "
-        f"{int(acc['best_epoch'])} of {int(acc['epochs'])})"
+# ---------------------------------------------------------------------------------- failures
+#: failures of a deterministic solver over seeded poses: a pose near a basin's edge may flip with
+#: the rounding of one step, so the failure rates are compared by the overlap of their 95 %
+#: (Clopper-Pearson) intervals; the sample counts exactly
+FAILURES = Tolerance(
+    "statistical",
+    0.0,
+    0.0,
+    "failure counts over seeded poses: the number of poses exactly, the failure rates by the "
+    "overlap of their 95 % intervals (a pose at a basin's edge may flip with one rounding)",
+    columns={"poses": (0.0, 0.0)},
+    intervals=(("rate_ci_low", "rate_ci_high"),),
+)
+
+
+def working_mode_poses(
+    mech: P3P4S, n: int, g: np.random.Generator, bounds: tuple, max_rounds: int = 200
+) -> np.ndarray:
+    """``n`` poses uniform in the box ``bounds`` on the paper's working mode: reachable, and the
+    pose the closed-form FK (the upper sphere intersection) returns for its own strokes (below it
+    the same strokes assemble a second time, the lower intersection)."""
+    from parakin.solvers.result import rowwise
+
+    kept, count = [], 0
+    for _ in range(max_rounds):
+        if count >= n:
+            break
+        x = sample_reachable(mech, max(2 * (n - count), 64), g, bounds=bounds, max_rounds=1000)
+        back = rowwise(lambda q: mech.fk(q), mech.ik(x), tail=(3,))
+        with np.errstate(invalid="ignore"):
+            x = x[np.max(np.abs(back - x), axis=-1) <= 1e-9]
+        kept.append(x)
+        count += len(x)
+    if count < n:
+        raise ValueError(f"only {count} of {n} working-mode poses found in the box {bounds}")
+    return np.concatenate(kept)[:n]
+
+
+def failure_settings(config: dict) -> dict:
+    """``config[KEY]["failures"]``, checked."""
+    try:
+        cfg = config[KEY]["failures"]
+    except (KeyError, TypeError):
+        raise ConfigError(f"config has no '{KEY}.failures' section") from None
+    boxes = {b["name"]: b for b in config[KEY]["fk"]["accuracy_boxes"]}
+    if cfg.get("paper_box") not in boxes:
+        raise ConfigError(
+            f"{KEY}.failures.paper_box = {cfg.get('paper_box')!r} must name one of the boxes in "
+            f"{KEY}.fk.accuracy_boxes: {', '.join(boxes) or 'none'}"
+        )
+    z = cfg.get("z_bands")
+    if not (isinstance(z, list) and len(z) >= 2 and all(a < b for a, b in zip(z, z[1:]))):
+        raise ConfigError(f"{KEY}.failures.z_bands = {z!r} must be >= 2 increasing heights (m)")
+    return {
+        **cfg,
+        "paper_box_bounds": (boxes[cfg["paper_box"]]["low"], boxes[cfg["paper_box"]]["high"]),
+    }
+
+
+@artefact(
+    "qn_failures",
+    outputs=["extra_qn_failures.csv", "extra_qn_failures.md"],
+    needs=["zhao2017_3p4s:train"],
+    config=["zhao2017_3p4s.fk", "zhao2017_3p4s.bench", "zhao2017_3p4s.failures"],
+    tolerance=FAILURES,
+    resources={"runtime": 10, "mem_mb": 2000},
+    caption="quasi-Newton from the home pose, region by region: how often and how it fails",
+)
+def qn_failures(config: dict, outdir: Path) -> list[Path]:
+    """Conclusion (1), quasi-Newton "strongly affected by the initial value": Broyden, BFGS and
+    Newton from the home pose, and the hybrid, on uniform working-mode poses of the box of Table 1's
+    poses, of the benchmark's box and of the whole reachable workspace (a cube about home that
+    holds it) and its height bands; per region the failure rate with its 95 % interval and the
+    kind of failure (not converged, or converged to the other assembly of the same strokes)."""
+    from parakin.nn import load_network
+    from parakin.papers.failures import failure_table
+
+    cfg, bench = failure_settings(config), config[KEY]["bench"]
+    mech, n = _mech(), int(cfg["samples"])
+    home = mech.home()
+    cube = (home - cfg["cube_half_width"], home + cfg["cube_half_width"])
+    g = rng(config, f"{KEY}.failures")
+    whole = working_mode_poses(mech, n * (len(cfg["z_bands"]) - 1), g, cube)
+    regions = {
+        "Table 1's box": working_mode_poses(mech, n, g, cfg["paper_box_bounds"]),
+        "benchmark box": working_mode_poses(mech, n, g, mech.pose_bounds()),
+        "whole workspace": whole[:n],
+    }
+    for lo, hi in zip(cfg["z_bands"], cfg["z_bands"][1:]):
+        band = (np.r_[cube[0][:2], lo], np.r_[cube[1][:2], hi])
+        regions[f"z {lo:g} to {hi:g} m"] = working_mode_poses(mech, n, g, band)
+    net = load_network(network_path(config), fallback=True)
+    eps = config[KEY]["fk"]["epsilon"]
+    solvers = {
+        "Broyden from home": {"method": "broyden"},
+        "quasi-Newton (BFGS) from home": {"method": "bfgs"},
+        "Newton-Raphson from home": {"method": "newton"},
+        "hybrid (network + Broyden)": {"method": "hybrid", "network": net, "eps": eps},
+    }
+    tab = failure_table(
+        mech,
+        regions,
+        solvers,
+        x0=home,
+        success_tol=bench["success_tol"],
+        tol=bench["tol"],
+        maxiter=bench["maxiter"],
     )
-    if conv is None:
-        return stopped + "; extra_bp_convergence not run: neither region nor convergence shown", ""
+    span = np.ptp(whole, axis=0)
+    notes = (
+        f"Per region {n} poses uniform on the working mode (the upper sphere intersection of eq. 5's "
+        "strokes: the pose the closed-form FK returns; beneath it the same strokes assemble again). "
+        f"Whole workspace: a cube of half-width {cfg['cube_half_width']:g} m about home holds every "
+        f"sampled working-mode pose (they span {span[0]:.2f} x {span[1]:.2f} x {span[2]:.2f} m); height "
+        f"bands of that cube from z = {cfg['z_bands'][0]:g} to {cfg['z_bands'][-1]:g} m. Every solver starts "
+        f"from the home pose {tuple(round(float(v), 3) for v in home)} m (the hybrid from its network's guess; the "
+        f"network was trained on the benchmark box only). Failure: not within {bench['success_tol']:g} m of "
+        f"the sampled pose; not_converged: the solver gave up; another_assembly: converged to another pose "
+        "with the same strokes. Rates with exact (Clopper-Pearson) 95 % intervals."
+    )
+    return write_table(
+        tab,
+        outdir / "extra_qn_failures",
+        title="Quasi-Newton from home: failures by region",
+        notes=notes,
+    )
+
+
+# ---------------------------------------------------------------------------------- speed per solve
+#: iteration counts and evaluation counts are deterministic from seeded inputs (a step at the
+#: threshold may add one); the times are this machine's and never compared
+SPEED = Tolerance(
+    "statistical",
+    0.0,
+    0.0,
+    "per-solve speed: the median iterations within one; times (this machine, this load) not "
+    "compared, their ratio decides only where it is far from 1",
+    columns={"inputs": (0.0, 0.0), "median_nit": (0.0, 1.0)},
+)
+
+
+GUESS_THEN_BROYDEN = "network guess, then Broyden (no reachability check)"
+
+
+def _interleaved_us(calls: dict, inputs: np.ndarray, rounds: int) -> dict[str, float]:
+    """Median time (µs) of one call per input of each entry of ``calls``, the entries taking turns
+    on every input (so that load on a shared machine falls on all of them alike)."""
+    for f in calls.values():
+        f(inputs[0])  # warm-up
+    times = {k: [] for k in calls}
+    for _ in range(rounds):
+        for q in inputs:
+            for k, f in calls.items():
+                t0 = time.perf_counter()
+                f(q)
+                times[k].append(time.perf_counter() - t0)
+    return {k: float(np.median(v)) * 1e6 for k, v in times.items()}
+
+
+@artefact(
+    "hybrid_speed",
+    outputs=["extra_hybrid_speed.csv", "extra_hybrid_speed.md"],
+    needs=["zhao2017_3p4s:train"],
+    config=["zhao2017_3p4s.fk", "zhao2017_3p4s.bench"],
+    tolerance=SPEED,
+    caption="the hybrid against quasi-Newton from home, per solve: iterations and time in one run",
+)
+def hybrid_speed(config: dict, outdir: Path) -> list[Path]:
+    """Conclusion (1), the hybrid "more efficient than quasi-Newton": on the same random inputs,
+    in one run, the hybrid (network guess + Broyden) against Broyden from the home pose, with the
+    hybrid taken apart (the network's guess alone, Broyden from that guess alone): iterations and
+    function evaluations per solve (machine-independent) and the time per solve of each, the calls
+    taking turns on every input."""
+    from parakin.nn import load_network
+
+    cfg, eps = config[KEY]["bench"], config[KEY]["fk"]["epsilon"]
+    mech = _mech()
+    net = load_network(network_path(config), fallback=True)
+    x = sample_reachable(mech, cfg["n_single"], rng(config, f"{KEY}.hybrid_speed"))
+    q = mech.ik(x)
+    home = mech.home()
+    opts = {"tol": cfg["tol"], "maxiter": cfg["maxiter"]}
+    solves = {
+        "hybrid (network + Broyden)": lambda v: solve_fk(
+            mech, v, method="hybrid", network=net, eps=eps, **opts
+        ),
+        "Broyden from home": lambda v: solve_fk(mech, v, method="broyden", x0=home, **opts),
+        GUESS_THEN_BROYDEN: lambda v: solve_fk(
+            mech, v, method="broyden", x0=net.predict(v), xtol=eps, **opts
+        ),
+    }
+    times = _interleaved_us({**solves, "network guess alone": net.predict}, q, cfg["repeats"])
+    rows = []
+    for label, f in solves.items():
+        res = [f(v) for v in q]
+        rows.append(
+            {
+                "computation": label,
+                "inputs": len(q),
+                "median_nit": float(np.median([r.nit for r in res])),
+                "median_nfev": float(np.median([r.nfev for r in res])),
+                "median_time_us": times[label],
+            }
+        )
+    rows.append(
+        {
+            "computation": "network guess alone",
+            "inputs": len(q),
+            "median_nit": 0.0,
+            "median_nfev": 0.0,
+            "median_time_us": times["network guess alone"],
+        }
+    )
+    tab = pd.DataFrame(rows)
+    ref = tab.set_index("computation").loc["Broyden from home"]
+    tab["time_ratio_to_broyden_from_home"] = tab["median_time_us"] / ref["median_time_us"]
+    tab["iteration_ratio_to_broyden_from_home"] = tab["median_nit"] / ref["median_nit"]
+    notes = (
+        f"{len(q)} random reachable inputs of the benchmark box, each solved once by every computation per "
+        f"round ({cfg['repeats']} rounds), the computations taking turns on every input so that the load of a "
+        "shared machine falls on all alike; medians of single calls (µs, this machine). Iterations and "
+        "function evaluations are machine-independent; the time ratios are of computations timed in the same "
+        "run. The hybrid taken apart: the network's guess alone, and the guess followed by Broyden stopped like "
+        f"the hybrid's refinement (step below eps = {eps:g} m) without the hybrid's reachability check of the "
+        "strokes."
+    )
+    return write_table(
+        tab,
+        outdir / "extra_hybrid_speed",
+        title="The hybrid against quasi-Newton, per solve",
+        notes=notes,
+    )
+
+
+# ---------------------------------------------------------------------------------- report
+def network_accuracy_claims(
+    accuracy: pd.DataFrame | None,
+    log: pd.DataFrame | None,
+    conv: pd.DataFrame,
+    curves: pd.DataFrame,
+    ref,
+) -> list[Claim]:
+    """§1.1's "1e-4 level" judged on the restarts of extra_bp_convergence (``conv``, per region;
+    ``curves``: each run's curve, its returned network flagged ``best``): on our workspace box (an
+    independent computation) and on the paper's working poses (Table 1's box: the region is assumed,
+    the paper does not state it). Each claim asks whether the level lies in the range of its runs
+    (half a decade, the reference CSV's tolerance; the paper reports one training). Where neither
+    does, the reason says what was ruled out: the epoch limit (our box trained to convergence by the
+    rule fixed before the runs, docs/zhao2017_3p4s.md#s4.5; ``log``: the pipeline's own training,
+    row 0 of extra_bp_accuracy, ``accuracy``) and what was not shown (the region). Table 2's E_3
+    measure is reported, not judged: it was looked at after the runs."""
+    printed = printed_value(ref, "text_s1.1", "network_accuracy")
     c = conv.set_index("region")
-    if (c["converged_runs"] < c["restarts"]).any():
-        return stopped + "; not every training to convergence converged: cause not shown", ""
-    evidence = f"{KEY}/extra_bp_convergence.md"
-    ours = c.loc[OURS]
+    best = curves[curves["best"].astype(bool)]
     paper = c[c["role"] == "the paper's working poses"].iloc[0]
-    if at_level(ours["test_rms_median_m"]):
-        return (
-            f"{stopped}; cause: the epoch limit: trained to convergence on the same box, the median "
-            f"test RMS error is {ours['test_rms_median_m']:.1e} m, at the paper's level",
-            evidence,
-        )
-    if at_level(paper["test_rms_median_m"]):
-        return (
-            f"{stopped}; cause: the sampling region: on the paper's working poses (Table 1's box) "
-            f"the converged median is {paper['test_rms_median_m']:.1e} m, at the paper's level",
-            evidence,
-        )
+    runs = {
+        name: best[best["region"] == name]["test_rms_m"].to_numpy() for name in (OURS, paper.name)
+    }
+    ours = c.loc[OURS]
     rule = (int(ours["window"]), float(ours["min_improvement"]))
     e = None if log is None else plateau_epoch(log["val_rms_m"], *rule)
     limit = (
@@ -729,24 +1013,142 @@ def network_accuracy_cause(
         if e is not None
         else ""
     )
-    longer = accuracy[accuracy["box"] == paper.name]
-    longer = (
-        f"; the pipeline's set-up on that box ({int(longer['samples'].iloc[0])} samples, stopped by "
-        f"{longer['stop_reason'].iloc[0]} at epoch {int(longer['epochs'].iloc[0])}) gives "
-        f"{longer['test_rms_m'].iloc[0]:.1e} m"
-        if len(longer)
-        else ""
+    span = lambda v: f"{v.min():.1e} to {v.max():.1e} m"  # noqa: E731
+    band = lambda v: int(np.sum(np.abs(np.log10(v / float(printed))) <= 0.5))  # noqa: E731
+    unconverged = [n for n in runs if c.loc[n, "converged_runs"] < c.loc[n, "restarts"]]
+    capped = f"; runs that hit the epoch cap in {', '.join(unconverged)}" if unconverged else ""
+    e3 = (
+        "Not tested: the error measure (seen after the runs): Table 2's E_3 gives "
+        + (
+            f"{float(accuracy.iloc[0].get('test_e3_m', np.nan)):.1e} m for the pipeline's network, "
+            if accuracy is not None
+            else ""
+        )
+        + f"{paper['test_e3_median_m']:.1e} m (median) on Table 1's box and "
+        f"{ours['test_e3_median_m']:.1e} m converged on our box"
     )
-    return (
-        f"cause unknown. Ruled out: the epoch limit on our box ({limit}trained to convergence "
-        f"{int(ours['restarts'])} times: median {ours['test_rms_median_m']:.1e} m). Not shown: the "
-        f"paper's working poses as region (Table 1's box, converged by the rule: median "
-        f"{paper['test_rms_median_m']:.1e} m{longer}). "
-        f"Not tested: the error measure (seen after the runs): Table 2's E_3 gives "
-        f"{float(acc.get('test_e3_m', np.nan)):.1e} m for this network, {paper['test_e3_median_m']:.1e} m "
-        f"on Table 1's box and {ours['test_e3_median_m']:.1e} m converged on our box",
-        "",
+    ours_runs, paper_runs = runs[OURS], runs[paper.name]
+    if band(ours_runs):
+        text = (
+            f"{band(ours_runs)} of {len(ours_runs)} trainings on our box within half a decade of "
+            f"the level ({span(ours_runs)}){capped}"
+        )
+        reason = {OURS: text, paper.name: text}
+    elif band(paper_runs):
+        reason = {
+            OURS: f"none of the {len(ours_runs)} trainings on our box reaches the level "
+            f"({span(ours_runs)}; the epoch limit ruled out: {limit}trained to convergence); on "
+            f"Table 1's box, the region assumed for the paper, {band(paper_runs)} of "
+            f"{len(paper_runs)} do (that row){capped}. {e3}",
+            paper.name: f"{band(paper_runs)} of {len(paper_runs)} trainings within half a decade "
+            f"of the level ({span(paper_runs)}); on our box none ({span(ours_runs)}){capped}",
+        }
+    else:
+        text = (
+            f"cause unknown. Ruled out: the epoch limit on our box ({limit}trained to convergence "
+            f"{len(ours_runs)} times: {span(ours_runs)}). Not shown: the paper's working poses as "
+            f"region (Table 1's box, converged by the rule: {span(paper_runs)}). {e3}{capped}"
+        )
+        reason = {OURS: text, paper.name: text}
+    return [
+        Claim.from_runs(
+            KEY,
+            "text_s1.1",
+            "network_accuracy",
+            printed,
+            runs[name],
+            "m",
+            f"test-set RMS error on {where}, trained to convergence",
+            what="trainings",
+            basis=basis,
+            reason=reason[name],
+        )
+        for name, where, basis in (
+            (OURS, "our workspace box", ""),
+            (
+                paper.name,
+                "Table 1's box",
+                "the sampling region: the box of Table 1's poses (the paper does not state it)",
+            ),
+        )
+    ]
+
+
+def hybrid_speed_claims(t: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
+    """Conclusion (1)'s "more efficient than quasi-Newton", judged twice from one run
+    (extra_hybrid_speed): on iterations (machine-independent) and on the time per solve (a ratio of
+    two computations timed in the same run, the hybrid taken apart). No cause of the time ratio is
+    counted as shown: taking the hybrid apart shows where its time goes, but removing its overhead
+    does not make it faster, which is what a shown cause would have to give."""
+    h, b = t.loc["hybrid (network + Broyden)"], t.loc["Broyden from home"]
+    parts, guess = t.loc[GUESS_THEN_BROYDEN], t.loc["network guess alone"]
+    evidence = f"{KEY}/extra_hybrid_speed.md"
+    reason = (
+        f"cause unknown. Measured in one run: the hybrid {h['median_time_us']:.0f} µs per solve "
+        f"({h['median_nit']:g} iterations), Broyden from home {b['median_time_us']:.0f} µs "
+        f"({b['median_nit']:g} iterations); taken apart, the network's guess costs "
+        f"{guess['median_time_us']:.0f} µs and guess + Broyden without the hybrid's reachability check "
+        f"{parts['median_time_us']:.0f} µs: most of the hybrid's time is its check and call overhead, "
+        "but even without them the saved iterations do not make it faster than quasi-Newton from home "
+        "(an iteration of our compiled Broyden costs about as much as the network's guess; the paper's "
+        "implementation and its costs are not given)"
     )
+    quantity = "hybrid.iteration_ratio_vs_quasi_newton"
+    return [
+        Claim(
+            KEY,
+            "conclusion",
+            quantity,
+            printed_value(ref, "conclusion", quantity),
+            float(b["median_nit"] / h["median_nit"]),
+            "1",
+            f"median iterations per solve: Broyden from home {b['median_nit']:g} / hybrid "
+            f"{h['median_nit']:g} (same run as the time per solve)",
+            reason="iteration counts (machine-independent): the network's guess saves quasi-Newton "
+            "iterations; on time per solve the claim does not survive (hybrid.time_ratio_vs_quasi_newton)",
+            evidence=evidence,
+        ),
+        Claim(
+            KEY,
+            "conclusion",
+            "hybrid.time_ratio_vs_quasi_newton",
+            printed_value(ref, "conclusion", "hybrid.time_ratio_vs_quasi_newton"),
+            float(b["median_time_us"] / h["median_time_us"]),
+            "1",
+            "median time per solve, Broyden from home / hybrid, timed in turns in one run",
+            reason=reason,
+        ),
+    ]
+
+
+def failure_claims(t: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
+    """Conclusion (1)'s "quasi-Newton is strongly affected by the initial value" per region of
+    extra_qn_failures: the larger failure rate of Broyden and BFGS from home against the encoded
+    bound (>= 0.1 % of reachable inputs)."""
+    quantity = "quasi_newton.failure_rate_from_home"
+    qn = t[t["solver"].isin(["Broyden from home", "quasi-Newton (BFGS) from home"])]
+    out = []
+    for region, g in qn.groupby("region", sort=False):
+        worst = g.loc[g["failure_rate"].idxmax()]
+        kinds = "; ".join(
+            f"{r.solver}: {r.failures}/{r.poses} ({r.not_converged} not converged, "
+            f"{r.another_assembly} on another assembly), 95 % CI [{r.rate_ci_low:.2g}, {r.rate_ci_high:.2g}]"
+            for r in g.itertuples()
+        )
+        out.append(
+            Claim(
+                KEY,
+                "conclusion",
+                quantity,
+                printed_value(ref, "conclusion", quantity),
+                float(worst["failure_rate"]),
+                "1",
+                f"largest failure rate of quasi-Newton from the home pose, {region}",
+                reason=kinds,
+                evidence=f"{KEY}/extra_qn_failures.md",
+            )
+        )
+    return out
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
@@ -763,9 +1165,11 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                     printed_value(ref, "table2", f"case{r.case}.e3"),
                     r.e3,
                     "m",
-                    "hybrid (Broyden)",
-                    reason="ours converges far below the paper's E_3 in as many iterations; why the paper's "
-                    "last iterate stayed at ~5e-8 (its solver is not printed) is not shown",
+                    "hybrid (Broyden), E_3 of the iterate the paper's rule stops at",
+                    reason="the printed E_3 is the error of the paper's stopped iterate, which depends on "
+                    "where its (unprinted) solver stood when its step fell below eps (table2_iterates: ours "
+                    "goes from the guess's error to round-off within the last steps); comparable is the "
+                    "accuracy the stopping rule reaches: a bound, ours at most the printed E_3",
                 )
             )
             out.append(
@@ -798,8 +1202,8 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                     )
                 )
         time_reason = (
-            "a wall-clock time: load on a shared machine only lengthens it, and the bound must be "
-            "met 10 times over (declared margin)"
+            "shown for information only: the median single-solve time on this machine, under "
+            "whatever load it had (Table 2's time_ms); no verdict rests on a wall-clock time"
         )
         headline = (
             ("fk_accuracy", tab["e3"].max(), "m", "max E_3 over Table 2", ""),
@@ -826,65 +1230,22 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
                         reason=reason,
                     )
                 )
-    acc = figdir / "extra_bp_accuracy.csv"
-    if acc.exists():
-        accuracy = pd.read_csv(acc)
-        a = accuracy.iloc[0]
-        printed = printed_value(ref, "text_s1.1", "network_accuracy")
-        conv, log = figdir / "extra_bp_convergence.csv", figdir / "extra_bp_training.csv"
-        reason, evidence = network_accuracy_cause(
-            accuracy,
+    conv, curves = figdir / "extra_bp_convergence.csv", figdir / "extra_bp_convergence_curves.csv"
+    if conv.exists() and curves.exists():
+        acc, log = figdir / "extra_bp_accuracy.csv", figdir / "extra_bp_training.csv"
+        out += network_accuracy_claims(
+            pd.read_csv(acc) if acc.exists() else None,
             pd.read_csv(log) if log.exists() else None,
-            pd.read_csv(conv) if conv.exists() else None,
-            printed,
+            pd.read_csv(conv),
+            pd.read_csv(curves),
+            ref,
         )
-        out.append(
-            Claim(
-                KEY,
-                "text_s1.1",
-                "network_accuracy",
-                printed,
-                float(a["test_rms_m"]),
-                "m",
-                "test-set RMS error",
-                reason=reason,
-                evidence=evidence,
-            )
-        )
-    bench = figdir / "fk_benchmark.csv"
-    if bench.exists():
-        b = pd.read_csv(bench).set_index("method")
-        h, qn = b.loc["hybrid"], b.loc["broyden"]
-        h = h.iloc[0] if isinstance(h, pd.DataFrame) else h
-        out.append(
-            Claim(
-                KEY,
-                "conclusion",
-                "hybrid.iteration_ratio_vs_quasi_newton",
-                printed_value(ref, "conclusion", "hybrid.iteration_ratio_vs_quasi_newton"),
-                float(qn["median_nit"] / h["median_nit"]),
-                "1",
-                f"median iterations: Broyden from home {qn['median_nit']:g} / hybrid {h['median_nit']:g}",
-                reason="iteration counts, not wall-clock: the network's guess saves quasi-Newton iterations",
-            )
-        )
-        worst = b[(b["start"] == "home") & b.index.isin(["broyden", "bfgs"])]
-        fail = 1.0 - float(worst["success_rate"].min())
-        out.append(
-            Claim(
-                KEY,
-                "conclusion",
-                "quasi_newton.failure_rate_from_home",
-                printed_value(ref, "conclusion", "quasi_newton.failure_rate_from_home"),
-                fail,
-                "1",
-                f"largest failure rate of quasi-Newton from the home pose ({', '.join(worst.index)}; "
-                f"{int(worst['n_accuracy'].min())} reachable inputs each)",
-                evidence=f"{KEY}/fk_benchmark.md",
-                reason="every quasi-Newton start from home converges on this mechanism's workspace: the "
-                "hybrid's lower start sensitivity has nothing to improve on",
-            )
-        )
+    speed = figdir / "extra_hybrid_speed.csv"
+    if speed.exists():
+        out += hybrid_speed_claims(pd.read_csv(speed).set_index("computation"), ref)
+    fails = figdir / "extra_qn_failures.csv"
+    if fails.exists():
+        out += failure_claims(pd.read_csv(fails), ref)
     return out
 
 
