@@ -440,10 +440,10 @@ def test_claims_and_summary(section_outputs):
     for c in claims:
         printed = "printed" in c.variant
         c = resolve(c, ref)  # judged with the tolerance data/reference declares
-        assert (c.verdict == "differs — cause shown") if printed else (c.verdict == "reproduced"), (
-            c.variant,
-            c.ours,
-        )
+        # the agreement needs our corrected equations: consistent after assuming them (issue 28)
+        want = "consistent after fitting or assuming" if c.basis else "reproduced"
+        assert c.verdict == ("differs — cause shown" if printed else want), (c.variant, c.ours)
+        assert printed or c.outcome == "reproduced", (c.variant, c.ours)
     text = section.summary(out, ref)
     assert "40.63 N per motor" in text and "slip confirmed" in text and "Power balance" in text
     assert "open loop" in text

@@ -88,9 +88,11 @@ def test_claims_and_summary(outputs):
     for q in ("best_R.realtime_robust", "odd_even_ratio.nr", "odd_even_ratio.broyden"):
         assert "P = (max - min)/mean" in table.loc[q, "reason"], q
         assert table.loc[q, "verdict"] not in ("reproduced", "bound satisfied"), q
-    # a count compared exactly: N-R's one drop (R4, near its d_max) is named
-    assert table.loc["nr.step_drops", "verdict"].startswith("differs")
-    assert "R4" in table.loc["nr.step_drops", "reason"]
+    # a count compared exactly: any N-R drop makes it differ and is named (at the full grid one,
+    # R4 near its d_max; the quick grid steps over it)
+    drops = float(table.loc["nr.step_drops", "ours"])
+    assert table.loc["nr.step_drops", "verdict"].startswith("differs") == (drops > 0)
+    assert table.loc["nr.step_drops", "reason"].count(" steps at d = ") == drops
     assert float(table.loc["accuracy_factor", "ours"]) > 1e3
     assert {"composite.nr", "composite_ratio", "width.R2.nr", "bump.R0.L"} <= set(table.index)
     # C9, C10, C11, C15 and the rest of C8 are rows (qualitative statements, encodings in the reasons)
@@ -108,9 +110,10 @@ def test_claims_and_summary(outputs):
         "odd_even_ratio.nr",
         "odd_even_ratio.broyden",
     } <= set(table.index)
-    assert (
-        table.loc["broyden.trend_spearman", "verdict"] == "bound satisfied"
-    )  # C10: Broyden's steps rise with d
+    # C10: Broyden's steps rise with d, over the assumed passive sets of each drive mode
+    trend = next(c for c in claims if c.quantity == "broyden.trend_spearman")
+    assert trend.outcome == "bound satisfied"
+    assert trend.verdict == "consistent after fitting or assuming" and "passive" in trend.basis
     text = Y.summary(outputs, ref)
     assert "Table 5 steps" in text and "cond(dF/dX)" in text
 

@@ -79,6 +79,19 @@ class Kernel:
     n_joints: int
     home: np.ndarray | None = None  #: the mechanism's home pose (the default start), if given
 
+    def __reduce__(self):
+        # a module does not pickle: by its import name (a mechanism, and with it a solver's result
+        # that holds one, goes to worker processes and into caches)
+        fields = (self.params, self.n_pose, self.n_joints, self.home)
+        return (_kernel_of_module, (self.module.__name__, *fields))
+
+
+def _kernel_of_module(module: str, *fields) -> Kernel:
+    """A :class:`Kernel` of the kernel module imported by ``module`` name (unpickling)."""
+    import importlib
+
+    return Kernel(importlib.import_module(module), *fields)
+
 
 # ---------------------------------------------------------------------------- is it on?
 _INTERPRETED: contextvars.ContextVar[bool] = contextvars.ContextVar("interpreted", default=False)
