@@ -168,11 +168,9 @@ class RPR3(Mechanism):
         in the plane."""
         x, y, phi = pose[..., 0], pose[..., 1], pose[..., 2]
         batch = x.shape
-        origin = dj.stack([x, y, 0.0 * x])
-        rotation = dj.rotations([phi], "z")
-        tops = origin[..., None, :] + dj.matvec(
-            rotation[..., None, :, :], self._in_space(self.platform)
-        )
+        origin = dj.stack([x, y, 0.0 * x])[..., None, :]  # one platform body
+        turn = dj.rotations([phi], "z")[..., None, :, :]
+        tops = origin + dj.matvec(turn, self._in_space(self.platform))
         n, lengths = dj.normalize(tops - self._in_space(self.base))
         frame = dj.stack([_NORMAL, dj.cross(n, _NORMAL), n], axis=-1)
         normal = np.broadcast_to(_NORMAL, (*batch, 3, 3))
@@ -180,14 +178,7 @@ class RPR3(Mechanism):
         pistons = tuple(f"piston{k}" for k in (1, 2, 3))
         base = dj.constant_like(np.broadcast_to(self._in_space(self.base), (*batch, 3, 3)), pose)
         groups = (
-            BodyGroup(
-                "platform",
-                ("platform",),
-                ("world",),
-                "free",
-                origin[..., None, :],
-                rotation=rotation[..., None, :, :],
-            ),
+            BodyGroup("platform", ("platform",), ("world",), "free", origin, rotation=turn),
             BodyGroup(
                 "cylinder",
                 cylinders,
