@@ -23,6 +23,7 @@ from parakin.dynamics.trajectory import Harmonic, power_balance, read_trajectory
 from parakin.errors import ShapeError, SingularityError, UnreachableError
 from parakin.mechanisms import P3P4S, REGISTRY, Stewart12
 from parakin.mechanisms import p3p4s_dynamics as zhao
+from parakin.mechanisms.rpr3 import RPR3
 
 #: every registered mechanism that declares its dynamics
 MECHS = [cls() for cls in REGISTRY.values() if cls().mass_model() is not None]
@@ -357,6 +358,26 @@ def test_simulation_follows_the_feedforward_forces():
     assert sim.max_drift < 1e-9
     with pytest.raises(ValueError, match="dt"):
         simulate(mech, *tr.state(0.0)[:2], feedforward(mech, tr, 0.1, 1e-3), 0.1, 0.0)
+
+
+def test_planar_3rpr_in_its_plane_and_under_its_forces():
+    """The 3-RPR (docs/dynamics.md §7): every body stays in the plane z = 0 (values and
+    derivatives); gravity normal to the plane does no work, so the joints carry it and the forces
+    are those of zero gravity (to rounding), while the default in-plane gravity changes them; under
+    the feedforward forces of a trajectory the simulator follows it, the loops held."""
+    mech = RPR3()
+    tr = Harmonic.around(mech, 0.5, 1.0)
+    x, v, a = tr.state(np.linspace(0.0, tr.period, 9))
+    origins = [g.origin for g in mech.bodies(jet.variable(x, v)).groups]
+    assert all(np.all(o.value[..., 2] == 0) and np.all(o.tangents[..., 2] == 0) for o in origins)
+    model = mech.mass_model()
+    free = D.inverse_dynamics(mech, x, v, a, mass=model.replace(gravity=(0.0, 0.0, 0.0))).force
+    flat = D.inverse_dynamics(mech, x, v, a, mass=model.replace(gravity=(0.0, 0.0, -9.81))).force
+    assert rel(flat, free) < 1e-12
+    assert rel(D.inverse_dynamics(mech, x, v, a).force, free) > 0.1
+    sim = simulate(mech, *tr.state(0.0)[:2], feedforward(mech, tr, 0.1, 1e-3), 0.1, 1e-3)
+    assert np.max(np.abs(sim.pose - tr.state(sim.t)[0])) < 1e-9
+    assert sim.max_drift < 1e-9
 
 
 # ---------------------------------------------------------------------------------------- layering

@@ -4,7 +4,9 @@ joint on the base, an actuated prismatic joint and a revolute joint on the platf
 Beyond the four papers: the textbook planar parallel mechanism (Gosselin & Angeles 1988; Merlet,
 *Parallel Robots*, 2006, ch. 4), added as the worked example of docs/kernels.md. Its geometry is
 declared once here, its equations once in :mod:`parakin.kernels.rpr3`; everything else (the
-numpy methods, every FK solver, compiled and torch, the CLI, the tests, the solver atlas) follows.
+numpy methods, every FK solver, compiled and torch, the CLI, the tests, the solver atlas) follows;
+its dynamics (:meth:`RPR3.mass_model`, :meth:`RPR3.bodies`: the worked example of docs/dynamics.md
+§7) gives it inverse and forward dynamics and the MuJoCo and pinocchio checks.
 
 Default geometry (ours, symmetric): base pivots on a circle of radius 0.5 m at 90, 210 and 330 deg,
 platform pivots on a circle of radius 0.2 m turned 60 deg further, so that at home (the platform
@@ -22,11 +24,17 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 
+import parakin.dynamics.jet as dj
+from parakin.dynamics.jet import Jet
+from parakin.dynamics.model import Bodies, BodyGroup, Closure, MassModel, hexapod_masses
 from parakin.kernels import Kernel, evaluate
 from parakin.kernels import rpr3 as kernels
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch
 
 __all__ = ["RPR3"]
+
+#: the plane's normal: the world z axis, the axis of every revolute joint
+_NORMAL = np.array([0.0, 0.0, 1.0])
 
 
 def _circle(radius: float, degrees: ArrayLike) -> tuple[tuple[float, float], ...]:
@@ -120,3 +128,69 @@ class RPR3(Mechanism):
             polygons=[("base", b), ("platform", p)],
             frames={"O": (np.zeros(3), np.eye(3)), "P": (np.array([x[0], x[1], 0.0]), turn)},
         )
+
+    # ------------------------------------------------------------------ dynamics (issue 27)
+    def _in_space(self, points: Any) -> Array:
+        """Planar points (3, 2) as points (3, 3) of the plane ``z = 0``."""
+        return np.hstack([np.asarray(points), np.zeros((3, 1))])
+
+    def mass_model(self) -> MassModel:
+        """Illustrative defaults (no paper gives masses): a 1 kg platform, a thin disc in the plane
+        of radius the RMS distance of its pivots from their centroid, centred there; each leg a
+        0.4 kg cylinder turning about its base pivot and a 0.2 kg piston sliding in it, solid rods
+        of half the mean leg length at :meth:`home`, centres a quarter of it from their joints
+        (:func:`parakin.dynamics.model.hexapod_masses`).
+
+        Gravity ``(0, -9.81, 0)`` m/s^2 lies *in* the plane of motion: the mechanism stands in a
+        vertical plane, ``y`` up, so gravity does work on every body and enters the actuator
+        forces. Lying flat (gravity along ``-z``, normal to the plane) it would do no work on a
+        planar motion: the joints' reactions carry it, out of the plane, and the actuator forces
+        are those of zero gravity (``mass_model().replace(gravity=(0, 0, -9.81))`` shows it)."""
+        leg = float(np.mean(self.ik(self.home())))
+        return hexapod_masses(
+            self._in_space(self.platform),
+            leg,
+            platform_mass=1.0,
+            cylinder_mass=0.4,
+            piston_mass=0.2,
+            gravity=(0.0, -9.81, 0.0),
+            note="rpr3 illustrative defaults, standing in a vertical plane",
+        )
+
+    def bodies(self, pose: Jet) -> Bodies:
+        """The platform (origin ``(x, y, 0)``, turned by ``phi`` about the plane's normal ``z``)
+        and each leg's two bodies in the plane ``z = 0``: the cylinder, hinged to the base at
+        ``B_i`` about ``z``, and the piston, sliding in it along the leg (the actuated joint,
+        ``rho_i``) and hinged to the platform at ``P_i`` (a loop closure). Both leg bodies turn with
+        the leg, frame ``[z, n_i x z, n_i]`` (``n_i`` the unit leg vector: body z along the leg,
+        body x the hinge axis). The engines' models are planar too: hinges about ``z``, slides in
+        the plane, and three closures at non-collinear points at ``z = 0`` hold the free platform
+        in the plane."""
+        x, y, phi = pose[..., 0], pose[..., 1], pose[..., 2]
+        batch = x.shape
+        origin = dj.stack([x, y, 0.0 * x])[..., None, :]  # one platform body
+        turn = dj.rotations([phi], "z")[..., None, :, :]
+        tops = origin + dj.matvec(turn, self._in_space(self.platform))
+        n, lengths = dj.normalize(tops - self._in_space(self.base))
+        frame = dj.stack([_NORMAL, dj.cross(n, _NORMAL), n], axis=-1)
+        normal = np.broadcast_to(_NORMAL, (*batch, 3, 3))
+        cylinders = tuple(f"cylinder{k}" for k in (1, 2, 3))
+        pistons = tuple(f"piston{k}" for k in (1, 2, 3))
+        base = dj.constant_like(np.broadcast_to(self._in_space(self.base), (*batch, 3, 3)), pose)
+        groups = (
+            BodyGroup("platform", ("platform",), ("world",), "free", origin, rotation=turn),
+            BodyGroup(
+                "cylinder",
+                cylinders,
+                ("world",) * 3,
+                "hinge",
+                base,
+                rotation=frame,
+                joint_axis=normal,
+            ),
+            BodyGroup(
+                "piston", pistons, cylinders, "slide", tops, rotation=frame, joint_axis=n.value
+            ),
+        )
+        closure = Closure(pistons, ("platform",) * 3, tops.value)
+        return Bodies(groups, lengths, pistons, (closure,))
