@@ -12,7 +12,6 @@ from __future__ import annotations
 import contextlib
 import os
 import time
-import timeit
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -22,6 +21,7 @@ import pandas as pd
 
 from parakin.mechanisms.base import REGISTRY, Array, Mechanism
 from parakin.solvers import solve_fk
+from parakin.timing import best_of, best_time
 
 __all__ = ["SolverSpec", "bench_fk", "BASELINE"]
 
@@ -83,7 +83,7 @@ def bench_fk(
             latencies[i] = time.perf_counter() - t0
             xs[i], nits[i], oks[i] = r.x, r.nit, r.success
         if spec.batched:
-            best, rb = _best_of(lambda: solve_fk(mech, q2, x0=home, **kwargs), repeats)  # noqa: B023
+            best, rb = best_of(lambda: solve_fk(mech, q2, x0=home, **kwargs), repeats)  # noqa: B023
             err, nit, ok, n_acc = _errors(rb.x, x2), rb.nit, rb.success, len(q2)
             throughput = len(q2) / best
         else:
@@ -149,20 +149,6 @@ def _kernels_off():
             del os.environ["PARAKIN_KERNELS"]
         else:
             os.environ["PARAKIN_KERNELS"] = old
-
-
-def _best_of(f: Callable[[], Any], repeats: int) -> tuple[float, Any]:
-    """The shortest of ``repeats`` timed calls of ``f`` (``timeit``) and the last call's result."""
-    out: list[Any] = [None]
-
-    def call() -> None:
-        out[0] = f()
-
-    return min(timeit.repeat(call, number=1, repeat=max(repeats, 1))), out[0]
-
-
-def _best(f: Callable[[], Any], repeats: int) -> float:
-    return _best_of(f, repeats)[0]
 
 
 def _compiled_mechanisms() -> list[Mechanism]:
@@ -255,7 +241,7 @@ def _solver_goals(mech: Mechanism, n_single: int, n_batch: int, repeats: int) ->
         )
     for method, goal in (("newton", GOALS["newton_per_s"]), ("lm", GOALS["lm_per_s"])):
         solve_fk(mech, q2[:1000], method=method, maxiter=100)
-        t = _best(lambda: solve_fk(mech, q2, method=method, maxiter=100), repeats)  # noqa: B023
+        t = best_time(lambda: solve_fk(mech, q2, method=method, maxiter=100), repeats)  # noqa: B023
         rows.append(_goal_row(mech.name, f"{method} batched", len(q2) / t, "solves/s", goal))
     return rows
 
@@ -264,9 +250,9 @@ def _stewart36_all_goals(mech: Mechanism, n_all: int, repeats: int) -> list[dict
     """The 3-6 Stewart's all-solutions FK throughput, compiled and numpy path."""
     _, qa = _sample(mech, n_all, seed=19)
     solve_fk(mech, qa[:10], method="all-solutions")
-    t = _best(lambda: solve_fk(mech, qa, method="all-solutions"), repeats)
+    t = best_time(lambda: solve_fk(mech, qa, method="all-solutions"), repeats)
     with _kernels_off():  # the numpy path, the baseline of the same run
-        t_np = _best(lambda: solve_fk(mech, qa, method="all-solutions"), 1)
+        t_np = best_time(lambda: solve_fk(mech, qa, method="all-solutions"), 1)
     return [
         _goal_row(mech.name, "all-solutions FK", len(qa) / t, "inputs/s", GOALS["stewart36_all_per_s"]),
         _goal_row(mech.name, "all-solutions FK, numpy path", len(qa) / t_np, "inputs/s", np.nan),
@@ -279,9 +265,9 @@ def _stewart66_all_goals(n_all_66: int, repeats: int) -> list[dict]:
     m66 = REGISTRY["stewart66"]()
     _, q66 = _sample(m66, n_all_66, seed=20)
     m66.fk_all(q66[:2])  # warm-up: the geometry's start system, the cached kernels
-    t = _best(lambda: m66.fk_all(q66), repeats)
+    t = best_time(lambda: m66.fk_all(q66), repeats)
     with _kernels_off():
-        t_np = _best(lambda: m66.fk_all(q66), 1)
+        t_np = best_time(lambda: m66.fk_all(q66), 1)
     per = GOALS["stewart66_all_ms"]
     return [
         _goal_row(m66.name, "all-solutions FK", 1e3 * t / len(q66), "ms/input", per, higher=False),
@@ -297,7 +283,7 @@ def _pso_goals(mech: Mechanism) -> list[dict]:
     q = np.broadcast_to(mech.ik(mech.home()), (50, 6))
     fit = lambda x, joints: mech.objective(x, joints[:, None, :])  # noqa: E731  (as chaos.run_pso)
     kw = dict(method="pso", seed=np.arange(50), tol=0.0, maxiter=1000, swarm=50, inertia="linear")
-    t = _best(lambda: solve_fk(mech, q, vclamp=0.2, fitness=fit, **kw), 1)
+    t = best_time(lambda: solve_fk(mech, q, vclamp=0.2, fitness=fit, **kw), 1)
     what = "Li 2017 PSO experiment (50 x 50 x 1000)"
     rows = [_goal_row(mech.name, what, t, "s", GOALS["li2017_pso_s"], higher=False)]
     # one run per call as the atlas's PSO rows (40 particles, 300 iterations, eq. 20 fitness):
