@@ -24,8 +24,9 @@ import re
 import sys
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from functools import cache
+from functools import cache, wraps
 from pathlib import Path
+from typing import Any
 
 __all__ = [
     "Tolerance",
@@ -310,6 +311,32 @@ def artefact(
         REGISTRY[item.key] = item
         make.artefact = item
         return make
+
+    return register
+
+
+def table_and_figure(
+    study: str,
+    name: str,
+    stem: str,
+    draw: Callable[[Any, Path], Path],
+    **declared: Any,
+) -> Callable:
+    """Declare the decorated ``table(config) -> DataFrame`` as one figure artefact: the table is
+    written to ``<stem>.csv`` and the figure drawn from that file into ``<stem>.png`` by ``draw``
+    (:func:`parakin.io.write_and_draw`, which hands ``draw`` the final path, so the figure is
+    tagged by its name); ``declared``: :func:`artefact`'s other fields. The artefact's
+    ``make(config, outdir)`` keeps the table's name and docstring."""
+    png, csv = f"{stem}.png", f"{stem}.csv"
+
+    def register(table: Callable[[dict], Any]) -> Callable:
+        @wraps(table)
+        def make(config: dict, outdir: Path) -> list[Path]:
+            from parakin.io import write_and_draw
+
+            return write_and_draw(table(config), Path(outdir) / csv, draw)
+
+        return artefact(study, name, outputs=[png, csv], draws=[(png, csv, draw)], **declared)(make)
 
     return register
 

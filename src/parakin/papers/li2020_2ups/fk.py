@@ -17,7 +17,7 @@ import pandas as pd
 import parakin.solvers.pso  # noqa: F401  (registers "pso")
 from parakin.claims import Claim, load_reference, printed_value
 from parakin.config import seed_for
-from parakin.io import write_and_draw, write_csv, write_table
+from parakin.io import write_csv, write_table
 from parakin.papers.li2020_2ups.common import (
     CASES,
     KEY,
@@ -25,6 +25,7 @@ from parakin.papers.li2020_2ups.common import (
     mech,
     table2_inputs,
     table2_outputs,
+    table_and_figure,
     to_paper,
 )
 from parakin.plot import new_figure, save_figure
@@ -344,14 +345,8 @@ def draw_fig02(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
-    "fig02",
-    outputs=["fig02_fitness.png", "fig02_fitness.csv"],
-    config=[KEY],
-    tolerance=PSO_TRAJECTORY,
-    draws=[("fig02_fitness.png", "fig02_fitness.csv", draw_fig02)],
-)
-def fig02(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig02", "fig02_fitness", draw_fig02, config=[KEY], tolerance=PSO_TRAJECTORY)
+def fig02(config: dict) -> pd.DataFrame:
     """Fig. 2: best fitness F (mm) per iteration for the five cases, one seed, as printed vs improved."""
     m = mech(config)
     q = table2_inputs()
@@ -373,7 +368,7 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
             )
     df = pd.concat(frames)
     df["threshold_mm"] = config[KEY]["pso"]["ftol_mm"]  # eq. (20)'s threshold, dashed in the figure
-    return write_and_draw(df, outdir / "fig02_fitness.csv", draw_fig02)
+    return df
 
 
 @artefact(

@@ -13,7 +13,7 @@ from scipy.optimize import least_squares, minimize
 from parakin.claims import Claim, load_reference, printed_value
 from parakin.io import write_and_draw, write_table
 from parakin.mechanisms import P3P4S
-from parakin.papers.zhao2017_3p4s.common import KEY, artefact
+from parakin.papers.zhao2017_3p4s.common import KEY, artefact, table_and_figure
 from parakin.registry import DESCRIPTIVE, ROUNDING
 
 HALF_DIGIT = 0.005  # Table 1 prints strokes to 0.01 m: half a unit of the last digit
@@ -340,26 +340,16 @@ def _mechanism_table() -> pd.DataFrame:
     return skeleton_table(mech.skeleton(mech.home()))
 
 
-@artefact(
-    "fig01",
-    outputs=["fig01_mechanism.png", "fig01_mechanism.csv"],
-    tolerance=DESCRIPTIVE,
-    draws=[("fig01_mechanism.png", "fig01_mechanism.csv", draw_fig01)],
-)
-def fig01(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig01", "fig01_mechanism", draw_fig01, tolerance=DESCRIPTIVE)
+def fig01(config: dict) -> pd.DataFrame:
     """Fig. 1: the 3-P(4S) mechanism (the paper shows a CAD model; we draw our kinematic model)."""
-    return write_and_draw(_mechanism_table(), outdir / "fig01_mechanism.csv", draw_fig01)
+    return _mechanism_table()
 
 
-@artefact(
-    "fig02",
-    outputs=["fig02_sketch.png", "fig02_sketch.csv"],
-    tolerance=DESCRIPTIVE,
-    draws=[("fig02_sketch.png", "fig02_sketch.csv", draw_fig02)],
-)
-def fig02(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig02", "fig02_sketch", draw_fig02, tolerance=DESCRIPTIVE)
+def fig02(config: dict) -> pd.DataFrame:
     """Fig. 2: sketch with the frames {O}, {P}, {u_i} and the points u_i, c_i, d_i of §1.1."""
-    return write_and_draw(_mechanism_table(), outdir / "fig02_sketch.csv", draw_fig02)
+    return _mechanism_table()
 
 
 # ---------------------------------------------------------------------------------------- Fig. 4
@@ -593,17 +583,17 @@ def draw_fig04(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@table_and_figure(
     "fig04",
-    outputs=["fig04_equivalent_limb.png", "fig04_equivalent_limb.csv"],
+    "fig04_equivalent_limb",
+    draw_fig04,
     tolerance=DESCRIPTIVE,
     caption="Fig. 4: the equivalent P(4S) limb and its unit vectors, drawn from our model",
-    draws=[("fig04_equivalent_limb.png", "fig04_equivalent_limb.csv", draw_fig04)],
 )
-def fig04(config: dict, outdir: Path) -> list[Path]:
+def fig04(config: dict) -> pd.DataFrame:
     """Fig. 4: the P(4S) limb and its equivalent rod with the unit vectors e_i, m_i, n_i, s_i of
     eq. (6) (the paper draws a schematic; we draw limb 1 of our model at the home pose)."""
-    return write_and_draw(_fig04_table(), outdir / "fig04_equivalent_limb.csv", draw_fig04)
+    return _fig04_table()
 
 
 # ---------------------------------------------------------------------------------------- report
