@@ -815,17 +815,8 @@ def train_lm(
 
     X, Y = _training_arrays(inputs, targets)
     _check_split_options(hidden, val_fraction, test_fraction)
-    rules = _LMRules(
-        max_epochs=max_epochs,
-        mu_dec=mu_dec,
-        mu_inc=mu_inc,
-        mu_max=mu_max,
-        max_fail=max_fail,
-        min_grad=min_grad,
-        goal=goal,
-        plateau_window=plateau_window,
-        plateau_improvement=plateau_improvement,
-    )
+    rules = _LMRules(max_epochs, mu_dec, mu_inc, mu_max, max_fail, min_grad, goal,
+                     plateau_window, plateau_improvement)  # fmt: skip
     rules.check(mu)
 
     start = time.perf_counter()
