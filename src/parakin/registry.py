@@ -132,6 +132,12 @@ class Tolerance:
         """The column limit of condition numbers of matrices up to ``n x n`` (:class:`ConditionNumber`)."""
         return ConditionNumber(n)
 
+    @classmethod
+    def statistical(cls, reason: str, **fields) -> Tolerance:
+        """A ``kind="statistical"`` tolerance: only what ``fields`` (``columns``, ``intervals``,
+        ...) name is compared, so the default ``rtol`` and ``atol`` are 0."""
+        return cls("statistical", 0.0, 0.0, reason, **fields)
+
     def but(self, reason: str | None = None, **changes) -> Tolerance:
         """A copy with some fields changed (and a reason that says why)."""
         from dataclasses import replace

@@ -39,10 +39,7 @@ from parakin.solvers.pso import ChaoticLogistic
 #: to O(1), so the weight sequences and the PSO runs they drive are compared only through what is
 #: stable: the histogram of the map's values (Table 1) within sampling noise, and the PSO fitness
 #: statistics over 50 runs by order of magnitude
-CHAOS = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+CHAOS = Tolerance.statistical(
     "chaotic map and PSO runs: histogram counts within 3 sqrt(count) + 3, statistics of "
     "the map within 0.05; trajectories and PSO extremes not compared",
     columns={

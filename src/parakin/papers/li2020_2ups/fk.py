@@ -36,10 +36,7 @@ from parakin.solvers import solve_fk
 #: PSO is a seeded but chaotic search: the pose it settles on in one run moves with the rounding of
 #: one product. Stable are the exact and printed poses (closed form / transcribed) and the medians
 #: over all runs of a variant that converges; spreads, extremes and counts of runs are not compared
-PSO_TABLE = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+PSO_TABLE = Tolerance.statistical(
     "PSO runs: exact (closed-form) and printed columns to rounding, run medians within "
     "0.05 (deg, mm); spreads, extremes, iteration counts and run counts not compared; "
     "the consistency checks (closed form) to rounding",
@@ -62,17 +59,11 @@ PSO_TABLE = Tolerance(
     | {"value": (1e-6, 1e-9)},
     files=("table2_runs.csv",),
 )
-PSO_TRAJECTORY = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+PSO_TRAJECTORY = Tolerance.statistical(
     "PSO fitness per iteration: one chaotic trajectory per run",
     files=("fig02_fitness.csv", "fig02_fitness.png"),
 )
-SOLVER_COUNTS = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+SOLVER_COUNTS = Tolerance.statistical(
     "solver counts: local solvers and the closed form exactly (deterministic from the "
     "seeded inputs), the PSO row within 2 of 20 runs; iteration medians within one",
     columns={
@@ -600,10 +591,7 @@ def _numerical_fk_claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
 
 #: failures of deterministic solvers over seeded poses: the sample counts exactly, the rates by
 #: the overlap of their 95 % intervals (a pose at a basin's edge may flip with one rounding)
-FAILURES = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+FAILURES = Tolerance.statistical(
     "failure counts over seeded poses: the number of poses exactly, the failure rates by the "
     "overlap of their 95 % intervals (a pose at a basin's edge may flip with one rounding)",
     columns={"poses": (0.0, 0.0)},

@@ -43,10 +43,7 @@ from parakin.registry import EXACT, ROUNDING, TIMING, Tolerance
 #: corner it reaches (r_a, r_b and phi at their bounds) and the indices there (those seeds spread
 #: 3.6 % in sigma1); L, d and the near-zero composite objective f are flat directions, not compared;
 #: the published numbers are judged on the distribution over the runs (GA_RUNS, extra_ga_summary)
-GA = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+GA = Tolerance.statistical(
     "genetic algorithm: the bound-hitting design variables within 2 % of the box and the "
     "indices within 5 % (three seeds spread 3.6 %); flat directions (L, d, f) and the "
     "per-generation trajectories not compared",
@@ -965,10 +962,7 @@ def load_ga(config: dict) -> dict:
 
 #: the GA runs over independent seeds: each run is one chaotic trajectory (not compared); the
 #: statistics over the runs are, by the overlap of their 99 % confidence intervals of the median
-GA_RUNS = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+GA_RUNS = Tolerance.statistical(
     "independent GA runs: each run's design and trajectory is chaotic (not compared); per "
     "published quantity the number of runs exactly and the 99 % confidence interval of the "
     "median over the runs must overlap the record's",
