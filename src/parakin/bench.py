@@ -12,7 +12,6 @@ from __future__ import annotations
 import contextlib
 import os
 import time
-import timeit
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -22,6 +21,7 @@ import pandas as pd
 
 from parakin.mechanisms.base import REGISTRY, Array, Mechanism
 from parakin.solvers import solve_fk
+from parakin.timing import best_of, best_time
 
 __all__ = ["SolverSpec", "bench_fk", "BASELINE"]
 
@@ -83,7 +83,7 @@ def bench_fk(
             latencies[i] = time.perf_counter() - t0
             xs[i], nits[i], oks[i] = r.x, r.nit, r.success
         if spec.batched:
-            best, rb = _best_of(lambda: solve_fk(mech, q2, x0=home, **kwargs), repeats)  # noqa: B023
+            best, rb = best_of(lambda: solve_fk(mech, q2, x0=home, **kwargs), repeats)  # noqa: B023
             err, nit, ok, n_acc = _errors(rb.x, x2), rb.nit, rb.success, len(q2)
             throughput = len(q2) / best
         else:
@@ -151,20 +151,6 @@ def _kernels_off():
             os.environ["PARAKIN_KERNELS"] = old
 
 
-def _best_of(f: Callable[[], Any], repeats: int) -> tuple[float, Any]:
-    """The shortest of ``repeats`` timed calls of ``f`` (``timeit``) and the last call's result."""
-    out: list[Any] = [None]
-
-    def call() -> None:
-        out[0] = f()
-
-    return min(timeit.repeat(call, number=1, repeat=max(repeats, 1))), out[0]
-
-
-def _best(f: Callable[[], Any], repeats: int) -> float:
-    return _best_of(f, repeats)[0]
-
-
 def _compiled_mechanisms() -> list[Mechanism]:
     """Every registered mechanism with compiled kernels (default parameters), in registry order."""
     mechs = [cls() for cls in REGISTRY.values()]
@@ -190,123 +176,136 @@ def kernel_goals(
     One row per measurement: ``mechanism, what, value, unit, goal, met``. The mechanisms are the
     registered ones with kernels (:data:`parakin.mechanisms.base.REGISTRY`)."""
     rows: list[dict[str, Any]] = []
-
-    def add(
-        mech: str, what: str, value: float, unit: str, goal: float, higher: bool = True
-    ) -> None:
-        rows.append(
-            {
-                "mechanism": mech,
-                "what": what,
-                "value": value,
-                "unit": unit,
-                "goal": goal,
-                "met": bool(value >= goal if higher else value <= goal),
-            }
-        )
-
     for mech in _compiled_mechanisms():
         if progress:
             progress(mech.name)
-        _, q1 = _sample(mech, n_single, seed=17)
-        _, q2 = _sample(mech, n_batch, seed=18)
-
-        def latency(method: str, mech: Mechanism = mech, q1: Array = q1) -> float:
-            solve_fk(mech, q1[0], method=method, maxiter=100)  # warm-up: load the cached kernels
-            lat = np.empty(len(q1))
-            for i in range(len(q1)):
-                t0 = time.perf_counter()
-                solve_fk(mech, q1[i], method=method, maxiter=100)
-                lat[i] = time.perf_counter() - t0
-            return float(np.median(lat))
-
-        base = latency(BASELINE)
-        add(mech.name, "scipy.optimize.root single call", base * 1e6, "us", np.nan)
-        for method in ("newton", "lm", "broyden", "bfgs"):
-            t = latency(method)
-            add(mech.name, f"{method} single call", t * 1e6, "us", np.nan)
-            add(
-                mech.name, f"{method} single call vs scipy", base / t, "x", GOALS["single_vs_scipy"]
-            )
-        for method, goal in (("newton", GOALS["newton_per_s"]), ("lm", GOALS["lm_per_s"])):
-            solve_fk(mech, q2[:1000], method=method, maxiter=100)
-            t = _best(lambda: solve_fk(mech, q2, method=method, maxiter=100), repeats)  # noqa: B023
-            add(mech.name, f"{method} batched", len(q2) / t, "solves/s", goal)
+        rows += _solver_goals(mech, n_single, n_batch, repeats)
     mech = REGISTRY["stewart36"]()  # the goals of issue 17 name the 3-6 and the 6-6
-    _, qa = _sample(mech, n_all, seed=19)
-    solve_fk(mech, qa[:10], method="all-solutions")
-    t = _best(lambda: solve_fk(mech, qa, method="all-solutions"), repeats)
-    add(mech.name, "all-solutions FK", len(qa) / t, "inputs/s", GOALS["stewart36_all_per_s"])
-    with _kernels_off():  # the numpy path, the baseline of the same run
-        t_np = _best(lambda: solve_fk(mech, qa, method="all-solutions"), 1)
-    add(mech.name, "all-solutions FK, numpy path", len(qa) / t_np, "inputs/s", np.nan)
-    add(mech.name, "all-solutions FK vs numpy path", t_np / t, "x", np.nan)
+    rows += _stewart36_all_goals(mech, n_all, repeats)
     if n_all_66:
         if progress:
             progress("stewart66 all-solutions")
-        m66 = REGISTRY["stewart66"]()
-        _, q66 = _sample(m66, n_all_66, seed=20)
-        m66.fk_all(q66[:2])  # warm-up: the geometry's start system, the cached kernels
-        t = _best(lambda: m66.fk_all(q66), repeats)
-        with _kernels_off():
-            t_np = _best(lambda: m66.fk_all(q66), 1)
-        per = GOALS["stewart66_all_ms"]
-        add(m66.name, "all-solutions FK", 1e3 * t / len(q66), "ms/input", per, higher=False)
-        add(m66.name, "all-solutions FK", len(q66) / t, "inputs/s", GOALS["stewart66_all_per_s"])
-        add(m66.name, "all-solutions FK, numpy path", 1e3 * t_np / len(q66), "ms/input", np.nan)
-        add(m66.name, "all-solutions FK vs numpy path", t_np / t, "x", np.nan)
+        rows += _stewart66_all_goals(n_all_66, repeats)
     if pso:
         if progress:
             progress("Li 2017 PSO")
-        q = np.broadcast_to(mech.ik(mech.home()), (50, 6))
-        fit = lambda x, joints: mech.objective(x, joints[:, None, :])  # noqa: E731  (as chaos.run_pso)
-        t = _best(
-            lambda: solve_fk(
-                mech,
-                q,
-                method="pso",
-                seed=np.arange(50),
-                tol=0.0,
-                maxiter=1000,
-                swarm=50,
-                inertia="linear",
-                vclamp=0.2,
-                fitness=fit,
-            ),
-            1,
-        )
-        add(
-            mech.name,
-            "Li 2017 PSO experiment (50 x 50 x 1000)",
-            t,
-            "s",
-            GOALS["li2017_pso_s"],
-            higher=False,
-        )
-        # one run per call as the atlas's PSO rows (40 particles, 300 iterations, eq. 20 fitness):
-        # the compiled loop (parakin.kernels: pso_row) against the numpy loop, same results
-        _, qp = _sample(mech, 10, seed=21)
-        kw = dict(method="pso", tol=1e-9, maxiter=300, swarm=40, vclamp=0.2, inertia="linear")
-
-        def rate() -> float:
-            solve_fk(mech, qp[0], seed=0, **kw)
-            t0 = time.perf_counter()
-            for i in range(len(qp)):
-                solve_fk(mech, qp[i], seed=i, **kw)
-            return len(qp) / (time.perf_counter() - t0)
-
-        r = rate()
-        with _kernels_off():
-            r_np = rate()
-        add(mech.name, "PSO single solve (40 x 300)", r, "solves/s", np.nan)
-        add(mech.name, "PSO single solve (40 x 300), numpy loop", r_np, "solves/s", np.nan)
-        add(mech.name, "PSO single solve vs numpy loop", r / r_np, "x", np.nan)
+        rows += _pso_goals(mech)
     from parakin.dynamics.bench import dynamics_goals  # issue 27: the dynamics rows
 
     dyn = dynamics_goals(
         [c() for c in REGISTRY.values()], n_batch, max(10, min(200, n_batch // 500)), repeats
     )
     return pd.DataFrame(rows + dyn.to_dict("records"))
+
+
+def _goal_row(
+    mech: str, what: str, value: float, unit: str, goal: float, higher: bool = True
+) -> dict[str, Any]:
+    """One row of :func:`kernel_goals`; ``met`` when ``value`` is at least (``higher``) or at most
+    ``goal``."""
+    return {
+        "mechanism": mech,
+        "what": what,
+        "value": value,
+        "unit": unit,
+        "goal": goal,
+        "met": bool(value >= goal if higher else value <= goal),
+    }
+
+
+def _solver_goals(mech: Mechanism, n_single: int, n_batch: int, repeats: int) -> list[dict]:
+    """Single-call latency of each compiled method against ``scipy.optimize.root``, and batched
+    Newton and LM throughput, for one mechanism."""
+    rows: list[dict[str, Any]] = []
+    _, q1 = _sample(mech, n_single, seed=17)
+    _, q2 = _sample(mech, n_batch, seed=18)
+
+    def latency(method: str) -> float:
+        solve_fk(mech, q1[0], method=method, maxiter=100)  # warm-up: load the cached kernels
+        lat = np.empty(len(q1))
+        for i in range(len(q1)):
+            t0 = time.perf_counter()
+            solve_fk(mech, q1[i], method=method, maxiter=100)
+            lat[i] = time.perf_counter() - t0
+        return float(np.median(lat))
+
+    base = latency(BASELINE)
+    rows.append(_goal_row(mech.name, "scipy.optimize.root single call", base * 1e6, "us", np.nan))
+    for method in ("newton", "lm", "broyden", "bfgs"):
+        t = latency(method)
+        rows.append(_goal_row(mech.name, f"{method} single call", t * 1e6, "us", np.nan))
+        rows.append(
+            _goal_row(
+                mech.name, f"{method} single call vs scipy", base / t, "x", GOALS["single_vs_scipy"]
+            )
+        )
+    for method, goal in (("newton", GOALS["newton_per_s"]), ("lm", GOALS["lm_per_s"])):
+        solve_fk(mech, q2[:1000], method=method, maxiter=100)
+        t = best_time(lambda: solve_fk(mech, q2, method=method, maxiter=100), repeats)  # noqa: B023
+        rows.append(_goal_row(mech.name, f"{method} batched", len(q2) / t, "solves/s", goal))
+    return rows
+
+
+def _stewart36_all_goals(mech: Mechanism, n_all: int, repeats: int) -> list[dict]:
+    """The 3-6 Stewart's all-solutions FK throughput, compiled and numpy path."""
+    _, qa = _sample(mech, n_all, seed=19)
+    solve_fk(mech, qa[:10], method="all-solutions")
+    t = best_time(lambda: solve_fk(mech, qa, method="all-solutions"), repeats)
+    with _kernels_off():  # the numpy path, the baseline of the same run
+        t_np = best_time(lambda: solve_fk(mech, qa, method="all-solutions"), 1)
+    return [
+        _goal_row(mech.name, "all-solutions FK", len(qa) / t, "inputs/s", GOALS["stewart36_all_per_s"]),
+        _goal_row(mech.name, "all-solutions FK, numpy path", len(qa) / t_np, "inputs/s", np.nan),
+        _goal_row(mech.name, "all-solutions FK vs numpy path", t_np / t, "x", np.nan),
+    ]  # fmt: skip
+
+
+def _stewart66_all_goals(n_all_66: int, repeats: int) -> list[dict]:
+    """The 6-6 Stewart's all-solutions FK (ms per input, inputs/s), compiled and numpy path."""
+    m66 = REGISTRY["stewart66"]()
+    _, q66 = _sample(m66, n_all_66, seed=20)
+    m66.fk_all(q66[:2])  # warm-up: the geometry's start system, the cached kernels
+    t = best_time(lambda: m66.fk_all(q66), repeats)
+    with _kernels_off():
+        t_np = best_time(lambda: m66.fk_all(q66), 1)
+    per = GOALS["stewart66_all_ms"]
+    return [
+        _goal_row(m66.name, "all-solutions FK", 1e3 * t / len(q66), "ms/input", per, higher=False),
+        _goal_row(m66.name, "all-solutions FK", len(q66) / t, "inputs/s", GOALS["stewart66_all_per_s"]),
+        _goal_row(m66.name, "all-solutions FK, numpy path", 1e3 * t_np / len(q66), "ms/input", np.nan),
+        _goal_row(m66.name, "all-solutions FK vs numpy path", t_np / t, "x", np.nan),
+    ]  # fmt: skip
+
+
+def _pso_goals(mech: Mechanism) -> list[dict]:
+    """Li 2017's PSO experiment as published (50 runs x 50 particles x 1000 iterations, seconds),
+    and single PSO solves of the compiled loop against the numpy loop."""
+    q = np.broadcast_to(mech.ik(mech.home()), (50, 6))
+    fit = lambda x, joints: mech.objective(x, joints[:, None, :])  # noqa: E731  (as chaos.run_pso)
+    kw = dict(method="pso", seed=np.arange(50), tol=0.0, maxiter=1000, swarm=50, inertia="linear")
+    t = best_time(lambda: solve_fk(mech, q, vclamp=0.2, fitness=fit, **kw), 1)
+    what = "Li 2017 PSO experiment (50 x 50 x 1000)"
+    rows = [_goal_row(mech.name, what, t, "s", GOALS["li2017_pso_s"], higher=False)]
+    # one run per call as the atlas's PSO rows (40 particles, 300 iterations, eq. 20 fitness):
+    # the compiled loop (parakin.kernels: pso_row) against the numpy loop, same results
+    _, qp = _sample(mech, 10, seed=21)
+    kw = dict(method="pso", tol=1e-9, maxiter=300, swarm=40, vclamp=0.2, inertia="linear")
+
+    def rate() -> float:
+        solve_fk(mech, qp[0], seed=0, **kw)
+        t0 = time.perf_counter()
+        for i in range(len(qp)):
+            solve_fk(mech, qp[i], seed=i, **kw)
+        return len(qp) / (time.perf_counter() - t0)
+
+    r = rate()
+    with _kernels_off():
+        r_np = rate()
+    return rows + [
+        _goal_row(mech.name, "PSO single solve (40 x 300)", r, "solves/s", np.nan),
+        _goal_row(mech.name, "PSO single solve (40 x 300), numpy loop", r_np, "solves/s", np.nan),
+        _goal_row(mech.name, "PSO single solve vs numpy loop", r / r_np, "x", np.nan),
+    ]
 
 
 def format_goals(df: pd.DataFrame) -> str:

@@ -903,15 +903,25 @@ def _mechanism_help(what: str) -> str:
     return "\n".join(lines)
 
 
-class _CommandList(argparse.RawTextHelpFormatter):
-    """``parakin --help``: each command and its help on one line (argparse measures the commands
-    one indent short and would push a long name's help onto the next line)."""
+class _Commands:
+    """The subcommands as the ``_add_*`` functions declare them (``add_parser(name, help=...)``),
+    each help kept here for ``parakin --help``'s command list rather than handed to argparse,
+    whose help formatter measures subcommands one indent short and would push a long name's
+    help onto the next line."""
 
-    def add_argument(self, action) -> None:
-        super().add_argument(action)
-        if isinstance(action, argparse._SubParsersAction):
-            widest = max(map(len, action.choices), default=0) + self._current_indent + 4
-            self._action_max_length = max(self._action_max_length, widest)
+    def __init__(self, action: argparse.Action) -> None:
+        self.action = action
+        self.helps: dict[str, str] = {}
+
+    def add_parser(self, name: str, *, help: str = "", **kwargs) -> argparse.ArgumentParser:
+        self.helps[name] = help
+        return self.action.add_parser(name, **kwargs)
+
+    def listing(self) -> str:
+        """``commands:`` and one line per command: its name and its help."""
+        width = max(map(len, self.helps), default=0) + 2
+        lines = [f"  {name:<{width}} {text}" for name, text in self.helps.items()]
+        return "\n".join(["commands:", *lines])
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -919,16 +929,15 @@ def build_parser() -> argparse.ArgumentParser:
     lists them, one line each, from the parser itself."""
     parser = _Parser(
         prog="parakin",
-        formatter_class=_CommandList,
+        formatter_class=argparse.RawTextHelpFormatter,
         description="parakin: parallel-mechanism kinematics (IK/FK, solvers, benchmarks) and the "
         "reproduction of four papers.",
-        epilog="parakin COMMAND --help shows a command's options. Bad input: exit status 2 and "
-        "one line on stderr.",
     )
     parser.add_argument("--version", action="version", version=f"parakin {_version()}")
-    sub = parser.add_subparsers(
+    action = parser.add_subparsers(
         title="commands", dest="command", required=True, metavar="COMMAND", parser_class=_Parser
     )
+    sub = _Commands(action)
     for add in (
         _add_ik,
         _add_fk,
@@ -943,6 +952,13 @@ def build_parser() -> argparse.ArgumentParser:
         _add_kernels,
     ):
         add(sub)
+    # the usage as argparse writes it; then the command list is ours, in the epilog
+    parser.usage = parser.format_usage().removeprefix("usage: ").rstrip("\n")
+    action.help = argparse.SUPPRESS
+    parser.epilog = (
+        sub.listing() + "\n\nparakin COMMAND --help shows a command's options. Bad input: exit "
+        "status 2 and one line on stderr."
+    )
     return parser
 
 

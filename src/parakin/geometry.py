@@ -18,6 +18,7 @@ __all__ = [
     "rot_x",
     "rot_y",
     "rot_z",
+    "plane_rotation",
     "euler_zyx",
     "euler_xyz",
     "euler_zyx_from_matrix",
@@ -29,11 +30,13 @@ __all__ = [
 ]
 
 
-def _rot(angle: ArrayLike, i: int, j: int) -> NDArray[np.float64]:
-    """Elementary rotation in the (i, j) coordinate plane, batched over ``angle``."""
-    t = np.asarray(angle, dtype=float)
-    c, s = np.cos(t), np.sin(t)
-    r = np.zeros(t.shape + (3, 3))
+def plane_rotation(angle: NDArray, i: int, j: int) -> NDArray:
+    """Elementary rotations (..., 3, 3) by ``angle`` (...,) in the (i, j) coordinate plane, in
+    ``angle``'s dtype (float, or object for the symbols :mod:`parakin.dynamics.jet` records)."""
+    c, s = np.cos(angle), np.sin(angle)
+    r = np.zeros(angle.shape + (3, 3), dtype=angle.dtype)
+    if angle.dtype == object:
+        r[...] = 0.0
     k = 3 - i - j  # the untouched axis
     r[..., k, k] = 1.0
     r[..., i, i] = c
@@ -41,6 +44,11 @@ def _rot(angle: ArrayLike, i: int, j: int) -> NDArray[np.float64]:
     r[..., i, j] = -s
     r[..., j, i] = s
     return r
+
+
+def _rot(angle: ArrayLike, i: int, j: int) -> NDArray[np.float64]:
+    """Elementary rotation in the (i, j) coordinate plane, batched over ``angle``."""
+    return plane_rotation(np.asarray(angle, dtype=float), i, j)
 
 
 def rot_x(angle: ArrayLike) -> NDArray[np.float64]:

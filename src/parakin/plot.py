@@ -21,7 +21,7 @@ from __future__ import annotations
 import contextlib
 import os
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -392,95 +392,15 @@ def draw_mechanism(
             raise TypeError(f"ax must be a 3-D axes (projection='3d'), got {type(ax).__name__}")
         ax.computed_zorder = False  # draw in the order of KIND_STYLES' zorder, not by depth
         handles: dict[str, Any] = {}
-
-        # ---- polygons: translucent faces with a solid outline
-        for i, (kind, verts) in enumerate(sk.polygons):
-            st = _style(kind)
-            v = np.asarray(verts, float).reshape(-1, 3)
-            poly = Poly3DCollection(
-                [v], facecolors=mpl.colors.to_rgba(st["face"], st["alpha"]),
-                edgecolors=st["color"], linewidths=st["lw"], zorder=st["zorder"],
-            )  # fmt: skip
-            poly.set_gid(f"polygon:{i}:{kind}")
-            ax.add_collection3d(poly)
-            handles.setdefault(
-                kind,
-                Patch(facecolor=mpl.colors.to_rgba(st["face"], st["alpha"]),
-                      edgecolor=st["color"], linewidth=st["lw"], label=st["label"]),
-            )  # fmt: skip
-
-        # ---- segments: exactly one Line3D each (ax.lines has one entry per segment)
-        for i, (kind, seg) in enumerate(sk.segments):
-            st = _style(kind)
-            s = np.asarray(seg, float).reshape(2, 3)
-            extra = {k: st[k] for k in ("solid_capstyle",) if k in st}
-            (line,) = ax.plot(
-                s[:, 0], s[:, 1], s[:, 2], color=st["color"], lw=st["lw"], ls=st["ls"],
-                zorder=st["zorder"], **extra,
-            )  # fmt: skip
-            line.set_gid(f"segment:{i}:{kind}")
-            if kind not in handles:
-                handles[kind] = Line2D([], [], color=st["color"], lw=st["lw"], ls=st["ls"],
-                                       label=st["label"], **extra)  # fmt: skip
-
-        # ---- joints: open circles at the ends of passive links
-        joints = _unique_rows(
-            [np.asarray(s, float).reshape(2, 3) for k, s in sk.segments if k in _JOINT_KINDS]
-        )
-        if len(joints):
-            sc = ax.scatter(
-                joints[:, 0], joints[:, 1], joints[:, 2], s=9, marker="o", facecolors="white",
-                edgecolors="0.15", linewidths=0.8, depthshade=False, zorder=6,
-            )  # fmt: skip
-            sc.set_gid("joints")
-            handles["joint"] = Line2D([], [], ls="none", marker="o", ms=3.2, mfc="white",
-                                      mec="0.15", mew=0.8, label="joint")  # fmt: skip
-
-        # ---- named points
-        if sk.points:
-            pts = np.array([np.asarray(p, float).reshape(3) for p in sk.points.values()])
-            sc = ax.scatter(pts[:, 0], pts[:, 1], pts[:, 2], s=7, color=_POINT_COLOR,
-                            depthshade=False, zorder=7)  # fmt: skip
-            sc.set_gid("points")
-
-        # ---- frames: three arrows each
+        _draw_polygons(ax, sk, handles)
+        _draw_segments(ax, sk, handles)
+        _draw_joints(ax, sk, handles)
+        _draw_points(ax, sk)
         if frames and sk.frames:
-            origins = np.array([np.asarray(o, float).reshape(3) for o, _ in sk.frames.values()])
-            rots = np.array([np.asarray(r, float).reshape(3, 3) for _, r in sk.frames.values()])
-            for k, color in enumerate(FRAME_AXIS_COLORS):
-                q = ax.quiver(
-                    origins[:, 0], origins[:, 1], origins[:, 2],
-                    rots[:, 0, k], rots[:, 1, k], rots[:, 2, k],
-                    length=frame_length, normalize=True, arrow_length_ratio=0.28,
-                    color=color, linewidths=1.1, zorder=8,
-                )  # fmt: skip
-                q.set_gid(f"frame_axes:{'xyz'[k]}")
-            handles["frame axes"] = tuple(
-                Line2D([], [], color=color, lw=1.4) for color in FRAME_AXIS_COLORS
-            )
-
-        # ---- limits, equal aspect, view
-        xyz = _all_coordinates(sk, frame_length if frames else 0.0)
-        lo, hi = xyz.min(axis=0), xyz.max(axis=0)
-        span = float(np.max(hi - lo)) or 1.0
-        pad = 0.04 * span
-        lo, hi = lo - pad, hi + pad
-        ranges = np.maximum(hi - lo, 0.05 * span)
-        mid = 0.5 * (lo + hi)
-        lo, hi = mid - ranges / 2, mid + ranges / 2
-        ax.set_xlim(lo[0], hi[0])
-        ax.set_ylim(lo[1], hi[1])
-        ax.set_zlim(lo[2], hi[2])
-        ax.set_box_aspect(tuple(ranges), zoom=1.0)
-        ax.view_init(elev=view[0], azim=view[1])
-        ax.set_proj_type("ortho")  # parallel lines stay parallel, as in a technical drawing
-        ax.set_xlabel("$x$ (m)", labelpad=-2)
-        ax.set_ylabel("$y$ (m)", labelpad=-2)
-        ax.set_zlabel("$z$ (m)", labelpad=-4)
+            _draw_frames(ax, sk, frame_length, handles)
+        _set_limits_and_view(ax, sk, frame_length if frames else 0.0, view)
         _style_panes(ax)
-
-        # ---- title and legend, then (own figure) fit the box below them, then the labels
-        fig = ax.figure
+        # title and legend, then (own figure) fit the box below them, then the labels
         handle_list = list(handles.values()) if legend else []
         label_list = [_legend_label(key, h) for key, h in handles.items()] if legend else []
         legend_kw: dict[str, Any] = {
@@ -490,22 +410,7 @@ def draw_mechanism(
             "handler_map": {tuple: HandlerTuple(ndivide=None, pad=0.25)},
         }
         if own_figure:
-            top = fig.bbox.height
-            pt = fig.dpi / 72.0
-            if title:
-                sup = fig.suptitle(title, y=1.0 - 3 * pt / fig.bbox.height, va="top")
-                top = sup.get_window_extent(fig.canvas.get_renderer()).y0 - 2 * pt
-            if handle_list:
-                renderer = fig.canvas.get_renderer()
-                for ncols in range(min(len(handle_list), 5), 0, -1):  # widest that fits
-                    leg = ax.legend(
-                        loc="upper center", ncols=ncols, bbox_to_anchor=(0.5, top / fig.bbox.height),
-                        bbox_transform=fig.transFigure, borderaxespad=0.3, columnspacing=1.4,
-                        frameon=False, **legend_kw,
-                    )  # fmt: skip
-                    if leg.get_window_extent(renderer).width <= fig.bbox.width - 4 * pt:
-                        break
-                top = leg.get_window_extent(renderer).y0
+            top = _title_and_legend_on_top(ax, title, legend_kw)
             _fit_axes3d(ax, top=top)
         else:
             if handle_list:
@@ -515,6 +420,129 @@ def draw_mechanism(
         if labels or frames:
             _place_labels(ax, sk, labels=labels, frames=frames, frame_length=frame_length)
     return ax
+
+
+def _draw_polygons(ax: Axes3D, sk: Skeleton, handles: dict[str, Any]) -> None:
+    """Polygons: translucent faces with a solid outline; one legend handle per kind."""
+    for i, (kind, verts) in enumerate(sk.polygons):
+        st = _style(kind)
+        v = np.asarray(verts, float).reshape(-1, 3)
+        poly = Poly3DCollection(
+            [v], facecolors=mpl.colors.to_rgba(st["face"], st["alpha"]),
+            edgecolors=st["color"], linewidths=st["lw"], zorder=st["zorder"],
+        )  # fmt: skip
+        poly.set_gid(f"polygon:{i}:{kind}")
+        ax.add_collection3d(poly)
+        handles.setdefault(
+            kind,
+            Patch(facecolor=mpl.colors.to_rgba(st["face"], st["alpha"]),
+                  edgecolor=st["color"], linewidth=st["lw"], label=st["label"]),
+        )  # fmt: skip
+
+
+def _draw_segments(ax: Axes3D, sk: Skeleton, handles: dict[str, Any]) -> None:
+    """Segments: exactly one Line3D each (``ax.lines`` has one entry per segment)."""
+    for i, (kind, seg) in enumerate(sk.segments):
+        st = _style(kind)
+        s = np.asarray(seg, float).reshape(2, 3)
+        extra = {k: st[k] for k in ("solid_capstyle",) if k in st}
+        (line,) = ax.plot(
+            s[:, 0], s[:, 1], s[:, 2], color=st["color"], lw=st["lw"], ls=st["ls"],
+            zorder=st["zorder"], **extra,
+        )  # fmt: skip
+        line.set_gid(f"segment:{i}:{kind}")
+        if kind not in handles:
+            handles[kind] = Line2D([], [], color=st["color"], lw=st["lw"], ls=st["ls"],
+                                   label=st["label"], **extra)  # fmt: skip
+
+
+def _draw_joints(ax: Axes3D, sk: Skeleton, handles: dict[str, Any]) -> None:
+    """Joints: open circles at the ends of passive links."""
+    joints = _unique_rows(
+        [np.asarray(s, float).reshape(2, 3) for k, s in sk.segments if k in _JOINT_KINDS]
+    )
+    if len(joints):
+        sc = ax.scatter(
+            joints[:, 0], joints[:, 1], joints[:, 2], s=9, marker="o", facecolors="white",
+            edgecolors="0.15", linewidths=0.8, depthshade=False, zorder=6,
+        )  # fmt: skip
+        sc.set_gid("joints")
+        handles["joint"] = Line2D([], [], ls="none", marker="o", ms=3.2, mfc="white",
+                                  mec="0.15", mew=0.8, label="joint")  # fmt: skip
+
+
+def _draw_points(ax: Axes3D, sk: Skeleton) -> None:
+    """Named points: small dots."""
+    if sk.points:
+        pts = np.array([np.asarray(p, float).reshape(3) for p in sk.points.values()])
+        sc = ax.scatter(pts[:, 0], pts[:, 1], pts[:, 2], s=7, color=_POINT_COLOR,
+                        depthshade=False, zorder=7)  # fmt: skip
+        sc.set_gid("points")
+
+
+def _draw_frames(ax: Axes3D, sk: Skeleton, frame_length: float, handles: dict[str, Any]) -> None:
+    """Frames: three arrows each (x red, y green, z blue), ``frame_length`` metres long."""
+    origins = np.array([np.asarray(o, float).reshape(3) for o, _ in sk.frames.values()])
+    rots = np.array([np.asarray(r, float).reshape(3, 3) for _, r in sk.frames.values()])
+    for k, color in enumerate(FRAME_AXIS_COLORS):
+        q = ax.quiver(
+            origins[:, 0], origins[:, 1], origins[:, 2],
+            rots[:, 0, k], rots[:, 1, k], rots[:, 2, k],
+            length=frame_length, normalize=True, arrow_length_ratio=0.28,
+            color=color, linewidths=1.1, zorder=8,
+        )  # fmt: skip
+        q.set_gid(f"frame_axes:{'xyz'[k]}")
+    handles["frame axes"] = tuple(
+        Line2D([], [], color=color, lw=1.4) for color in FRAME_AXIS_COLORS
+    )
+
+
+def _set_limits_and_view(
+    ax: Axes3D, sk: Skeleton, frame_length: float, view: tuple[float, float]
+) -> None:
+    """Limits around everything drawn (frames ``frame_length`` long, 0 = none), equal aspect
+    (a metre as long on every axis), orthographic ``view``, axis labels."""
+    xyz = _all_coordinates(sk, frame_length)
+    lo, hi = xyz.min(axis=0), xyz.max(axis=0)
+    span = float(np.max(hi - lo)) or 1.0
+    pad = 0.04 * span
+    lo, hi = lo - pad, hi + pad
+    ranges = np.maximum(hi - lo, 0.05 * span)
+    mid = 0.5 * (lo + hi)
+    lo, hi = mid - ranges / 2, mid + ranges / 2
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_zlim(lo[2], hi[2])
+    ax.set_box_aspect(tuple(ranges), zoom=1.0)
+    ax.view_init(elev=view[0], azim=view[1])
+    ax.set_proj_type("ortho")  # parallel lines stay parallel, as in a technical drawing
+    ax.set_xlabel("$x$ (m)", labelpad=-2)
+    ax.set_ylabel("$y$ (m)", labelpad=-2)
+    ax.set_zlabel("$z$ (m)", labelpad=-4)
+
+
+def _title_and_legend_on_top(ax: Axes3D, title: str | None, legend_kw: dict[str, Any]) -> float:
+    """Put the title (a suptitle) and the legend (as many columns as fit, at most 5) at the top
+    of the axes' own figure; return the pixel height below them."""
+    fig = ax.figure
+    top = fig.bbox.height
+    pt = fig.dpi / 72.0
+    if title:
+        sup = fig.suptitle(title, y=1.0 - 3 * pt / fig.bbox.height, va="top")
+        top = sup.get_window_extent(fig.canvas.get_renderer()).y0 - 2 * pt
+    handle_list = legend_kw["handles"]
+    if handle_list:
+        renderer = fig.canvas.get_renderer()
+        for ncols in range(min(len(handle_list), 5), 0, -1):  # widest that fits
+            leg = ax.legend(
+                loc="upper center", ncols=ncols, bbox_to_anchor=(0.5, top / fig.bbox.height),
+                bbox_transform=fig.transFigure, borderaxespad=0.3, columnspacing=1.4,
+                frameon=False, **legend_kw,
+            )  # fmt: skip
+            if leg.get_window_extent(renderer).width <= fig.bbox.width - 4 * pt:
+                break
+        top = leg.get_window_extent(renderer).y0
+    return top
 
 
 def _legend_label(key: str, handle: Any) -> str:
@@ -547,7 +575,9 @@ def _fit_axes3d(
     """
     fig = ax.figure
     renderer = fig.canvas.get_renderer()
-    aspect = np.asarray(ax._box_aspect, float)  # set by set_box_aspect (already normalised)
+    # the box aspect as set_box_aspect stored it (normalised): kept while zooming; reading it back
+    # rather than passing the ranges keeps the zoom, hence every figure, bit for bit as before
+    aspect = np.asarray(ax.get_box_aspect(), float)
     zoom = 1.0
     m = margin_pt * fig.dpi / 72.0
     x0, y0, x1, y1 = m, m, fig.bbox.width - m, (fig.bbox.height if top is None else top) - m
@@ -610,29 +640,10 @@ def _place_labels(
     """
     fig = ax.figure
     ax.apply_aspect()  # fixes ax.transData for the 3-D projection (done again at draw time)
-    M = ax.get_proj()
+    to_px = _projector(ax)
     dpi = fig.dpi
     renderer = fig.canvas.get_renderer() if hasattr(fig.canvas, "get_renderer") else None
-
-    def to_px(p: ArrayLike) -> np.ndarray:
-        p = np.atleast_2d(np.asarray(p, float))
-        x, y, _ = proj3d.proj_transform(p[:, 0], p[:, 1], p[:, 2], M)
-        return ax.transData.transform(np.stack([x, y], axis=-1))
-
-    # everything drawn, projected to pixels
-    pieces3: list[np.ndarray] = [np.asarray(s, float).reshape(2, 3) for _, s in sk.segments]
-    for _, verts in sk.polygons:
-        v = np.asarray(verts, float).reshape(-1, 3)
-        pieces3 += [np.stack([v[j], v[(j + 1) % len(v)]]) for j in range(len(v))]
-    if frames:
-        for origin, rot in sk.frames.values():
-            o = np.asarray(origin, float).reshape(3)
-            r = np.asarray(rot, float).reshape(3, 3)
-            pieces3 += [np.stack([o, o + frame_length * r[:, k] / np.linalg.norm(r[:, k])])
-                        for k in range(3)]  # fmt: skip
-    seg_px = to_px(np.concatenate(pieces3)).reshape(-1, 2, 2) if pieces3 else np.zeros((0, 2, 2))
-    pts_px = to_px(np.array([np.asarray(p, float).reshape(3) for p in sk.points.values()])) \
-        if sk.points else np.zeros((0, 2))  # fmt: skip
+    seg_px, pts_px = _drawing_in_pixels(sk, frame_length if frames else None, to_px)
     xyz_all = _all_coordinates(sk, frame_length if frames else 0.0)
     centre = to_px(0.5 * (xyz_all.min(axis=0) + xyz_all.max(axis=0)))[0]
     # where labels may go: the axes, as far as it lies inside the figure (x0, y0, x1, y1 pixels)
@@ -650,7 +661,6 @@ def _place_labels(
 
     angles = np.deg2rad(np.arange(0.0, 360.0, 15.0))
     dirs = np.stack([np.cos(angles), np.sin(angles)], axis=-1)
-    radii_pt = (_LABEL_OFFSET_PT, 2.0 * _LABEL_OFFSET_PT)
     placed: list[np.ndarray] = []  # boxes (x0, y0, x1, y1) of labels already placed
     for pos, text, is_frame in todo:
         size = 8.0 if is_frame else 8.5
@@ -659,38 +669,8 @@ def _place_labels(
         outward = anchor - centre
         n_out = np.linalg.norm(outward)
         outward = outward / n_out if n_out > 1e-9 else np.array([0.0, -1.0])
-        best = None
-        for ring, r_pt in enumerate(radii_pt):
-            off = dirs * (r_pt * dpi / 72.0)  # (C, 2) pixels
-            ha, va = _alignment(dirs)
-            x0 = anchor[0] + off[:, 0] - np.where(ha == 0, w, np.where(ha == 1, 0.0, w / 2))
-            y0 = anchor[1] + off[:, 1] - np.where(va == 0, h, np.where(va == 1, 0.0, h / 2))
-            boxes = np.stack([x0, y0, x0 + w, y0 + h], axis=-1)
-            pad = 1.5 * dpi / 72.0
-            grown = boxes + np.array([-pad, -pad, pad, pad])
-            cost = 2.0 * _clipped_length(grown, seg_px).sum(axis=1)
-            if placed:
-                cost += 0.5 * _overlap_area(grown, np.array(placed)).sum(axis=1)
-            if len(pts_px):
-                inside = (
-                    (pts_px[None, :, 0] > grown[:, None, 0])
-                    & (pts_px[None, :, 0] < grown[:, None, 2])
-                    & (pts_px[None, :, 1] > grown[:, None, 1])
-                    & (pts_px[None, :, 1] < grown[:, None, 3])
-                )
-                cost += 60.0 * inside.sum(axis=1)  # fmt: skip
-            outside = (
-                np.maximum(axbox[0] - boxes[:, 0], 0)
-                + np.maximum(boxes[:, 2] - axbox[2], 0)
-                + np.maximum(axbox[1] - boxes[:, 1], 0)
-                + np.maximum(boxes[:, 3] - axbox[3], 0)
-            )
-            cost += 20.0 * outside + 15.0 * ring - 8.0 * (dirs @ outward)  # fmt: skip
-            k = int(np.argmin(np.round(cost, 6)))
-            if best is None or round(float(cost[k]), 6) < best[0]:
-                best = (round(float(cost[k]), 6), k, r_pt, boxes[k], ha[k], va[k])
-        assert best is not None
-        _, k, r_pt, box, ha_k, va_k = best
+        obstacles = (seg_px, pts_px, placed, axbox)
+        _, k, r_pt, box, ha_k, va_k = _best_label_box(anchor, (w, h), outward, dirs, dpi, obstacles)
         placed.append(box)
         dx, dy = r_pt * dirs[k]
         t = ax.text(
@@ -702,6 +682,87 @@ def _place_labels(
                   "alpha": 0.65},
         )  # fmt: skip
         t.set_gid(("frame_label:" if is_frame else "point_label:") + text)
+
+
+def _projector(ax: Axes3D) -> Callable[[ArrayLike], np.ndarray]:
+    """A function from 3-D points (n, 3) to display pixels (n, 2) in ``ax``'s current view."""
+    M = ax.get_proj()
+
+    def to_px(p: ArrayLike) -> np.ndarray:
+        p = np.atleast_2d(np.asarray(p, float))
+        x, y, _ = proj3d.proj_transform(p[:, 0], p[:, 1], p[:, 2], M)
+        return ax.transData.transform(np.stack([x, y], axis=-1))
+
+    return to_px
+
+
+def _drawing_in_pixels(
+    sk: Skeleton, frame_length: float | None, to_px: Callable[[ArrayLike], np.ndarray]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Every line drawn (segments, polygon edges, frame arrows ``frame_length`` long; None = no
+    frames) as pixel segments (n, 2, 2), and the named points as pixels (m, 2)."""
+    pieces3: list[np.ndarray] = [np.asarray(s, float).reshape(2, 3) for _, s in sk.segments]
+    for _, verts in sk.polygons:
+        v = np.asarray(verts, float).reshape(-1, 3)
+        pieces3 += [np.stack([v[j], v[(j + 1) % len(v)]]) for j in range(len(v))]
+    if frame_length is not None:
+        for origin, rot in sk.frames.values():
+            o = np.asarray(origin, float).reshape(3)
+            r = np.asarray(rot, float).reshape(3, 3)
+            pieces3 += [np.stack([o, o + frame_length * r[:, k] / np.linalg.norm(r[:, k])])
+                        for k in range(3)]  # fmt: skip
+    seg_px = to_px(np.concatenate(pieces3)).reshape(-1, 2, 2) if pieces3 else np.zeros((0, 2, 2))
+    pts_px = to_px(np.array([np.asarray(p, float).reshape(3) for p in sk.points.values()])) \
+        if sk.points else np.zeros((0, 2))  # fmt: skip
+    return seg_px, pts_px
+
+
+def _best_label_box(
+    anchor: np.ndarray,
+    size_px: tuple[float, float],
+    outward: np.ndarray,
+    dirs: np.ndarray,
+    dpi: float,
+    obstacles: tuple[np.ndarray, np.ndarray, list[np.ndarray], np.ndarray],
+) -> tuple[float, int, float, np.ndarray, Any, Any]:
+    """The cheapest place for a label of ``size_px`` (w, h pixels) near ``anchor``: tried in each
+    direction ``dirs`` at two distances; ``obstacles`` = (pixel segments, pixel points, boxes of
+    labels already placed, the area allowed). Returns (cost, direction index, distance in
+    points, box, ha code, va code); ties go to the first direction and the nearer ring."""
+    w, h = size_px
+    seg_px, pts_px, placed, axbox = obstacles
+    best = None
+    for ring, r_pt in enumerate((_LABEL_OFFSET_PT, 2.0 * _LABEL_OFFSET_PT)):
+        off = dirs * (r_pt * dpi / 72.0)  # (C, 2) pixels
+        ha, va = _alignment(dirs)
+        x0 = anchor[0] + off[:, 0] - np.where(ha == 0, w, np.where(ha == 1, 0.0, w / 2))
+        y0 = anchor[1] + off[:, 1] - np.where(va == 0, h, np.where(va == 1, 0.0, h / 2))
+        boxes = np.stack([x0, y0, x0 + w, y0 + h], axis=-1)
+        pad = 1.5 * dpi / 72.0
+        grown = boxes + np.array([-pad, -pad, pad, pad])
+        cost = 2.0 * _clipped_length(grown, seg_px).sum(axis=1)
+        if placed:
+            cost += 0.5 * _overlap_area(grown, np.array(placed)).sum(axis=1)
+        if len(pts_px):
+            inside = (
+                (pts_px[None, :, 0] > grown[:, None, 0])
+                & (pts_px[None, :, 0] < grown[:, None, 2])
+                & (pts_px[None, :, 1] > grown[:, None, 1])
+                & (pts_px[None, :, 1] < grown[:, None, 3])
+            )
+            cost += 60.0 * inside.sum(axis=1)  # fmt: skip
+        outside = (
+            np.maximum(axbox[0] - boxes[:, 0], 0)
+            + np.maximum(boxes[:, 2] - axbox[2], 0)
+            + np.maximum(axbox[1] - boxes[:, 1], 0)
+            + np.maximum(boxes[:, 3] - axbox[3], 0)
+        )
+        cost += 20.0 * outside + 15.0 * ring - 8.0 * (dirs @ outward)  # fmt: skip
+        k = int(np.argmin(np.round(cost, 6)))
+        if best is None or round(float(cost[k]), 6) < best[0]:
+            best = (round(float(cost[k]), 6), k, r_pt, boxes[k], ha[k], va[k])
+    assert best is not None
+    return best
 
 
 def _alignment(dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -24,8 +24,9 @@ import re
 import sys
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from functools import cache
+from functools import cache, wraps
 from pathlib import Path
+from typing import Any
 
 __all__ = [
     "Tolerance",
@@ -130,6 +131,12 @@ class Tolerance:
     def condition(n: int) -> ConditionNumber:
         """The column limit of condition numbers of matrices up to ``n x n`` (:class:`ConditionNumber`)."""
         return ConditionNumber(n)
+
+    @classmethod
+    def statistical(cls, reason: str, **fields) -> Tolerance:
+        """A ``kind="statistical"`` tolerance: only what ``fields`` (``columns``, ``intervals``,
+        ...) name is compared, so the default ``rtol`` and ``atol`` are 0."""
+        return cls("statistical", 0.0, 0.0, reason, **fields)
 
     def but(self, reason: str | None = None, **changes) -> Tolerance:
         """A copy with some fields changed (and a reason that says why)."""
@@ -310,6 +317,32 @@ def artefact(
         REGISTRY[item.key] = item
         make.artefact = item
         return make
+
+    return register
+
+
+def table_and_figure(
+    study: str,
+    name: str,
+    stem: str,
+    draw: Callable[[Any, Path], Path],
+    **declared: Any,
+) -> Callable:
+    """Declare the decorated ``table(config) -> DataFrame`` as one figure artefact: the table is
+    written to ``<stem>.csv`` and the figure drawn from that file into ``<stem>.png`` by ``draw``
+    (:func:`parakin.io.write_and_draw`, which hands ``draw`` the final path, so the figure is
+    tagged by its name); ``declared``: :func:`artefact`'s other fields. The artefact's
+    ``make(config, outdir)`` keeps the table's name and docstring."""
+    png, csv = f"{stem}.png", f"{stem}.csv"
+
+    def register(table: Callable[[dict], Any]) -> Callable:
+        @wraps(table)
+        def make(config: dict, outdir: Path) -> list[Path]:
+            from parakin.io import write_and_draw
+
+            return write_and_draw(table(config), Path(outdir) / csv, draw)
+
+        return artefact(study, name, outputs=[png, csv], draws=[(png, csv, draw)], **declared)(make)
 
     return register
 

@@ -11,7 +11,6 @@ the machine and its load; they never decide a test.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
@@ -22,6 +21,7 @@ import pandas as pd
 from parakin.dynamics.inverse import inverse_dynamics
 from parakin.dynamics.trajectory import Harmonic
 from parakin.mechanisms.base import Array, Mechanism
+from parakin.timing import best_time
 
 __all__ = ["GOALS", "batched_forces", "dynamics_goals"]
 
@@ -49,15 +49,6 @@ def batched_forces(
         return np.concatenate([run(i) for i in starts])
     with ThreadPoolExecutor(workers) as pool:
         return np.concatenate(list(pool.map(run, starts)))
-
-
-def _best(f, repeats: int) -> float:
-    best = np.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        f()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def dynamics_goals(
@@ -91,11 +82,11 @@ def dynamics_goals(
         tr = Harmonic.around(mech, 0.05, 0.5)
         x, v, a = tr.state(np.linspace(0.0, tr.period, n_batch))
         batched_forces(mech, x[:chunk], v[:chunk], a[:chunk], chunk, workers)  # warm-up
-        t_batch = _best(lambda: batched_forces(mech, x, v, a, chunk, workers), repeats)  # noqa: B023
+        t_batch = best_time(lambda: batched_forces(mech, x, v, a, chunk, workers), repeats)  # noqa: B023
         mm = mujoco_check.build(mech)
         idx = np.linspace(0, n_batch - 1, n_mujoco).astype(int)
         mujoco_check.inverse_dynamics(mm, x[idx[:2]], v[idx[:2]], a[idx[:2]])  # warm-up
-        t_mj = _best(lambda: mujoco_check.inverse_dynamics(mm, x[idx], v[idx], a[idx]), 1)  # noqa: B023
+        t_mj = best_time(lambda: mujoco_check.inverse_dynamics(mm, x[idx], v[idx], a[idx]), 1)  # noqa: B023
         goal = GOALS.get(mech.name, {})
         per_s, mj_per_s = n_batch / t_batch, n_mujoco / t_mj
         add(

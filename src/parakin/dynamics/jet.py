@@ -30,6 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from parakin.geometry import plane_rotation
+
 Array = NDArray[np.float64]
 
 __all__ = [
@@ -407,22 +409,6 @@ def _skew_times(w: Array, r: Array) -> Array:
     return np.swapaxes(_cross(w[..., None, :], np.swapaxes(r, -1, -2)), -1, -2)
 
 
-def _turn(angle: Array, i: int, j: int) -> Array:
-    """Rotation matrices (..., 3, 3) by ``angle`` (...,) in the plane of axes ``i``, ``j`` (the
-    values of :func:`parakin.geometry.rot_x` and its siblings, for floats or recorded symbols)."""
-    c, s = np.cos(angle), np.sin(angle)
-    r = np.zeros(angle.shape + (3, 3), dtype=angle.dtype)
-    if angle.dtype == object:
-        r[...] = 0.0
-    k = 3 - i - j
-    r[..., k, k] = 1.0
-    r[..., i, i] = c
-    r[..., j, j] = c
-    r[..., i, j] = -s
-    r[..., j, i] = s
-    return r
-
-
 def rotations(angles: Sequence[Jet], axes: str) -> Jet:
     """``R = R_{axes[0]}(angles[0]) R_{axes[1]}(angles[1]) ...`` (e.g. ``axes="zyx"``: Z-Y-X Euler
     angles) as a jet, from the world axes ``u_k`` of the successive turns rather than by products
@@ -442,7 +428,7 @@ def rotations(angles: Sequence[Jet], axes: str) -> Jet:
         w = w + u * angle.tangents[..., None]
         bias_alpha = bias_alpha + u * angle.bias[..., None] + _cross(omega_before, u) * rate
         omega_before = omega_before + u * rate
-        partial = partial @ _turn(angle.value, *elementary[name])
+        partial = partial @ plane_rotation(angle.value, *elementary[name])
     omega = w[-1]
     bias = _skew_times(bias_alpha, partial) + _skew_times(omega, _skew_times(omega, partial))
     return Jet(partial, _skew_times(w, partial), bias)

@@ -428,6 +428,332 @@ def plateau_epoch(errors: ArrayLike, window: int, improvement: float = 0.01) -> 
     return int(k[hit][0]) if hit.any() else None
 
 
+_SETS = ("train", "val", "test")
+_LOG_COLUMNS = (
+    "epoch",
+    "mu",
+    "train_mse",
+    "val_mse",
+    "test_mse",
+    "train_rms_m",
+    "val_rms_m",
+    "test_rms_m",
+    "grad_norm",
+)
+
+
+@dataclass(frozen=True)
+class _LMRules:
+    """The damping and stopping rules of :func:`train_lm` (MATLAB ``trainlm``'s names)."""
+
+    max_epochs: int
+    mu_dec: float
+    mu_inc: float
+    mu_max: float
+    max_fail: int
+    min_grad: float
+    goal: float
+    plateau_window: int | None
+    plateau_improvement: float
+
+    def check(self, mu: float) -> None:
+        """Raise ``ValueError`` naming the first rule out of its range (``mu`` = the initial mu)."""
+        if not (mu > 0 and 0 < self.mu_dec < 1 < self.mu_inc and self.mu_max >= mu):
+            raise ValueError(
+                f"need mu > 0, 0 < mu_dec < 1 < mu_inc and mu_max >= mu; got mu = {mu}, "
+                f"mu_dec = {self.mu_dec}, mu_inc = {self.mu_inc}, mu_max = {self.mu_max}"
+            )
+        if self.max_epochs < 0 or self.max_fail < 1:
+            raise ValueError(
+                f"max_epochs = {self.max_epochs} must be >= 0 and max_fail = {self.max_fail} >= 1"
+            )
+        window, improvement = self.plateau_window, self.plateau_improvement
+        if window is not None and not (window >= 1 and 0 < improvement < 1):
+            raise ValueError(
+                f"plateau_window = {window} must be >= 1 and 0 < plateau_improvement = "
+                f"{improvement} < 1"
+            )
+
+    def plateau(self, epoch: int, best_rms: list[float]) -> bool:
+        """The rule of :func:`plateau_epoch`, applied as the log grows."""
+        window = self.plateau_window
+        return (
+            window is not None
+            and epoch >= window
+            and best_rms[-1] > (1.0 - self.plateau_improvement) * best_rms[-1 - window]
+        )
+
+    def stop_reason(self, row: Mapping[str, float], val_fail: int, best_rms: list[float]) -> str:
+        """Why training stops after the epoch logged in ``row`` ('' = go on); MATLAB trainlm order."""
+        if row["train_mse"] <= self.goal:
+            return "goal"
+        if row["mu"] > self.mu_max:
+            return "mu_max"
+        if row["grad_norm"] < self.min_grad:
+            return "min_grad"
+        if val_fail >= self.max_fail:
+            return "max_fail"
+        if self.plateau(int(row["epoch"]), best_rms):
+            return "plateau"
+        if row["epoch"] >= self.max_epochs:
+            return "max_epochs"
+        return ""
+
+    def summary(self) -> dict[str, Any]:
+        """The rules as the summary reports them (plateau ones only when the rule is on, so the
+        meta of a MATLAB-rules network is unchanged)."""
+        out: dict[str, Any] = {
+            "max_epochs": self.max_epochs,
+            "max_fail": self.max_fail,
+            "min_grad": self.min_grad,
+            "goal": self.goal,
+        }
+        if self.plateau_window is not None:
+            out.update(
+                plateau_window=self.plateau_window, plateau_improvement=self.plateau_improvement
+            )
+        return out
+
+
+def _training_arrays(inputs: ArrayLike, targets: ArrayLike) -> tuple[Array, Array]:
+    """``inputs`` and ``targets`` as float arrays, checked: (N, n_in) and (N, n_out), finite."""
+    X = np.asarray(inputs, dtype=np.float64)
+    Y = np.asarray(targets, dtype=np.float64)
+    if X.ndim != 2 or Y.ndim != 2 or len(X) != len(Y):
+        raise ShapeError(
+            f"inputs and targets must be (N, n_in) and (N, n_out) arrays, got {X.shape} and {Y.shape}"
+        )
+    for name, arr in (("inputs", X), ("targets", Y)):
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(
+                f"{name} contain non-finite values (first at {tuple(np.argwhere(~np.isfinite(arr))[0])})"
+            )
+    return X, Y
+
+
+def _check_split_options(hidden: int, val_fraction: float, test_fraction: float) -> None:
+    """Raise ``ValueError`` unless ``hidden`` >= 1 and the two fractions leave a training set."""
+    if hidden < 1:
+        raise ValueError(f"hidden = {hidden} must be >= 1")
+    if not (0 <= val_fraction < 1 and 0 <= test_fraction < 1 and val_fraction + test_fraction < 1):
+        raise ValueError(
+            f"val_fraction = {val_fraction} and test_fraction = {test_fraction} must be >= 0 with sum < 1"
+        )
+
+
+def _minmax_normalise(X: Array, Y: Array) -> tuple[tuple[Array, ...], Array, Array, Array]:
+    """MATLAB ``mapminmax`` over the whole data set: the bounds ``(x_min, x_max, y_min, y_max)``,
+    the inputs and targets scaled to [-1, 1], and the metres per normalised unit of each output."""
+    x_min, x_max, y_min, y_max = X.min(0), X.max(0), Y.min(0), Y.max(0)
+    Xn = 2.0 * (X - x_min) / _span(x_min, x_max) - 1.0
+    Yn = 2.0 * (Y - y_min) / _span(y_min, y_max) - 1.0
+    y_scale = 0.5 * _span(y_min, y_max)  # metres per normalised unit, per output
+    return (x_min, x_max, y_min, y_max), Xn, Yn, y_scale
+
+
+def _tensor_sets(
+    Xn: Array, Yn: Array, split: tuple[NDArray[np.intp], ...]
+) -> dict[str, tuple[torch.Tensor, torch.Tensor]]:
+    """The normalised (inputs, targets) of each set as tensors, keyed train/val/test."""
+    import torch
+
+    tt = lambda a: torch.from_numpy(np.ascontiguousarray(a))  # noqa: E731
+    return {name: (tt(Xn[idx]), tt(Yn[idx])) for name, idx in zip(_SETS, split)}
+
+
+def _network(
+    w: torch.Tensor,
+    shape: tuple[int, int, int],
+    bounds: tuple[Array, ...],
+    meta: Mapping[str, Any] | None = None,
+) -> BPNetwork:
+    """The :class:`BPNetwork` of the flat weight vector ``w``."""
+    p = _unflatten(w, *shape)
+    x_min, x_max, y_min, y_max = bounds
+    return BPNetwork(
+        **{k: v.numpy().copy() for k, v in p.items()},
+        x_min=x_min,
+        x_max=x_max,
+        y_min=y_min,
+        y_max=y_max,
+        meta=meta or {},
+    )
+
+
+def _set_errors(
+    w: torch.Tensor,
+    data: tuple[torch.Tensor, torch.Tensor],
+    shape: tuple[int, int, int],
+    scale: torch.Tensor,
+) -> tuple[float, float]:
+    """(normalised MSE, RMS Euclidean error in SI units) of weights ``w`` on one set; NaN if empty."""
+    import torch
+
+    x, t = data
+    if len(x) == 0:
+        return float("nan"), float("nan")
+    d = _net_normalised(w, x, *shape) - t
+    mse = float(torch.mean(d * d))
+    rms_m = float(torch.sqrt(torch.mean(torch.sum((d * scale) ** 2, dim=1))))
+    return mse, rms_m
+
+
+def _epoch_row(
+    epoch: int,
+    mu: float,
+    w: torch.Tensor,
+    e: torch.Tensor,
+    sse: float,
+    Jte: torch.Tensor,
+    sets: Mapping[str, tuple[torch.Tensor, torch.Tensor]],
+    shape: tuple[int, int, int],
+    scale: torch.Tensor,
+) -> dict[str, float]:
+    """One row of :func:`train_lm`'s log: the errors of weights ``w`` on every set."""
+    import torch
+
+    m = sets["train"][1].numel()
+    grad_norm = float(2.0 * torch.linalg.vector_norm(Jte) / m)
+    train_mse, train_rms = (
+        sse / m,
+        float(torch.sqrt(torch.mean(torch.sum((e.reshape(-1, shape[2]) * scale) ** 2, 1)))),
+    )
+    val_mse, val_rms = _set_errors(w, sets["val"], shape, scale)
+    test_mse, test_rms = _set_errors(w, sets["test"], shape, scale)
+    return {
+        "epoch": epoch,
+        "mu": mu,
+        "train_mse": train_mse,
+        "val_mse": val_mse,
+        "test_mse": test_mse,
+        "train_rms_m": train_rms,
+        "val_rms_m": val_rms,
+        "test_rms_m": test_rms,
+        "grad_norm": grad_norm,
+    }
+
+
+def _lm_step(
+    w: torch.Tensor,
+    e: torch.Tensor,
+    sse: float,
+    JtJ: torch.Tensor,
+    Jte: torch.Tensor,
+    mu: float,
+    train: tuple[torch.Tensor, torch.Tensor],
+    hidden: int,
+    rules: _LMRules,
+) -> tuple[torch.Tensor, torch.Tensor, float, float]:
+    """One LM step: raise mu until the step lowers the training SSE. Returns the new
+    ``(w, e, sse, mu)``, or the old ones with mu past ``mu_max`` if no step does."""
+    import torch
+
+    x_tr, t_tr = train
+    eye = torch.eye(w.numel(), dtype=torch.float64)
+    rhs = -Jte.unsqueeze(1)
+    while mu <= rules.mu_max:
+        L, info = torch.linalg.cholesky_ex(JtJ + mu * eye)
+        if int(info) == 0:
+            w_new = w + torch.cholesky_solve(rhs, L).squeeze(1)
+            e_new = residuals(w_new, x_tr, t_tr, hidden)
+            sse_new = float(e_new @ e_new)
+            if sse_new < sse:
+                return w_new, e_new, sse_new, max(mu * rules.mu_dec, 1e-20)
+        mu *= rules.mu_inc
+    return w, e, sse, mu
+
+
+def _lm_epochs(
+    sets: Mapping[str, tuple[torch.Tensor, torch.Tensor]],
+    shape: tuple[int, int, int],
+    y_scale: Array,
+    seed: int,
+    mu: float,
+    rules: _LMRules,
+    progress: Callable[[int, float, float], None] | None,
+) -> tuple[list[dict[str, float]], torch.Tensor, int, int, str, float]:
+    """:func:`train_lm`'s epochs from the Nguyen-Widrow weights of ``seed``. Returns (log rows,
+    best weights, best epoch, last epoch, stop reason, final mu)."""
+    import torch
+
+    hidden = shape[1]
+    train = sets["train"]
+    has_val = len(sets["val"][0]) > 0
+    scale = torch.from_numpy(np.ascontiguousarray(y_scale))
+    w = nguyen_widrow_init(*shape, torch.Generator().manual_seed(seed))
+    e = residuals(w, *train, hidden)
+    sse = float(e @ e)
+    best_w, best_val, best_epoch, val_fail = w.clone(), math.inf, 0, 0
+    best_rms: list[float] = []  # best validation (or training) RMS error up to each epoch
+    rows: list[dict[str, float]] = []
+    epoch = 0
+    while True:
+        J = residual_jacobian(w, *train, hidden)
+        JtJ = J.T @ J
+        Jte = J.T @ e
+        row = _epoch_row(epoch, mu, w, e, sse, Jte, sets, shape, scale)
+        rows.append(row)
+        if progress is not None:
+            progress(epoch, row["train_mse"], row["val_mse"])
+        # early-stopping bookkeeping (MATLAB: a failure is an epoch that does not beat the best)
+        if not has_val:
+            best_w, best_epoch = w, epoch
+        elif row["val_mse"] < best_val:
+            best_w, best_val, best_epoch, val_fail = w, row["val_mse"], epoch, 0
+        elif epoch > 0:
+            val_fail += 1
+        watched = row["val_rms_m"] if has_val else row["train_rms_m"]
+        best_rms.append(min(watched, best_rms[-1]) if best_rms else watched)
+        stop_reason = rules.stop_reason(row, val_fail, best_rms)
+        if stop_reason:
+            return rows, best_w, best_epoch, epoch, stop_reason, mu
+        w, e, sse, mu = _lm_step(w, e, sse, JtJ, Jte, mu, train, hidden, rules)
+        epoch += 1
+
+
+def _summary_head(
+    run: tuple[list[dict[str, float]], torch.Tensor, int, int, str, float],
+    split: tuple[NDArray[np.intp], ...],
+    shape: tuple[int, int, int],
+    n_weights: int,
+    seed: int,
+    rules: _LMRules,
+) -> dict[str, Any]:
+    """:func:`train_lm`'s summary up to the errors: the run (from :func:`_lm_epochs`), the set
+    sizes, the network's shape and the rules."""
+    _, _, best_epoch, epochs, stop_reason, mu_final = run
+    return {
+        "epochs": epochs,
+        "stop_reason": stop_reason,
+        "best_epoch": best_epoch,
+        **{f"n_{name}": len(idx) for name, idx in zip(_SETS, split)},
+        "n_in": shape[0],
+        "hidden": shape[1],
+        "n_out": shape[2],
+        "n_weights": n_weights,
+        "seed": seed,
+        "init": "nguyen-widrow (MATLAB initnw)",
+        "algorithm": "levenberg-marquardt (MATLAB trainlm)",
+        "mu_final": mu_final,
+        **rules.summary(),
+    }
+
+
+def _set_position_errors(
+    net: BPNetwork, X: Array, Y: Array, split: tuple[NDArray[np.intp], ...]
+) -> dict[str, float]:
+    """:func:`_position_errors` of ``net`` on each set, keys prefixed with the set's name."""
+    out: dict[str, float] = {}
+    for name, idx in zip(_SETS, split):
+        errs = (
+            _position_errors(net.predict(X[idx]), Y[idx])
+            if len(idx)
+            else _position_errors(Y[:0], Y[:0])
+        )
+        out.update({f"{name}_{k}": v for k, v in errs.items()})
+    return out
+
+
 def train_lm(
     inputs: ArrayLike,
     targets: ArrayLike,
@@ -486,201 +812,27 @@ def train_lm(
     train and val), set sizes, hyper-parameters and ``wall_time_s``.
     """
     import pandas as pd
-    import torch
 
-    X = np.asarray(inputs, dtype=np.float64)
-    Y = np.asarray(targets, dtype=np.float64)
-    if X.ndim != 2 or Y.ndim != 2 or len(X) != len(Y):
-        raise ShapeError(
-            f"inputs and targets must be (N, n_in) and (N, n_out) arrays, got {X.shape} and {Y.shape}"
-        )
-    for name, arr in (("inputs", X), ("targets", Y)):
-        if not np.all(np.isfinite(arr)):
-            raise ValueError(
-                f"{name} contain non-finite values (first at {tuple(np.argwhere(~np.isfinite(arr))[0])})"
-            )
-    if hidden < 1:
-        raise ValueError(f"hidden = {hidden} must be >= 1")
-    if not (0 <= val_fraction < 1 and 0 <= test_fraction < 1 and val_fraction + test_fraction < 1):
-        raise ValueError(
-            f"val_fraction = {val_fraction} and test_fraction = {test_fraction} must be >= 0 with sum < 1"
-        )
-    if not (mu > 0 and 0 < mu_dec < 1 < mu_inc and mu_max >= mu):
-        raise ValueError(
-            f"need mu > 0, 0 < mu_dec < 1 < mu_inc and mu_max >= mu; got mu = {mu}, "
-            f"mu_dec = {mu_dec}, mu_inc = {mu_inc}, mu_max = {mu_max}"
-        )
-    if max_epochs < 0 or max_fail < 1:
-        raise ValueError(f"max_epochs = {max_epochs} must be >= 0 and max_fail = {max_fail} >= 1")
-    if plateau_window is not None and not (plateau_window >= 1 and 0 < plateau_improvement < 1):
-        raise ValueError(
-            f"plateau_window = {plateau_window} must be >= 1 and 0 < plateau_improvement = "
-            f"{plateau_improvement} < 1"
-        )
+    X, Y = _training_arrays(inputs, targets)
+    _check_split_options(hidden, val_fraction, test_fraction)
+    rules = _LMRules(max_epochs, mu_dec, mu_inc, mu_max, max_fail, min_grad, goal,
+                     plateau_window, plateau_improvement)  # fmt: skip
+    rules.check(mu)
 
     start = time.perf_counter()
-    n_in, n_out = X.shape[1], Y.shape[1]
-    itr, iva, ite = _split(len(X), val_fraction, test_fraction, seed)
-    x_min, x_max, y_min, y_max = X.min(0), X.max(0), Y.min(0), Y.max(0)
-    Xn = 2.0 * (X - x_min) / _span(x_min, x_max) - 1.0
-    Yn = 2.0 * (Y - y_min) / _span(y_min, y_max) - 1.0
-    y_scale = 0.5 * _span(y_min, y_max)  # metres per normalised unit, per output
-
-    def make_net(w: torch.Tensor, meta: Mapping[str, Any] | None = None) -> BPNetwork:
-        p = _unflatten(w, n_in, hidden, n_out)
-        return BPNetwork(
-            **{k: v.numpy().copy() for k, v in p.items()},
-            x_min=x_min,
-            x_max=x_max,
-            y_min=y_min,
-            y_max=y_max,
-            meta=meta or {},
-        )
-
-    rows: list[dict[str, float]] = []
+    shape = (X.shape[1], hidden, Y.shape[1])
+    split = _split(len(X), val_fraction, test_fraction, seed)
+    bounds, Xn, Yn, y_scale = _minmax_normalise(X, Y)
     with _torch_session(seed, num_threads):
-        tt = lambda a: torch.from_numpy(np.ascontiguousarray(a))  # noqa: E731
-        sets = {
-            name: (tt(Xn[idx]), tt(Yn[idx]))
-            for name, idx in (("train", itr), ("val", iva), ("test", ite))
-        }
-        x_tr, t_tr = sets["train"]
-        m = t_tr.numel()
-        scale = tt(y_scale)
-        gen = torch.Generator().manual_seed(seed)
-        w = nguyen_widrow_init(n_in, hidden, n_out, gen)
-        eye = torch.eye(w.numel(), dtype=torch.float64)
+        run = _lm_epochs(_tensor_sets(Xn, Yn, split), shape, y_scale, seed, mu, rules, progress)
+    rows, best_w = run[0], run[1]
 
-        def evaluate(w: torch.Tensor, name: str) -> tuple[float, float]:
-            x, t = sets[name]
-            if len(x) == 0:
-                return float("nan"), float("nan")
-            d = _net_normalised(w, x, n_in, hidden, n_out) - t
-            mse = float(torch.mean(d * d))
-            rms_m = float(torch.sqrt(torch.mean(torch.sum((d * scale) ** 2, dim=1))))
-            return mse, rms_m
-
-        e = residuals(w, x_tr, t_tr, hidden)
-        sse = float(e @ e)
-        best_w, best_val, best_epoch, val_fail = w.clone(), math.inf, 0, 0
-        best_rms: list[float] = []  # best validation (or training) RMS error up to each epoch
-        epoch, stop_reason = 0, "max_epochs"
-        while True:
-            J = residual_jacobian(w, x_tr, t_tr, hidden)
-            JtJ = J.T @ J
-            Jte = J.T @ e
-            grad_norm = float(2.0 * torch.linalg.vector_norm(Jte) / m)
-            train_mse, train_rms = (
-                sse / m,
-                float(torch.sqrt(torch.mean(torch.sum((e.reshape(-1, n_out) * scale) ** 2, 1)))),
-            )
-            val_mse, val_rms = evaluate(w, "val")
-            test_mse, test_rms = evaluate(w, "test")
-            rows.append(
-                {
-                    "epoch": epoch,
-                    "mu": mu,
-                    "train_mse": train_mse,
-                    "val_mse": val_mse,
-                    "test_mse": test_mse,
-                    "train_rms_m": train_rms,
-                    "val_rms_m": val_rms,
-                    "test_rms_m": test_rms,
-                    "grad_norm": grad_norm,
-                }
-            )
-            if progress is not None:
-                progress(epoch, train_mse, val_mse)
-            # early-stopping bookkeeping (MATLAB: a failure is an epoch that does not beat the best)
-            if len(iva) == 0:
-                best_w, best_epoch = w, epoch
-            elif val_mse < best_val:
-                best_w, best_val, best_epoch, val_fail = w, val_mse, epoch, 0
-            elif epoch > 0:
-                val_fail += 1
-            watched = val_rms if len(iva) else train_rms
-            best_rms.append(min(watched, best_rms[-1]) if best_rms else watched)
-            plateau = (  # the rule of plateau_epoch, applied as the log grows
-                plateau_window is not None
-                and epoch >= plateau_window
-                and best_rms[-1] > (1.0 - plateau_improvement) * best_rms[-1 - plateau_window]
-            )
-            # stopping criteria, MATLAB trainlm order
-            if train_mse <= goal:
-                stop_reason = "goal"
-            elif mu > mu_max:
-                stop_reason = "mu_max"
-            elif grad_norm < min_grad:
-                stop_reason = "min_grad"
-            elif val_fail >= max_fail:
-                stop_reason = "max_fail"
-            elif plateau:
-                stop_reason = "plateau"
-            elif epoch >= max_epochs:
-                stop_reason = "max_epochs"
-            else:
-                stop_reason = ""
-            if stop_reason:
-                break
-            # one LM step: raise mu until the step lowers the training SSE
-            rhs = -Jte.unsqueeze(1)
-            while mu <= mu_max:
-                L, info = torch.linalg.cholesky_ex(JtJ + mu * eye)
-                if int(info) == 0:
-                    w_new = w + torch.cholesky_solve(rhs, L).squeeze(1)
-                    e_new = residuals(w_new, x_tr, t_tr, hidden)
-                    sse_new = float(e_new @ e_new)
-                    if sse_new < sse:
-                        w, e, sse = w_new, e_new, sse_new
-                        mu = max(mu * mu_dec, 1e-20)
-                        break
-                mu *= mu_inc
-            epoch += 1
-
-    log = pd.DataFrame(
-        rows,
-        columns=[
-            "epoch",
-            "mu",
-            "train_mse",
-            "val_mse",
-            "test_mse",
-            "train_rms_m",
-            "val_rms_m",
-            "test_rms_m",
-            "grad_norm",
-        ],
-    )
-    net = make_net(best_w)
-    summary: dict[str, Any] = {
-        "epochs": epoch,
-        "stop_reason": stop_reason,
-        "best_epoch": best_epoch,
-        "n_train": len(itr),
-        "n_val": len(iva),
-        "n_test": len(ite),
-        "n_in": n_in,
-        "hidden": hidden,
-        "n_out": n_out,
-        "n_weights": net.n_weights,
-        "seed": seed,
-        "init": "nguyen-widrow (MATLAB initnw)",
-        "algorithm": "levenberg-marquardt (MATLAB trainlm)",
-        "mu_final": mu,
-        "max_epochs": max_epochs,
-        "max_fail": max_fail,
-        "min_grad": min_grad,
-        "goal": goal,
-    }
-    if plateau_window is not None:  # only then: the meta of a MATLAB-rules network is unchanged
-        summary.update(plateau_window=plateau_window, plateau_improvement=plateau_improvement)
-    for name, idx in (("train", itr), ("val", iva), ("test", ite)):
-        errs = (
-            _position_errors(net.predict(X[idx]), Y[idx])
-            if len(idx)
-            else _position_errors(Y[:0], Y[:0])
-        )
-        summary.update({f"{name}_{k}": v for k, v in errs.items()})
+    log = pd.DataFrame(rows, columns=list(_LOG_COLUMNS))
+    net = _network(best_w, shape, bounds)
+    summary = _summary_head(run, split, shape, net.n_weights, seed, rules)
+    summary.update(_set_position_errors(net, X, Y, split))
     summary["wall_time_s"] = time.perf_counter() - start
-    net = make_net(best_w, meta={k: v for k, v in summary.items() if k != "wall_time_s"})
+    net = _network(
+        best_w, shape, bounds, meta={k: v for k, v in summary.items() if k != "wall_time_s"}
+    )
     return net, log, summary

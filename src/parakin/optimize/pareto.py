@@ -30,14 +30,26 @@ class ParetoResult:
 
 
 def non_dominated(F: np.ndarray) -> np.ndarray:
-    """Boolean mask of the rows of ``F (K, m)`` (minimised) that no other row dominates."""
+    """Boolean mask of the rows of ``F (K, m)`` (minimised) that no other row dominates.
+
+    pymoo's non-dominated sorting (moocore) on each column's rank: the ranks keep every order and
+    every tie, so the mask is the same, and moocore gets the finite values it requires (it
+    mis-sorts +inf and crashes on -inf). A row with a NaN neither dominates nor is dominated."""
+    from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
+
     F = np.asarray(F, dtype=float)
     if F.ndim != 2:
         raise ValueError(f"F must be a 2-D array (K, m), got shape {F.shape}")
-    le = np.all(F[:, None, :] <= F[None, :, :], axis=-1)  # le[j, i]: row j <= row i everywhere
-    lt = np.any(F[:, None, :] < F[None, :, :], axis=-1)
-    dominated = np.any(le & lt, axis=0)
-    return ~dominated
+    keep = np.isnan(F).any(axis=1)
+    rows = np.flatnonzero(~keep)
+    if F.shape[1] == 0:
+        return np.ones(len(F), dtype=bool)
+    if rows.size:
+        ranks = np.empty((rows.size, F.shape[1]))
+        for j in range(F.shape[1]):
+            ranks[:, j] = np.unique(F[rows, j], return_inverse=True)[1]
+        keep[rows[NonDominatedSorting().do(ranks, only_non_dominated_front=True)]] = True
+    return keep
 
 
 def nsga2(

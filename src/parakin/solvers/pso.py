@@ -215,6 +215,74 @@ def pso(
         raise ValueError(f"swarm = {swarm!r} must be a positive integer")
     swarm = int(swarm)
     check_size(n_runs, swarm, maxiter, n)
+    lo, hi = _search_box(mech, bounds, n)
+    flight = _Flight(
+        schedule=inertia_schedule(inertia, w, w_end),
+        maxiter=maxiter,
+        lo=lo,
+        hi=hi,
+        vmax=None if vclamp is None else float(vclamp) * (hi - lo),
+        c1=c1,
+        c2=c2,
+        ftol=tol if ftol is None else ftol,
+    )
+    fit = fitness or _eq20(mech)
+    gens = _generators(seed, n_runs)
+    sw = _initial_swarm(fit, joints, x0, gens, flight, swarm, include_x0)
+    if callback is not None:
+        callback(0, sw.gbest.copy(), sw.gf.copy())
+    fast = (
+        None
+        if callback is not None or fitness is not None
+        else _compiled(mech, inertia, sw.x, joints)
+    )
+    if fast is not None:  # the same iterations, compiled (parakin.kernels: pso_row)
+        kernel, loops = fast
+        _compiled_loop(kernel, loops, joints, sw, gens, flight)
+    else:
+        _numpy_loop(fit, joints, sw, gens, flight, callback)
+    return _result(mech, joints, sw, flight, time.perf_counter() - start)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Flight:
+    """The fixed rules of one :func:`pso` call: inertia schedule, iteration cap, search box
+    ``[lo, hi]``, velocity limit, learning factors and the fitness that stops a run."""
+
+    schedule: Schedule
+    maxiter: int
+    lo: Array
+    hi: Array
+    vmax: Array | None
+    c1: float
+    c2: float
+    ftol: float
+
+
+@dataclasses.dataclass(eq=False)
+class _Swarm:
+    """The state of :func:`pso`'s runs, updated in place: positions ``x`` and velocities ``v``
+    (R, P, n), personal bests ``pbest``/``pf``, global bests ``gbest``/``gf``, counters, the best
+    fitness per iteration ``history``, the mean inertia weight per iteration ``weights`` and which
+    runs are still ``running``."""
+
+    x: Array
+    v: Array
+    pbest: Array
+    pf: Array
+    gbest: Array
+    gf: Array
+    nfev: NDArray[np.int64]
+    nit: NDArray[np.int64]
+    history: Array
+    weights: Array
+    running: NDArray[np.bool_]
+
+
+def _search_box(
+    mech: Mechanism, bounds: tuple[ArrayLike, ArrayLike] | None, n: int
+) -> tuple[Array, Array]:
+    """The search box ``(lo, hi)``: ``bounds``, default the mechanism's pose bounds; checked."""
     lo, hi = (
         np.asarray(b, dtype=float) for b in (bounds if bounds is not None else mech.pose_bounds())
     )
@@ -222,125 +290,146 @@ def pso(
         raise ValueError(
             f"bounds must be two arrays of {n} values with lower < upper, got {lo}, {hi}"
         )
-    span = hi - lo
-    vmax = None if vclamp is None else float(vclamp) * span
-    schedule = inertia_schedule(inertia, w, w_end)
-    fit = fitness or _eq20(mech)
-    ftol = tol if ftol is None else ftol
+    return lo, hi
+
+
+def _generators(seed: int | ArrayLike, n_runs: int) -> list[np.random.Generator]:
+    """One ``numpy.random.default_rng`` per run from ``seed`` (one int, or one per run)."""
     seeds = np.asarray(seed)
     if seeds.ndim == 0:
         seeds = np.full(n_runs, int(seeds))
     seeds = seeds.reshape(-1)
     if seeds.size != n_runs:
         raise ValueError(f"seed must be one int or one per run ({n_runs}), got {seeds.size}")
-    gens = [np.random.default_rng(int(s)) for s in seeds]
+    return [np.random.default_rng(int(s)) for s in seeds]
 
-    # initial swarm: first draw of each generator
+
+def _fitness_of(fit: Fitness, x: Array, joints: Array) -> Array:
+    """The fitness of positions ``x`` (R, P, n) for the rows ``joints``; inf where not finite."""
+    with np.errstate(all="ignore"):
+        f = rowwise(fit, x, joints, tail=(len(x[0]),), fill=np.inf)
+    return np.where(np.isfinite(f), f, np.inf)
+
+
+def _initial_swarm(
+    fit: Fitness,
+    joints: Array,
+    x0: Array,
+    gens: list[np.random.Generator],
+    flight: _Flight,
+    swarm: int,
+    include_x0: bool,
+) -> _Swarm:
+    """The swarm at iteration 0: positions from the first draw of each generator (particle 0 at
+    ``x0`` with ``include_x0``), velocities zero, bests from the first fitness evaluation."""
+    n_runs, n = x0.shape
+    lo, hi = flight.lo, flight.hi
     x = np.stack([g.uniform(lo, hi, size=(swarm, n)) for g in gens])  # (R, P, n)
     if include_x0:
         x[:, 0, :] = np.clip(x0, lo, hi)
-    v = np.zeros_like(x)
-    with np.errstate(all="ignore"):
-        f = rowwise(fit, x, joints, tail=(swarm,), fill=np.inf)
-    f = np.where(np.isfinite(f), f, np.inf)
+    f = _fitness_of(fit, x, joints)
     pbest, pf = x.copy(), f.copy()
     gi = np.argmin(pf, axis=1)
-    gbest = pbest[np.arange(n_runs), gi].copy()
     gf = pf[np.arange(n_runs), gi].copy()
-    nfev = np.full(n_runs, swarm, dtype=np.int64)
-    nit = np.zeros(n_runs, dtype=np.int64)
-    history = np.empty((n_runs, maxiter + 1))
+    history = np.empty((n_runs, flight.maxiter + 1))
     history[:, 0] = gf
-    weights = np.full(maxiter + 1, np.nan)
-    running = gf > ftol
-    rand = np.empty((n_runs, _BLOCK, 2, swarm, n))
-    if callback is not None:
-        callback(0, gbest.copy(), gf.copy())
-    fast = (
-        None if callback is not None or fitness is not None else _compiled(mech, inertia, x, joints)
+    return _Swarm(
+        x=x,
+        v=np.zeros_like(x),
+        pbest=pbest,
+        pf=pf,
+        gbest=pbest[np.arange(n_runs), gi].copy(),
+        gf=gf,
+        nfev=np.full(n_runs, swarm, dtype=np.int64),
+        nit=np.zeros(n_runs, dtype=np.int64),
+        history=history,
+        weights=np.full(flight.maxiter + 1, np.nan),
+        running=gf > flight.ftol,
     )
-    if fast is not None:  # the same iterations, compiled (parakin.kernels: pso_row)
-        kernel, loops = fast
-        _compiled_loop(
-            kernel,
-            loops,
-            joints,
-            x,
-            v,
-            pbest,
-            pf,
-            gbest,
-            gf,
-            nfev,
-            nit,
-            history,
-            weights,
-            running,
-            gens,
-            schedule,
-            maxiter,
-            lo,
-            hi,
-            vmax,
-            c1,
-            c2,
-            ftol,
-        )
-    else:
-        for k in range(1, maxiter + 1):
-            rows = np.flatnonzero(running)
-            if rows.size == 0:
-                history[:, k:] = gf[:, None]
-                break
-            slot = (k - 1) % _BLOCK
-            if slot == 0:
-                for i in rows:
-                    rand[i] = gens[i].random((_BLOCK, 2, swarm, n))
-            wk = schedule(k, maxiter, rows)
-            weights[k] = float(np.mean(wk))
-            wk = np.asarray(wk, dtype=float)
-            wk = wk[:, None, None] if wk.ndim == 1 else wk
-            full = rows.size == n_runs
-            idx = slice(None) if full else rows
-            xr, vr, pr = x[idx], v[idx], pbest[idx]
-            r = rand[idx, slot]
-            vr = wk * vr + c1 * r[:, 0] * (pr - xr) + c2 * r[:, 1] * (gbest[idx][:, None, :] - xr)
-            if vmax is not None:
-                vr = np.clip(vr, -vmax, vmax)
-            xr = np.clip(xr + vr, lo, hi)
-            with np.errstate(all="ignore"):
-                fr = rowwise(fit, xr, joints[idx], tail=(len(xr[0]),), fill=np.inf)
-            fr = np.where(np.isfinite(fr), fr, np.inf)
-            better = fr < pf[idx]
-            pr = np.where(better[..., None], xr, pr)
-            pfr = np.where(better, fr, pf[idx])
-            gi = np.argmin(pfr, axis=1)
-            sel = np.arange(len(pfr))
-            x[idx], v[idx], pbest[idx], pf[idx] = xr, vr, pr, pfr
-            gbest[idx] = pr[sel, gi]
-            gf[idx] = pfr[sel, gi]
-            nfev[idx] += swarm
-            nit[idx] += 1
-            history[:, k] = gf
-            running[idx] = gf[idx] > ftol
-            if callback is not None:
-                callback(k, gbest.copy(), gf.copy())
-    res = inf_norm(rowwise(mech.residual, gbest, joints, tail=(joints.shape[-1],)))
-    status = np.where(gf <= ftol, Status.CONVERGED, Status.MAXITER).astype(np.int64)
+
+
+def _numpy_loop(
+    fit: Fitness,
+    joints: Array,
+    sw: _Swarm,
+    gens: list[np.random.Generator],
+    fl: _Flight,
+    callback: Callable[[int, Array, Array], Any] | None,
+) -> None:
+    """The iterations of :func:`pso` in numpy, on the runs still going; updates ``sw`` in place.
+    Random numbers are drawn :data:`_BLOCK` iterations at a time per running run."""
+    n_runs, swarm, n = sw.x.shape
+    rand = np.empty((n_runs, _BLOCK, 2, swarm, n))
+    for k in range(1, fl.maxiter + 1):
+        rows = np.flatnonzero(sw.running)
+        if rows.size == 0:
+            sw.history[:, k:] = sw.gf[:, None]
+            break
+        slot = (k - 1) % _BLOCK
+        if slot == 0:
+            for i in rows:
+                rand[i] = gens[i].random((_BLOCK, 2, swarm, n))
+        wk = fl.schedule(k, fl.maxiter, rows)
+        sw.weights[k] = float(np.mean(wk))
+        wk = np.asarray(wk, dtype=float)
+        wk = wk[:, None, None] if wk.ndim == 1 else wk
+        idx = slice(None) if rows.size == n_runs else rows
+        _move(fit, joints, sw, idx, rand[idx, slot], wk, fl)
+        sw.nfev[idx] += swarm
+        sw.nit[idx] += 1
+        sw.history[:, k] = sw.gf
+        sw.running[idx] = sw.gf[idx] > fl.ftol
+        if callback is not None:
+            callback(k, sw.gbest.copy(), sw.gf.copy())
+
+
+def _move(
+    fit: Fitness,
+    joints: Array,
+    sw: _Swarm,
+    idx: slice | NDArray[np.intp],
+    r: Array,
+    wk: Array,
+    fl: _Flight,
+) -> None:
+    """One PSO step of the runs ``idx`` with random numbers ``r`` and inertia ``wk``: new
+    velocities and positions, then personal and global bests; updates ``sw`` in place."""
+    x, v, pbest, pf, gbest = sw.x, sw.v, sw.pbest, sw.pf, sw.gbest
+    xr, vr, pr = x[idx], v[idx], pbest[idx]
+    vr = wk * vr + fl.c1 * r[:, 0] * (pr - xr) + fl.c2 * r[:, 1] * (gbest[idx][:, None, :] - xr)
+    if fl.vmax is not None:
+        vr = np.clip(vr, -fl.vmax, fl.vmax)
+    xr = np.clip(xr + vr, fl.lo, fl.hi)
+    fr = _fitness_of(fit, xr, joints[idx])
+    better = fr < pf[idx]
+    pr = np.where(better[..., None], xr, pr)
+    pfr = np.where(better, fr, pf[idx])
+    gi = np.argmin(pfr, axis=1)
+    sel = np.arange(len(pfr))
+    x[idx], v[idx], pbest[idx], pf[idx] = xr, vr, pr, pfr
+    gbest[idx] = pr[sel, gi]
+    sw.gf[idx] = pfr[sel, gi]
+
+
+def _result(mech: Mechanism, joints: Array, sw: _Swarm, fl: _Flight, wall: float) -> PSOResult:
+    """The :class:`PSOResult` of a finished swarm."""
+    n_runs = len(sw.gbest)
+    res = inf_norm(rowwise(mech.residual, sw.gbest, joints, tail=(joints.shape[-1],)))
+    status = np.where(sw.gf <= fl.ftol, Status.CONVERGED, Status.MAXITER).astype(np.int64)
     return PSOResult(
-        x=gbest,
+        x=sw.gbest,
         success=status >= 0,
         status=status,
-        nit=nit,
-        nfev=nfev,
+        nit=sw.nit,
+        nfev=sw.nfev,
         njev=np.zeros(n_runs, dtype=np.int64),
         residual=res,
-        wall_time=time.perf_counter() - start,
+        wall_time=wall,
         method="pso",
-        message=summarize(status, maxiter),
-        fitness=gf,
-        history=history,
-        inertia=weights,
+        message=summarize(status, fl.maxiter),
+        fitness=sw.gf,
+        history=sw.history,
+        inertia=sw.weights,
     )
 
 
@@ -359,34 +448,16 @@ def _compiled(mech: Mechanism, inertia: Any, x: Array, joints: Array):
 
 
 def _compiled_loop(
-    kernel,
-    loops,
-    joints,
-    x,
-    v,
-    pbest,
-    pf,
-    gbest,
-    gf,
-    nfev,
-    nit,
-    history,
-    weights,
-    running,
-    gens,
-    schedule,
-    maxiter,
-    lo,
-    hi,
-    vmax,
-    c1,
-    c2,
-    ftol,
+    kernel, loops, joints: Array, sw: _Swarm, gens: list[np.random.Generator], fl: _Flight
 ) -> None:
     """The iterations of :func:`pso` by ``loops.pso_parallel``, block by block of :data:`_BLOCK`
     iterations: the random numbers are drawn here exactly as in the numpy loop (one block per
     running run at iterations 1, 1 + _BLOCK, ...), the weights of a block asked of the schedule for
     every run, then every run advances independently (in parallel). Fills the arrays in place."""
+    x, v, pbest, pf, gbest, gf = sw.x, sw.v, sw.pbest, sw.pf, sw.gbest, sw.gf
+    history, weights, running = sw.history, sw.weights, sw.running
+    schedule, maxiter, lo, hi, vmax = fl.schedule, fl.maxiter, fl.lo, fl.hi, fl.vmax
+    c1, c2, ftol = fl.c1, fl.c2, fl.ftol
     n_runs, swarm, n = x.shape
     state = np.zeros((n_runs, 3), dtype=np.int64)  # running, fitness evaluations, iterations
     state[:, 0] = running
@@ -437,5 +508,5 @@ def _compiled_loop(
                 weights[k + s] = float(np.mean(w[going, s]))
         k += nk
     gf[:] = best[:, 0]
-    nfev += state[:, 1]
-    nit += state[:, 2]
+    sw.nfev += state[:, 1]
+    sw.nit += state[:, 2]

@@ -32,10 +32,7 @@ TITLE = "Beyond the papers: every solver on every mechanism"
 
 #: success rates over seeded problems: PSO rows are chaotic searches and local solvers may flip a
 #: near-threshold problem; medians of errors (round-off) and iterations are stable, timings are not
-ATLAS = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+ATLAS = Tolerance.statistical(
     "solver statistics over seeded problems: success and wrong-assembly rates within 5 "
     "points, median iterations to convergence within one, conditioning to rounding; timings, extremes "
     "and round-off errors not compared",

@@ -406,10 +406,7 @@ def _declare():
 
     #: path tracking: the root count, the solutions found and the real ones are properties of the
     #: input (stable), the steps and retries of a path tracker move with rounding (not compared)
-    counts = Tolerance(
-        "statistical",
-        0.0,
-        0.0,
+    counts = Tolerance.statistical(
         "all-solutions counts per input are properties of the input: compared exactly; "
         "tracking steps and retries move with rounding (not compared); IK error to 1e-9",
         columns={

@@ -224,10 +224,7 @@ def _declare():
 
     #: real counts of certified solutions are properties of the input; a rerun elsewhere tracks the
     #: same paths up to rounding, so every count is compared exactly (the rate is a timing)
-    counts = Tolerance(
-        "statistical",
-        0.0,
-        0.0,
+    counts = Tolerance.statistical(
         "real-solution counts of certified solutions are properties of the inputs: compared exactly",
         columns={
             "complete_inputs": (0.0, 0.0),

@@ -27,6 +27,7 @@ from parakin.papers.li2017_stewart36.common import (
     cfg,
     fk_input,
     mech,
+    table_and_figure,
 )
 from parakin.plot import new_figure, save_figure, use_style
 from parakin.progress import Progress
@@ -38,10 +39,7 @@ from parakin.solvers.pso import ChaoticLogistic
 #: to O(1), so the weight sequences and the PSO runs they drive are compared only through what is
 #: stable: the histogram of the map's values (Table 1) within sampling noise, and the PSO fitness
 #: statistics over 50 runs by order of magnitude
-CHAOS = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+CHAOS = Tolerance.statistical(
     "chaotic map and PSO runs: histogram counts within 3 sqrt(count) + 3, statistics of "
     "the map within 0.05; trajectories and PSO extremes not compared",
     columns={
@@ -166,14 +164,8 @@ def draw_fig02(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
-    "fig02",
-    outputs=["fig02_chaotic_weights.png", "fig02_chaotic_weights.csv"],
-    config=[KEY],
-    tolerance=CHAOS,
-    draws=[("fig02_chaotic_weights.png", "fig02_chaotic_weights.csv", draw_fig02)],
-)
-def fig02(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig02", "fig02_chaotic_weights", draw_fig02, config=[KEY], tolerance=CHAOS)
+def fig02(config: dict) -> pd.DataFrame:
     """Fig. 2: the weight sequence omega(t) = Z_t, t = 1..1000, for mu = 4 (and mu = 0.4 as printed)."""
     c = cfg(config)["chaos"]
     n = int(c["n_weights"])
@@ -189,7 +181,7 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
             "mu_printed": float(c["mu_printed"]),
         }
     )
-    return write_and_draw(df, outdir / "fig02_chaotic_weights.csv", draw_fig02)
+    return df
 
 
 def schedule(config: dict, variant: str, mu: float | None = None):

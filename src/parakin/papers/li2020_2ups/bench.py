@@ -28,6 +28,7 @@ from parakin.papers.li2020_2ups.fk import pso_options, seeds
 from parakin.registry import TIMING
 from parakin.solvers import solve_fk
 from parakin.solvers.pso import _BLOCK, inertia_schedule
+from parakin.timing import best_of
 
 N_SINGLE = 200  #: FK inputs solved one per call (latency)
 N_BATCH = 20_000  #: FK inputs in one batched call (throughput, accuracy)
@@ -93,15 +94,6 @@ def pso_loop(
     return {"x": gbest, "fitness": gf, "nit": nit}
 
 
-def _best_of(fn, repeats: int = REPEATS) -> tuple[float, object]:
-    best, out = np.inf, None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
-
-
 def pso_rows(config: dict) -> list[dict]:
     """PSO timings: one run (vectorised vs per-particle loop, equality asserted), and all seeds x 5
     cases as one batched call vs one call per run."""
@@ -112,8 +104,9 @@ def pso_rows(config: dict) -> list[dict]:
         opts = pso_options(config, variant)
         s = seeds(config, variant)
         one = q[LOOP_CASE : LOOP_CASE + 1]
-        t_vec, res = _best_of(
-            lambda one=one, s=s, opts=opts: solve_fk(m, one, method="pso", seed=int(s[0]), **opts)
+        t_vec, res = best_of(
+            lambda one=one, s=s, opts=opts: solve_fk(m, one, method="pso", seed=int(s[0]), **opts),
+            REPEATS,
         )
         t0 = time.perf_counter()
         loop = pso_loop(
@@ -152,7 +145,7 @@ def pso_rows(config: dict) -> list[dict]:
         )
         nq, ns = len(q), len(s)
         qq, ss = np.repeat(q, ns, axis=0), np.tile(s, nq)
-        t_batch, rb = _best_of(
+        t_batch, rb = best_of(
             lambda qq=qq, ss=ss, opts=opts: solve_fk(m, qq, method="pso", seed=ss, **opts),
             repeats=1,
         )
@@ -230,7 +223,9 @@ def fk_rows(config: dict) -> pd.DataFrame:
     # Newton on a large batch
     x3 = g.uniform(lo, hi, (N_NEWTON, 3))
     q3 = m.ik(x3)
-    t3, r3 = _best_of(lambda: solve_fk(m, q3, method="newton", x0=m.home(), tol=1e-12, maxiter=50))
+    t3, r3 = best_of(
+        lambda: solve_fk(m, q3, method="newton", x0=m.home(), tol=1e-12, maxiter=50), REPEATS
+    )
     ok = float(np.mean(r3.success & (np.max(np.abs(r3.x - x3), axis=-1) <= 1e-8)))
     base = df[df["method"] == "scipy-root"].iloc[0]
     extra = pd.DataFrame(

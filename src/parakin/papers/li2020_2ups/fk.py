@@ -17,7 +17,7 @@ import pandas as pd
 import parakin.solvers.pso  # noqa: F401  (registers "pso")
 from parakin.claims import Claim, load_reference, printed_value
 from parakin.config import seed_for
-from parakin.io import write_and_draw, write_csv, write_table
+from parakin.io import write_csv, write_table
 from parakin.papers.li2020_2ups.common import (
     CASES,
     KEY,
@@ -25,6 +25,7 @@ from parakin.papers.li2020_2ups.common import (
     mech,
     table2_inputs,
     table2_outputs,
+    table_and_figure,
     to_paper,
 )
 from parakin.plot import new_figure, save_figure
@@ -35,10 +36,7 @@ from parakin.solvers import solve_fk
 #: PSO is a seeded but chaotic search: the pose it settles on in one run moves with the rounding of
 #: one product. Stable are the exact and printed poses (closed form / transcribed) and the medians
 #: over all runs of a variant that converges; spreads, extremes and counts of runs are not compared
-PSO_TABLE = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+PSO_TABLE = Tolerance.statistical(
     "PSO runs: exact (closed-form) and printed columns to rounding, run medians within "
     "0.05 (deg, mm); spreads, extremes, iteration counts and run counts not compared; "
     "the consistency checks (closed form) to rounding",
@@ -61,17 +59,11 @@ PSO_TABLE = Tolerance(
     | {"value": (1e-6, 1e-9)},
     files=("table2_runs.csv",),
 )
-PSO_TRAJECTORY = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+PSO_TRAJECTORY = Tolerance.statistical(
     "PSO fitness per iteration: one chaotic trajectory per run",
     files=("fig02_fitness.csv", "fig02_fitness.png"),
 )
-SOLVER_COUNTS = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+SOLVER_COUNTS = Tolerance.statistical(
     "solver counts: local solvers and the closed form exactly (deterministic from the "
     "seeded inputs), the PSO row within 2 of 20 runs; iteration medians within one",
     columns={
@@ -344,14 +336,8 @@ def draw_fig02(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
-    "fig02",
-    outputs=["fig02_fitness.png", "fig02_fitness.csv"],
-    config=[KEY],
-    tolerance=PSO_TRAJECTORY,
-    draws=[("fig02_fitness.png", "fig02_fitness.csv", draw_fig02)],
-)
-def fig02(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig02", "fig02_fitness", draw_fig02, config=[KEY], tolerance=PSO_TRAJECTORY)
+def fig02(config: dict) -> pd.DataFrame:
     """Fig. 2: best fitness F (mm) per iteration for the five cases, one seed, as printed vs improved."""
     m = mech(config)
     q = table2_inputs()
@@ -373,7 +359,7 @@ def fig02(config: dict, outdir: Path) -> list[Path]:
             )
     df = pd.concat(frames)
     df["threshold_mm"] = config[KEY]["pso"]["ftol_mm"]  # eq. (20)'s threshold, dashed in the figure
-    return write_and_draw(df, outdir / "fig02_fitness.csv", draw_fig02)
+    return df
 
 
 @artefact(
@@ -605,10 +591,7 @@ def _numerical_fk_claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
 
 #: failures of deterministic solvers over seeded poses: the sample counts exactly, the rates by
 #: the overlap of their 95 % intervals (a pose at a basin's edge may flip with one rounding)
-FAILURES = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+FAILURES = Tolerance.statistical(
     "failure counts over seeded poses: the number of poses exactly, the failure rates by the "
     "overlap of their 95 % intervals (a pose at a basin's edge may flip with one rounding)",
     columns={"poses": (0.0, 0.0)},

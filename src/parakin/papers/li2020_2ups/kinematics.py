@@ -11,8 +11,8 @@ import pandas as pd
 
 from parakin.claims import Claim, printed_value
 from parakin.config import rng
-from parakin.io import write_and_draw, write_table
-from parakin.papers.li2020_2ups.common import KEY, artefact, mech
+from parakin.io import write_table
+from parakin.papers.li2020_2ups.common import KEY, artefact, mech, table_and_figure
 from parakin.papers.li2020_2ups.symbolic import derivation, loop_closure_model
 from parakin.plot import (
     draw_mechanism,
@@ -40,19 +40,12 @@ def draw_fig01(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(ax.figure, path)
 
 
-@artefact(
-    "fig01",
-    outputs=["fig01_mechanism.png", "fig01_mechanism.csv"],
-    config=[KEY],
-    tolerance=DESCRIPTIVE,
-    draws=[("fig01_mechanism.png", "fig01_mechanism.csv", draw_fig01)],
-)
-def fig01(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig01", "fig01_mechanism", draw_fig01, config=[KEY], tolerance=DESCRIPTIVE)
+def fig01(config: dict) -> pd.DataFrame:
     """Fig. 1 redrawn from our model at FIG1_POSE, with the plotted coordinates as CSV."""
     m = mech(config)
     pose = np.array([np.deg2rad(FIG1_POSE[0]), np.deg2rad(FIG1_POSE[1]), FIG1_POSE[2] * 1e-3])
-    table = skeleton_table(m.skeleton(pose), frame_length=FIG1_FRAME_LENGTH)
-    return write_and_draw(table, outdir / "fig01_mechanism.csv", draw_fig01)
+    return skeleton_table(m.skeleton(pose), frame_length=FIG1_FRAME_LENGTH)
 
 
 @artefact(
@@ -178,14 +171,8 @@ def draw_parasitic(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
-    "parasitic",
-    outputs=["extra_parasitic.png", "extra_parasitic.csv"],
-    config=[KEY],
-    tolerance=ROUNDING,
-    draws=[("extra_parasitic.png", "extra_parasitic.csv", draw_parasitic)],
-)
-def parasitic(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("parasitic", "extra_parasitic", draw_parasitic, config=[KEY], tolerance=ROUNDING)
+def parasitic(config: dict) -> pd.DataFrame:
     """Extra: the parasitic translations X = rho sin(beta) and dZ = c - rho cos(beta) over the
     Table 1 box (beta, Y); gamma does not enter."""
     m = mech(config)
@@ -208,7 +195,7 @@ def parasitic(config: dict, outdir: Path) -> list[Path]:
             "c_mm": m.c * 1e3,
         }
     )
-    return write_and_draw(df, outdir / "extra_parasitic.csv", draw_parasitic)
+    return df
 
 
 def draw_fk_solutions(frame: pd.DataFrame, path: Path) -> Path:
@@ -227,14 +214,10 @@ def draw_fk_solutions(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
-    "fk_solutions",
-    outputs=["extra_fk_solutions.png", "extra_fk_solutions.csv"],
-    config=[KEY],
-    tolerance=EXACT,
-    draws=[("extra_fk_solutions.png", "extra_fk_solutions.csv", draw_fk_solutions)],
+@table_and_figure(
+    "fk_solutions", "extra_fk_solutions", draw_fk_solutions, config=[KEY], tolerance=EXACT
 )
-def solution_count(config: dict, outdir: Path) -> list[Path]:
+def solution_count(config: dict) -> pd.DataFrame:
     """Extra: number of real FK solutions (rho > 0 branch, all of beta, gamma) of the strokes of each
     pose of a (beta, gamma) grid, at three Y across Table 1's range; and how many lie in the box."""
     m = mech(config)
@@ -259,7 +242,7 @@ def solution_count(config: dict, outdir: Path) -> list[Path]:
             "n_in_box": nbox.ravel(),
         }
     )
-    return write_and_draw(df, outdir / "extra_fk_solutions.csv", draw_fk_solutions)
+    return df
 
 
 def draw_singularity_workspace(frame: pd.DataFrame, path: Path) -> Path:
@@ -310,20 +293,14 @@ def draw_singularity_workspace(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@table_and_figure(
     "singularity_workspace",
-    outputs=["extra_singularity_workspace.png", "extra_singularity_workspace.csv"],
+    "extra_singularity_workspace",
+    draw_singularity_workspace,
     config=[KEY],
     tolerance=EXACT,
-    draws=[
-        (
-            "extra_singularity_workspace.png",
-            "extra_singularity_workspace.csv",
-            draw_singularity_workspace,
-        )
-    ],
 )
-def singularity_workspace(config: dict, outdir: Path) -> list[Path]:
+def singularity_workspace(config: dict) -> pd.DataFrame:
     """Extra: det of the velocity Jacobian J (qdot = J posedot) over (beta, gamma) at three Y of
     Table 1's box, with the region where eq (19)'s stroke limits hold; cond(J) beside it.
     det J = 0 is a singularity (the pose cannot be held by the actuators)."""
@@ -349,9 +326,7 @@ def singularity_workspace(config: dict, outdir: Path) -> list[Path]:
             "within_eq19": inside.ravel(),
         }
     )
-    return write_and_draw(
-        df, outdir / "extra_singularity_workspace.csv", draw_singularity_workspace
-    )
+    return df
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:

@@ -673,147 +673,103 @@ def _spearman(x: np.ndarray, y: np.ndarray) -> float:
     return float(np.corrcoef(rx, ry)[0, 1])
 
 
+def _claim(
+    ref: pd.DataFrame, artefact: str, quantity: str, ours: float, unit: str, reason: str
+) -> Claim:
+    """The claim on the reference entry (``artefact``, ``quantity``) of this paper."""
+    return Claim(
+        KEY, artefact, quantity, printed_value(ref, artefact, quantity), ours, unit, reason=reason
+    )
+
+
 def _claims_steps(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     """C8 (rest), C9, C10 from the Fig. 10 / 11 CSVs; the paper's statements are qualitative, so the
     printed side is the statement's encoding (given in each reason)."""
     out: list[Claim] = []
     st = _step_stats(figdir)
     if st is not None:
-        s, common = st
-        w = s.pivot(index="R", columns="method", values="extra_steps")
-        tot = (w["nr"] + w["broyden"]).sort_values(ascending=False)
-        top3 = sorted(int(r) for r in tot.index[:3])
-        listing = ", ".join(f"R{r} {w.loc[r, 'nr']:.2f}/{w.loc[r, 'broyden']:.2f}" for r in w.index)
-        why = (
-            f"C9: mean extra steps tol 1e-6 -> 1e-9 (N-R/Broyden) over d <= {common:g} %: {listing}; d_max is "
-            "the same at both tolerances (the 1e-4 mm accuracy rule)"
-        )
-        out.append(
-            Claim(
-                KEY,
-                "text_s4.1",
-                "tol_sensitive.top3_in_R0R1R3",
-                printed_value(ref, "text_s4.1", "tol_sensitive.top3_in_R0R1R3"),
-                float(len(set(top3) & {0, 1, 3})),
-                "1",
-                reason=why
-                + f". Paper: R = 0, 1, 3 the most sensitive; ours the top 3 are R = {top3}",
-            )
-        )
-        out.append(
-            Claim(
-                KEY,
-                "text_s4.1",
-                "tol_sensitive.nr_most_R",
-                printed_value(ref, "text_s4.1", "tol_sensitive.nr_most_R"),
-                float(w["nr"].idxmax()),
-                "1",
-                reason="C9: the mode whose N-R steps grow most from tol 1e-6 to 1e-9 (paper: R = 0). N-R "
-                "converges quadratically, so ~0.5 extra steps in every mode",
-            )
-        )
-        rise = s.pivot(index="R", columns="method", values="rise")
-        both = rise["nr"] + rise["broyden"]
-        out.append(
-            Claim(
-                KEY,
-                "text_s4.1",
-                "least_initial_dependence_R",
-                printed_value(ref, "text_s4.1", "least_initial_dependence_R"),
-                float(both.idxmin()),
-                "1",
-                reason=(
-                    f"C8: the mode whose tol-1e-6 steps rise least from d = min to {common:g} % "
-                    "(N-R + Broyden): " + ", ".join(f"R{r} {v:g}" for r, v in both.items())
-                ),
-            )
-        )
-        out.append(
-            Claim(
-                KEY,
-                "text_s4.1",
-                "broyden.most_initial_dependence_R",
-                printed_value(ref, "text_s4.1", "broyden.most_initial_dependence_R"),
-                float(rise["broyden"].idxmax()),
-                "1",
-                reason=(
-                    "C8: the mode whose Broyden steps rise most over the same range: "
-                    + ", ".join(f"R{r} {v:g}" for r, v in rise["broyden"].items())
-                ),
-            )
-        )
+        out += _claims_tolerance(ref, *st)
     p = figdir / "fig10_steps_tol1e-6.csv"
     if p.exists():
-        df = pd.read_csv(p)
-        dec, near, rho, drops = {}, [], [], {}
-        for key in ("nr", "broyden"):
-            n_dec, drops[key] = 0, []
-            for r, g in df[(df["method"] == key) & (df["steps"] > 0)].groupby("R"):
-                g = g.sort_values("deviation_pct")
-                drop = np.diff(g["steps"].to_numpy()) < 0
-                n_dec += int(drop.sum())
-                drops[key] += [
-                    f"R{r}: {int(a)} -> {int(b)} steps at d = {d0:g} -> {d1:g} % (d_max {g['d_max_pct'].iloc[0]:g} %)"
-                    for a, b, d0, d1 in zip(
-                        g["steps"].to_numpy()[:-1][drop],
-                        g["steps"].to_numpy()[1:][drop],
-                        g["deviation_pct"].to_numpy()[:-1][drop],
-                        g["deviation_pct"].to_numpy()[1:][drop],
-                    )
-                ]
-                if key == "broyden":
-                    near += list(g["deviation_pct"].to_numpy()[1:][drop] / g["d_max_pct"].iloc[0])
-                    rho.append(_spearman(g["deviation_pct"].to_numpy(), g["steps"].to_numpy()))
-            dec[key] = n_dec
-        base = "C10: d-grid points where the tol-1e-6 step count drops as d grows, summed over the 6 modes"
-        out.append(
-            Claim(
-                KEY,
-                "fig10",
-                "nr.step_drops",
-                printed_value(ref, "fig10", "nr.step_drops"),
-                float(dec["nr"]),
-                "1",
-                reason=base + " (paper: N-R 'varies smoothly', read as 0 drops; counts compared "
-                "exactly): " + (", ".join(drops["nr"]) or "none"),
-            )
-        )
-        out.append(
-            Claim(
-                KEY,
-                "fig10",
-                "broyden.step_drops",
-                printed_value(ref, "fig10", "broyden.step_drops"),
-                float(dec["broyden"]),
-                "1",
-                reason=base + " (paper: Broyden 'fluctuates', read as >= 1 drop)",
-            )
-        )
-        frac = float(np.mean(np.asarray(near) >= 0.5)) if near else float("nan")
-        out.append(
-            Claim(
-                KEY,
-                "fig10",
-                "broyden.drops_near_dmax",
-                printed_value(ref, "fig10", "broyden.drops_near_dmax"),
-                frac,
-                "1",
-                reason="C10: share of Broyden's drops at d >= d_max/2 (paper: fluctuations 'near d_max')",
-            )
-        )
-        out.append(
-            Claim(
-                KEY,
-                "fig10",
-                "broyden.trend_spearman",
-                printed_value(ref, "fig10", "broyden.trend_spearman"),
-                float(min(rho)),
-                "1",
-                reason="C10: smallest Spearman rank correlation of Broyden's steps with d over the modes "
-                "(paper: 'a rising trend')",
-            )
-        )
+        out += _claims_step_drops(ref, pd.read_csv(p))
     return out
+
+
+def _claims_tolerance(ref: pd.DataFrame, s: pd.DataFrame, common: float) -> list[Claim]:
+    """C8, C9: which modes' step counts react most to the tolerance and to the deviation ``d``
+    (``s`` and ``common`` from :func:`_step_stats`)."""
+    w = s.pivot(index="R", columns="method", values="extra_steps")
+    tot = (w["nr"] + w["broyden"]).sort_values(ascending=False)
+    top3 = sorted(int(r) for r in tot.index[:3])
+    listing = ", ".join(f"R{r} {w.loc[r, 'nr']:.2f}/{w.loc[r, 'broyden']:.2f}" for r in w.index)
+    why = (
+        f"C9: mean extra steps tol 1e-6 -> 1e-9 (N-R/Broyden) over d <= {common:g} %: {listing}; d_max is "
+        "the same at both tolerances (the 1e-4 mm accuracy rule)"
+    )
+    rise = s.pivot(index="R", columns="method", values="rise")
+    both = rise["nr"] + rise["broyden"]
+    sec = "text_s4.1"
+    return [
+        _claim(ref, sec, "tol_sensitive.top3_in_R0R1R3", float(len(set(top3) & {0, 1, 3})), "1",
+               why + f". Paper: R = 0, 1, 3 the most sensitive; ours the top 3 are R = {top3}"),
+        _claim(ref, sec, "tol_sensitive.nr_most_R", float(w["nr"].idxmax()), "1",
+               "C9: the mode whose N-R steps grow most from tol 1e-6 to 1e-9 (paper: R = 0). N-R "
+               "converges quadratically, so ~0.5 extra steps in every mode"),
+        _claim(ref, sec, "least_initial_dependence_R", float(both.idxmin()), "1",
+               f"C8: the mode whose tol-1e-6 steps rise least from d = min to {common:g} % "
+               "(N-R + Broyden): " + ", ".join(f"R{r} {v:g}" for r, v in both.items())),
+        _claim(ref, sec, "broyden.most_initial_dependence_R", float(rise["broyden"].idxmax()), "1",
+               "C8: the mode whose Broyden steps rise most over the same range: "
+               + ", ".join(f"R{r} {v:g}" for r, v in rise["broyden"].items())),
+    ]  # fmt: skip
+
+
+def _step_drops(df: pd.DataFrame) -> tuple[dict[str, int], dict[str, list[str]], list, list]:
+    """Where the tol-1e-6 step count of Fig. 10's table ``df`` drops as d grows: the number of
+    drops per method, their descriptions, and for Broyden the drops' d / d_max and the Spearman
+    correlation of steps with d per mode."""
+    dec, near, rho, drops = {}, [], [], {}
+    for key in ("nr", "broyden"):
+        n_dec, drops[key] = 0, []
+        for r, g in df[(df["method"] == key) & (df["steps"] > 0)].groupby("R"):
+            g = g.sort_values("deviation_pct")
+            drop = np.diff(g["steps"].to_numpy()) < 0
+            n_dec += int(drop.sum())
+            drops[key] += [
+                f"R{r}: {int(a)} -> {int(b)} steps at d = {d0:g} -> {d1:g} % (d_max {g['d_max_pct'].iloc[0]:g} %)"
+                for a, b, d0, d1 in zip(
+                    g["steps"].to_numpy()[:-1][drop],
+                    g["steps"].to_numpy()[1:][drop],
+                    g["deviation_pct"].to_numpy()[:-1][drop],
+                    g["deviation_pct"].to_numpy()[1:][drop],
+                )
+            ]
+            if key == "broyden":
+                near += list(g["deviation_pct"].to_numpy()[1:][drop] / g["d_max_pct"].iloc[0])
+                rho.append(_spearman(g["deviation_pct"].to_numpy(), g["steps"].to_numpy()))
+        dec[key] = n_dec
+    return dec, drops, near, rho
+
+
+def _claims_step_drops(ref: pd.DataFrame, df: pd.DataFrame) -> list[Claim]:
+    """C10: N-R's steps vary smoothly with d, Broyden's fluctuate near d_max on a rising trend."""
+    dec, drops, near, rho = _step_drops(df)
+    base = (
+        "C10: d-grid points where the tol-1e-6 step count drops as d grows, summed over the 6 modes"
+    )
+    frac = float(np.mean(np.asarray(near) >= 0.5)) if near else float("nan")
+    return [
+        _claim(ref, "fig10", "nr.step_drops", float(dec["nr"]), "1",
+               base + " (paper: N-R 'varies smoothly', read as 0 drops; counts compared "
+               "exactly): " + (", ".join(drops["nr"]) or "none")),
+        _claim(ref, "fig10", "broyden.step_drops", float(dec["broyden"]), "1",
+               base + " (paper: Broyden 'fluctuates', read as >= 1 drop)"),
+        _claim(ref, "fig10", "broyden.drops_near_dmax", frac, "1",
+               "C10: share of Broyden's drops at d >= d_max/2 (paper: fluctuations 'near d_max')"),
+        _claim(ref, "fig10", "broyden.trend_spearman", float(min(rho)), "1",
+               "C10: smallest Spearman rank correlation of Broyden's steps with d over the modes "
+               "(paper: 'a rising trend')"),
+    ]  # fmt: skip
 
 
 def _claims_structures(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
@@ -911,157 +867,104 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     p = figdir / "table6.csv"
     if p.exists():
         t = pd.read_csv(p)
-        why = (
-            "C14: eq. (33) and Fig. 9 lost; P = (max-min)/mean of d_max over the structures, nested passive sets "
-            "(ASSUMED); Broyden = the paper's inverse rank-1 update (31)-(32) from H0 = pinv(J) in every "
-            "mode (docs/ye_stewart12.md#s5.6)"
-        )
-        for _, r in t.iloc[:-1].iterrows():
-            for key in PAPER_METHODS:
-                out.append(
-                    Claim(
-                        KEY,
-                        "table6",
-                        f"R{int(r['R'])}.{key}",
-                        printed_value(ref, "table6", f"R{int(r['R'])}.{key}"),
-                        float(r[f"{key}_P"]),
-                        "1",
-                        reason=why + (_direct(r, "P") if key == "broyden" else ""),
-                    )
-                )
-        comp = t.iloc[-1]
-        for key in PAPER_METHODS:
-            out.append(
-                Claim(
-                    KEY,
-                    "table6",
-                    f"composite.{key}",
-                    printed_value(ref, "table6", f"composite.{key}"),
-                    float(comp[f"{key}_P"]),
-                    "1",
-                    reason=why + (_direct(comp, "P") if key == "broyden" else ""),
-                )
-            )
-        out.append(
-            Claim(
-                KEY,
-                "text_s4.2",
-                "composite_ratio",
-                printed_value(ref, "text_s4.2", "composite_ratio"),
-                float(comp["nr_P"] / comp["broyden_P"]),
-                "1",
-                reason="C14: composite N-R / Broyden (the paper's inverse update)"
-                + (
-                    f"; with the direct update (beyond the paper) "
-                    f"{comp['nr_P'] / comp['broyden_direct_P']:.3g}"
-                    if "broyden_direct_P" in comp
-                    else ""
-                ),
-            )
-        )
-        for r in (5, 2):
-            row = t[t["R"] == r].iloc[0]
-            for key in PAPER_METHODS:
-                out.append(
-                    Claim(
-                        KEY,
-                        "text_s4.2",
-                        f"width.R{r}.{key}",
-                        printed_value(ref, "text_s4.2", f"width.R{r}.{key}"),
-                        float(row[f"{key}_width_pct"]),
-                        "%",
-                        reason="C12: max - min of d_max over the structures"
-                        + (
-                            "; Broyden = the paper's inverse update" + _direct(row, "width_pct")
-                            if key == "broyden"
-                            else ""
-                        ),
-                    )
-                )
-        modes6 = t.iloc[:-1]
-        best = _best_R(modes6, "P", "broyden", smallest=True)
-        out.append(
-            Claim(
-                KEY,
-                "conclusion",
-                "best_R.realtime_robust",
-                printed_value(ref, "conclusion", "best_R.realtime_robust"),
-                float(best),
-                "1",
-                reason="C16: the mode with the smallest P (N-R + the paper's inverse Broyden)"
-                + _direct_best(modes6, "P", smallest=True),
-            )
-        )
-        wid = _best_R(modes6, "width_pct", "broyden", smallest=False)
-        out.append(
-            Claim(
-                KEY,
-                "conclusion",
-                "best_R.structure_sensitive",
-                printed_value(ref, "conclusion", "best_R.structure_sensitive"),
-                float(wid),
-                "1",
-                reason="C16: the mode with the widest d_max interval (N-R + the paper's inverse "
-                "Broyden)" + _direct_best(modes6, "width_pct", smallest=False),
-            )
-        )
+        out += _claims_table6(ref, t) + _claims_best_modes(ref, t.iloc[:-1])
     p = figdir / "fig10_steps_tol1e-6.csv"
     if p.exists():
-        df = _paper(pd.read_csv(p))
-        common = df.groupby("R")["d_max_pct"].min().min()
-        mean = df[(df["deviation_pct"] <= common) & (df["steps"] > 0)].groupby("R")["steps"].mean()
-        out.append(
-            Claim(
-                KEY,
-                "text_s4.1",
-                "fewest_steps_R",
-                printed_value(ref, "text_s4.1", "fewest_steps_R"),
-                float(mean.idxmin()),
-                "1",
-                reason=f"C8: mode with the fewest mean steps (N-R and the paper's inverse Broyden) "
-                f"over d <= {common:g} %, tol 1e-6",
-            )
-        )
+        out.append(_claim_fewest_steps(ref, _paper(pd.read_csv(p))))
     p = figdir / "fig12_dmax_structures.csv"
     if p.exists():
-        full = pd.read_csv(p)
-        df = _paper(full)
-        mean = df.groupby("R")["d_max_pct"].mean()
-        direct = full[full["method"].isin(["nr", "broyden_direct"])]
-        out.append(
-            Claim(
-                KEY,
-                "conclusion",
-                "best_R.largest_dmax",
-                printed_value(ref, "conclusion", "best_R.largest_dmax"),
-                float(mean.idxmax()),
-                "1",
-                reason="C16: the mode with the largest mean d_max over structures (N-R and the "
-                "paper's inverse Broyden)"
-                + (
-                    f"; with the direct Broyden (beyond the paper): R = "
-                    f"{int(direct.groupby('R')['d_max_pct'].mean().idxmax())}"
-                    if (direct["method"] == "broyden_direct").any()
-                    else ""
-                ),
-            )
-        )
-        s = df[(df["R"] == 0) & (df["method"] == "nr")].groupby("L_mm")["d_max_pct"].mean()
-        out.append(
-            Claim(
-                KEY,
-                "text_s4.2",
-                "bump.R0.L",
-                printed_value(ref, "text_s4.2", "bump.R0.L"),
-                float(s.idxmax()),
-                "mm",
-                reason="C13: L of the largest mean d_max (over n), R = 0, N-R; +-1 grid step",
-            )
-        )
+        out += _claims_dmax(ref, pd.read_csv(p))
     out += (
         _claims_steps(figdir, ref) + _claims_structures(figdir, ref) + _claims_odd_even(figdir, ref)
     )
     return [replace(c, basis="; ".join(_assumed(c))) for c in out]
+
+
+def _claims_table6(ref: pd.DataFrame, t: pd.DataFrame) -> list[Claim]:
+    """C12, C14: Table 6's P per mode and composite, the composite ratio, the widths of R5, R2."""
+    why = (
+        "C14: eq. (33) and Fig. 9 lost; P = (max-min)/mean of d_max over the structures, nested passive sets "
+        "(ASSUMED); Broyden = the paper's inverse rank-1 update (31)-(32) from H0 = pinv(J) in every "
+        "mode (docs/ye_stewart12.md#s5.6)"
+    )
+    out: list[Claim] = []
+    for _, r in t.iloc[:-1].iterrows():
+        for key in PAPER_METHODS:
+            reason = why + (_direct(r, "P") if key == "broyden" else "")
+            out.append(
+                _claim(ref, "table6", f"R{int(r['R'])}.{key}", float(r[f"{key}_P"]), "1", reason)
+            )
+    comp = t.iloc[-1]
+    for key in PAPER_METHODS:
+        reason = why + (_direct(comp, "P") if key == "broyden" else "")
+        out.append(_claim(ref, "table6", f"composite.{key}", float(comp[f"{key}_P"]), "1", reason))
+    direct_ratio = (
+        f"; with the direct update (beyond the paper) {comp['nr_P'] / comp['broyden_direct_P']:.3g}"
+        if "broyden_direct_P" in comp
+        else ""
+    )
+    out.append(
+        _claim(ref, "text_s4.2", "composite_ratio", float(comp["nr_P"] / comp["broyden_P"]), "1",
+               "C14: composite N-R / Broyden (the paper's inverse update)" + direct_ratio)
+    )  # fmt: skip
+    for r in (5, 2):
+        row = t[t["R"] == r].iloc[0]
+        for key in PAPER_METHODS:
+            reason = "C12: max - min of d_max over the structures" + (
+                "; Broyden = the paper's inverse update" + _direct(row, "width_pct")
+                if key == "broyden"
+                else ""
+            )
+            ours = float(row[f"{key}_width_pct"])
+            out.append(_claim(ref, "text_s4.2", f"width.R{r}.{key}", ours, "%", reason))
+    return out
+
+
+def _claims_best_modes(ref: pd.DataFrame, modes6: pd.DataFrame) -> list[Claim]:
+    """C16: the modes of the smallest P and of the widest d_max interval (Table 6 without the
+    composite row)."""
+    best = _best_R(modes6, "P", "broyden", smallest=True)
+    wid = _best_R(modes6, "width_pct", "broyden", smallest=False)
+    return [
+        _claim(ref, "conclusion", "best_R.realtime_robust", float(best), "1",
+               "C16: the mode with the smallest P (N-R + the paper's inverse Broyden)"
+               + _direct_best(modes6, "P", smallest=True)),
+        _claim(ref, "conclusion", "best_R.structure_sensitive", float(wid), "1",
+               "C16: the mode with the widest d_max interval (N-R + the paper's inverse "
+               "Broyden)" + _direct_best(modes6, "width_pct", smallest=False)),
+    ]  # fmt: skip
+
+
+def _claim_fewest_steps(ref: pd.DataFrame, df: pd.DataFrame) -> Claim:
+    """C8: the mode with the fewest mean steps over the deviations every mode reaches."""
+    common = df.groupby("R")["d_max_pct"].min().min()
+    mean = df[(df["deviation_pct"] <= common) & (df["steps"] > 0)].groupby("R")["steps"].mean()
+    return _claim(
+        ref, "text_s4.1", "fewest_steps_R", float(mean.idxmin()), "1",
+        f"C8: mode with the fewest mean steps (N-R and the paper's inverse Broyden) "
+        f"over d <= {common:g} %, tol 1e-6",
+    )  # fmt: skip
+
+
+def _claims_dmax(ref: pd.DataFrame, full: pd.DataFrame) -> list[Claim]:
+    """C16 (largest mean d_max) and C13 (the bump of R = 0 in L) from Fig. 12's table ``full``."""
+    df = _paper(full)
+    mean = df.groupby("R")["d_max_pct"].mean()
+    direct = full[full["method"].isin(["nr", "broyden_direct"])]
+    beyond = (
+        f"; with the direct Broyden (beyond the paper): R = "
+        f"{int(direct.groupby('R')['d_max_pct'].mean().idxmax())}"
+        if (direct["method"] == "broyden_direct").any()
+        else ""
+    )
+    s = df[(df["R"] == 0) & (df["method"] == "nr")].groupby("L_mm")["d_max_pct"].mean()
+    return [
+        _claim(ref, "conclusion", "best_R.largest_dmax", float(mean.idxmax()), "1",
+               "C16: the mode with the largest mean d_max over structures (N-R and the "
+               "paper's inverse Broyden)" + beyond),
+        _claim(ref, "text_s4.2", "bump.R0.L", float(s.idxmax()), "mm",
+               "C13: L of the largest mean d_max (over n), R = 0, N-R; +-1 grid step"),
+    ]  # fmt: skip
 
 
 #: what every drive-mode result rests on, and what P-based ones rest on besides (both lost)

@@ -26,10 +26,10 @@ import pandas as pd
 
 from parakin.claims import Claim, printed_value
 from parakin.errors import ConfigError
-from parakin.io import write_and_draw, write_table
+from parakin.io import write_table
 from parakin.mechanisms import P3P4S
 from parakin.mechanisms import p3p4s_dynamics as dyn
-from parakin.papers.zhao2017_3p4s.common import KEY, artefact
+from parakin.papers.zhao2017_3p4s.common import KEY, artefact, table_and_figure
 from parakin.registry import ROUNDING
 
 #: tolerances stated in the figures and tested (relative to the peak of the analytic curve)
@@ -428,17 +428,16 @@ def draw_fig05(frame: pd.DataFrame, path: Path) -> Path:
     )
 
 
-@artefact(
+@table_and_figure(
     "fig05",
-    outputs=["fig05_drive_velocities.png", "fig05_drive_velocities.csv"],
+    "fig05_drive_velocities",
+    draw_fig05,
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
-    draws=[("fig05_drive_velocities.png", "fig05_drive_velocities.csv", draw_fig05)],
 )
-def fig05(config: dict, outdir: Path) -> list[Path]:
+def fig05(config: dict) -> pd.DataFrame:
     """Fig. 5: drive velocities ``qdot_i(t)`` by eq (8)."""
-    data = _drive_series_table(config, "qdot", "qdot{i}_m_s")
-    return write_and_draw(data, outdir / "fig05_drive_velocities.csv", draw_fig05)
+    return _drive_series_table(config, "qdot", "qdot{i}_m_s")
 
 
 def draw_fig06(frame: pd.DataFrame, path: Path) -> Path:
@@ -452,17 +451,16 @@ def draw_fig06(frame: pd.DataFrame, path: Path) -> Path:
     )
 
 
-@artefact(
+@table_and_figure(
     "fig06",
-    outputs=["fig06_drive_accelerations.png", "fig06_drive_accelerations.csv"],
+    "fig06_drive_accelerations",
+    draw_fig06,
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
-    draws=[("fig06_drive_accelerations.png", "fig06_drive_accelerations.csv", draw_fig06)],
 )
-def fig06(config: dict, outdir: Path) -> list[Path]:
+def fig06(config: dict) -> pd.DataFrame:
     """Fig. 6: drive accelerations ``qddot_i(t)`` by eq (13) with the corrected H."""
-    data = _drive_series_table(config, "qddot", "qddot{i}_m_s2")
-    return write_and_draw(data, outdir / "fig06_drive_accelerations.csv", draw_fig06)
+    return _drive_series_table(config, "qddot", "qddot{i}_m_s2")
 
 
 def draw_fig07(frame: pd.DataFrame, path: Path) -> Path:
@@ -485,14 +483,14 @@ def draw_fig07(frame: pd.DataFrame, path: Path) -> Path:
     )  # fmt: skip
 
 
-@artefact(
+@table_and_figure(
     "fig07",
-    outputs=["fig07_velocity_check.png", "fig07_velocity_check.csv"],
+    "fig07_velocity_check",
+    draw_fig07,
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
-    draws=[("fig07_velocity_check.png", "fig07_velocity_check.csv", draw_fig07)],
 )
-def fig07(config: dict, outdir: Path) -> list[Path]:
+def fig07(config: dict) -> pd.DataFrame:
     """Fig. 7 (the paper: ADAMS): eq (8) against IK finite differences and MuJoCo."""
     key = _key(config)
     tr = _trajectory(key)
@@ -506,8 +504,7 @@ def fig07(config: dict, outdir: Path) -> list[Path]:
     for i in range(3):
         data[f"diff{i + 1}_fd_m_s"] = tr["qdot_fd"][:, i] - kin.qdot[:, i]
         data[f"diff{i + 1}_mujoco_m_s"] = mj.qdot[:, i] - kin.qdot[:, i]
-    data = data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
-    return write_and_draw(data, outdir / "fig07_velocity_check.csv", draw_fig07)
+    return data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
 
 
 def draw_fig08(frame: pd.DataFrame, path: Path) -> Path:
@@ -544,14 +541,14 @@ FD_ACCELERATION = ROUNDING.but(
 )
 
 
-@artefact(
+@table_and_figure(
     "fig08",
-    outputs=["fig08_acceleration_check.png", "fig08_acceleration_check.csv"],
+    "fig08_acceleration_check",
+    draw_fig08,
     config=["zhao2017_3p4s.dynamics"],
     tolerance=FD_ACCELERATION,
-    draws=[("fig08_acceleration_check.png", "fig08_acceleration_check.csv", draw_fig08)],
 )
-def fig08(config: dict, outdir: Path) -> list[Path]:
+def fig08(config: dict) -> pd.DataFrame:
     """Fig. 8 (the paper: ADAMS): eq (13) against IK finite differences and MuJoCo; the printed
     H (no 1/l) is shown against the same finite differences."""
     key = _key(config)
@@ -568,8 +565,7 @@ def fig08(config: dict, outdir: Path) -> list[Path]:
         data[f"diff{i + 1}_fd_m_s2"] = tr["qddot_fd"][:, i] - kin.qddot[:, i]
         data[f"diff{i + 1}_mujoco_m_s2"] = mj.qddot[:, i] - kin.qddot[:, i]
         data[f"diff{i + 1}_printed_h_m_s2"] = tr["qddot_paper"][:, i] - kin.qddot[:, i]
-    data = data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
-    return write_and_draw(data, outdir / "fig08_acceleration_check.csv", draw_fig08)
+    return data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
 
 
 # ---------------------------------------------------------------------------------------- Figs 9-10
@@ -595,14 +591,14 @@ def draw_fig09(frame: pd.DataFrame, path: Path) -> Path:
     return _series_figure(t, f, r"motor force $f_i$ (N)", title, path, extra)
 
 
-@artefact(
+@table_and_figure(
     "fig09",
-    outputs=["fig09_driving_forces.png", "fig09_driving_forces.csv"],
+    "fig09_driving_forces",
+    draw_fig09,
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
-    draws=[("fig09_driving_forces.png", "fig09_driving_forces.csv", draw_fig09)],
 )
-def fig09(config: dict, outdir: Path) -> list[Path]:
+def fig09(config: dict) -> pd.DataFrame:
     """Fig. 9: motor forces along +m_i by the corrected Newton-Euler / virtual-power model."""
     key = _key(config)
     tr = _trajectory(key)
@@ -621,7 +617,7 @@ def fig09(config: dict, outdir: Path) -> list[Path]:
             "g_m_s2": -params.g[2],
         }
     )
-    return write_and_draw(data, outdir / "fig09_driving_forces.csv", draw_fig09)
+    return data
 
 
 def draw_fig10(frame: pd.DataFrame, path: Path) -> Path:
@@ -641,14 +637,14 @@ def draw_fig10(frame: pd.DataFrame, path: Path) -> Path:
     )  # fmt: skip
 
 
-@artefact(
+@table_and_figure(
     "fig10",
-    outputs=["fig10_mujoco_forces.png", "fig10_mujoco_forces.csv"],
+    "fig10_mujoco_forces",
+    draw_fig10,
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
-    draws=[("fig10_mujoco_forces.png", "fig10_mujoco_forces.csv", draw_fig10)],
 )
-def fig10(config: dict, outdir: Path) -> list[Path]:
+def fig10(config: dict) -> pd.DataFrame:
     """Fig. 10 (the paper: ADAMS): our forces against MuJoCo (equivalent-rod and 6-rod models)."""
     key = _key(config)
     tr = _trajectory(key)
@@ -668,8 +664,7 @@ def fig10(config: dict, outdir: Path) -> list[Path]:
         data[f"diff{i + 1}_printed_N"] = printed[:, i] - f[:, i]
     data["mujoco_loop_error_m"] = np.maximum(eq.loop_error, par.loop_error)
     data["mujoco_lstsq_residual"] = np.maximum(eq.lstsq_residual, par.lstsq_residual)
-    data = data.assign(**_motion_columns(tr["motion"]))
-    return write_and_draw(data, outdir / "fig10_mujoco_forces.csv", draw_fig10)
+    return data.assign(**_motion_columns(tr["motion"]))
 
 
 # ---------------------------------------------------------------------------------------- extras
@@ -727,14 +722,14 @@ def draw_power_balance(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@table_and_figure(
     "power_balance",
-    outputs=["extra_power_balance.png", "extra_power_balance.csv"],
+    "extra_power_balance",
+    draw_power_balance,
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
-    draws=[("extra_power_balance.png", "extra_power_balance.csv", draw_power_balance)],
 )
-def power_balance(config: dict, outdir: Path) -> list[Path]:
+def power_balance(config: dict) -> pd.DataFrame:
     """extra_power_balance: ``sum f_i qdot_i`` vs ``dE/dt`` (E from positions and velocities of
     every body, independent of the Newton-Euler code), for ours and each printed variant."""
     key = _key(config)
@@ -745,8 +740,7 @@ def power_balance(config: dict, outdir: Path) -> list[Path]:
     )
     for label, _, _, _ in VARIANTS[1:]:
         data[f"residual_{_slug(label)}_W"] = _balance(key, label).residual
-    data = data.assign(**_motion_columns(tr["motion"]))
-    return write_and_draw(data, outdir / "extra_power_balance.csv", draw_power_balance)
+    return data.assign(**_motion_columns(tr["motion"]))
 
 
 def _slug(label: str) -> str:
@@ -911,22 +905,21 @@ def draw_dynamics_printed(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@table_and_figure(
     "dynamics_printed",
-    outputs=["extra_dynamics_printed.png", "extra_dynamics_printed.csv"],
+    "extra_dynamics_printed",
+    draw_dynamics_printed,
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
-    draws=[("extra_dynamics_printed.png", "extra_dynamics_printed.csv", draw_dynamics_printed)],
 )
-def dynamics_printed(config: dict, outdir: Path) -> list[Path]:
+def dynamics_printed(config: dict) -> pd.DataFrame:
     """extra_dynamics_printed: Fig. 9 as the printed equations give it, and each slip's share."""
     tr = _trajectory(_key(config))
     data = pd.DataFrame({"t_s": tr["t"]})
     for label, _, _, _ in VARIANTS:
         for i in range(3):
             data[f"f{i + 1}_{_slug(label)}_N"] = tr["forces"][label][:, i]
-    data = data.assign(**_motion_columns(tr["motion"]))
-    return write_and_draw(data, outdir / "extra_dynamics_printed.csv", draw_dynamics_printed)
+    return data.assign(**_motion_columns(tr["motion"]))
 
 
 #: the open-loop MuJoCo runs of extra_mujoco_tracking: (variant, rod model), in drawing order
@@ -998,14 +991,14 @@ def draw_mujoco_tracking(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@table_and_figure(
     "mujoco_tracking",
-    outputs=["extra_mujoco_tracking.png", "extra_mujoco_tracking.csv"],
+    "extra_mujoco_tracking",
+    draw_mujoco_tracking,
     config=["zhao2017_3p4s.dynamics"],
     tolerance=ROUNDING,
-    draws=[("extra_mujoco_tracking.png", "extra_mujoco_tracking.csv", draw_mujoco_tracking)],
 )
-def mujoco_tracking(config: dict, outdir: Path) -> list[Path]:
+def mujoco_tracking(config: dict) -> pd.DataFrame:
     """extra_mujoco_tracking: MuJoCo's forward dynamics driven open loop by each variant's forces;
     how far the platform strays from the motion law (ours: both MuJoCo models)."""
     key = _key(config)
@@ -1017,8 +1010,7 @@ def mujoco_tracking(config: dict, outdir: Path) -> list[Path]:
         results[("corrected (ours)", "equivalent")].loop_error,
         results[("corrected (ours)", "parallelogram")].loop_error,
     )
-    data = data.assign(**_motion_columns(_trajectory(key)["motion"]))
-    return write_and_draw(data, outdir / "extra_mujoco_tracking.csv", draw_mujoco_tracking)
+    return data.assign(**_motion_columns(_trajectory(key)["motion"]))
 
 
 # ---------------------------------------------------------------------------------------- report

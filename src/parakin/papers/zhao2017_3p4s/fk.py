@@ -30,10 +30,7 @@ from parakin.workspace import sample_reachable
 
 #: LM training follows another trajectory once a BLAS kernel rounds one product differently; the
 #: trained network's test error is stable to within a factor of two, its weights and log are not
-TRAINING = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+TRAINING = Tolerance.statistical(
     "network training: the per-epoch log is one chaotic trajectory (not compared); the "
     "test error of the trained network is compared within a factor of two",
     columns={
@@ -56,10 +53,7 @@ HYBRID = ITERATIVE.but(
     files=("table2_iterates.csv", "table2_iterates.md"),
 )
 #: solver statistics over seeded random inputs; PSO rows are chaotic searches
-SOLVER_STATS = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+SOLVER_STATS = Tolerance.statistical(
     "solver statistics: success rates within 5 points (PSO is a chaotic search), "
     "median iterations within one; errors at round-off level and extremes not compared",
     columns={"n_accuracy": (0.0, 0.0), "success_rate": (0.0, 0.05), "median_nit": (0.0, 1.0)},
@@ -261,10 +255,7 @@ def _training_figure(log: pd.DataFrame, outdir: Path) -> list[Path]:
 #: two; each run's curve is one chaotic trajectory (another BLAS kernel, another number of epochs)
 #: and is not compared, nor is how many runs converged (a run near the rule's threshold may stop
 #: an epoch window later on another machine)
-CONVERGENCE = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+CONVERGENCE = Tolerance.statistical(
     "network training to convergence: the per-epoch curves are chaotic trajectories (not "
     "compared); per region the set-up, the overlap of the 99 % confidence intervals of the "
     "median test error over the restarts and the median p95 and E_3 within a factor of two are",
@@ -749,10 +740,7 @@ def fk_benchmark(config: dict, outdir: Path) -> list[Path]:
 #: failures of a deterministic solver over seeded poses: a pose near a basin's edge may flip with
 #: the rounding of one step, so the failure rates are compared by the overlap of their 95 %
 #: (Clopper-Pearson) intervals; the sample counts exactly
-FAILURES = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+FAILURES = Tolerance.statistical(
     "failure counts over seeded poses: the number of poses exactly, the failure rates by the "
     "overlap of their 95 % intervals (a pose at a basin's edge may flip with one rounding)",
     columns={"poses": (0.0, 0.0)},
@@ -876,10 +864,7 @@ def qn_failures(config: dict, outdir: Path) -> list[Path]:
 # ---------------------------------------------------------------------------------- speed per solve
 #: iteration counts and evaluation counts are deterministic from seeded inputs (a step at the
 #: threshold may add one); the times are this machine's and never compared
-SPEED = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+SPEED = Tolerance.statistical(
     "per-solve speed: the median iterations within one; times (this machine, this load) not "
     "compared, their ratio decides only where it is far from 1",
     columns={"inputs": (0.0, 0.0), "median_nit": (0.0, 1.0)},

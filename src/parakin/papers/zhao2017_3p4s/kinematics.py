@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -12,7 +13,7 @@ from scipy.optimize import least_squares, minimize
 from parakin.claims import Claim, load_reference, printed_value
 from parakin.io import write_and_draw, write_table
 from parakin.mechanisms import P3P4S
-from parakin.papers.zhao2017_3p4s.common import KEY, artefact
+from parakin.papers.zhao2017_3p4s.common import KEY, artefact, table_and_figure
 from parakin.registry import DESCRIPTIVE, ROUNDING
 
 HALF_DIGIT = 0.005  # Table 1 prints strokes to 0.01 m: half a unit of the last digit
@@ -339,26 +340,16 @@ def _mechanism_table() -> pd.DataFrame:
     return skeleton_table(mech.skeleton(mech.home()))
 
 
-@artefact(
-    "fig01",
-    outputs=["fig01_mechanism.png", "fig01_mechanism.csv"],
-    tolerance=DESCRIPTIVE,
-    draws=[("fig01_mechanism.png", "fig01_mechanism.csv", draw_fig01)],
-)
-def fig01(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig01", "fig01_mechanism", draw_fig01, tolerance=DESCRIPTIVE)
+def fig01(config: dict) -> pd.DataFrame:
     """Fig. 1: the 3-P(4S) mechanism (the paper shows a CAD model; we draw our kinematic model)."""
-    return write_and_draw(_mechanism_table(), outdir / "fig01_mechanism.csv", draw_fig01)
+    return _mechanism_table()
 
 
-@artefact(
-    "fig02",
-    outputs=["fig02_sketch.png", "fig02_sketch.csv"],
-    tolerance=DESCRIPTIVE,
-    draws=[("fig02_sketch.png", "fig02_sketch.csv", draw_fig02)],
-)
-def fig02(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig02", "fig02_sketch", draw_fig02, tolerance=DESCRIPTIVE)
+def fig02(config: dict) -> pd.DataFrame:
     """Fig. 2: sketch with the frames {O}, {P}, {u_i} and the points u_i, c_i, d_i of §1.1."""
-    return write_and_draw(_mechanism_table(), outdir / "fig02_sketch.csv", draw_fig02)
+    return _mechanism_table()
 
 
 # ---------------------------------------------------------------------------------------- Fig. 4
@@ -460,19 +451,20 @@ def _arrow(ax, r, size: float, color: str, lw: float, ls="-") -> None:
     )
 
 
-def draw_fig04(frame: pd.DataFrame, path: Path) -> Path:
-    """Fig. 4 from its CSV: (a) limb 1 in its vertical plane with the vector loop of eq. (6) and
-    the unit vectors e_1, m_1, n_1, s_1; (b) its 4S parallelogram face-on with the equivalent rod
-    joining the midpoints c_1, d_1 of the short edges."""
-    from parakin.plot import KIND_STYLES, new_figure, save_figure, use_style
+#: the loop vectors of Fig. 4 (a) in mathtext
+_FIG04_MATHNAME = {
+    "r_b e_1": r"$r_b\,\mathbf{e}_1$",
+    "q_1 m_1": r"$q_1\mathbf{m}_1$",
+    "l n_1": r"$l\,\mathbf{n}_1$",
+    "r_a cos(theta) s_1": r"$r_a\cos\theta\,\mathbf{s}_1$",
+    "r": r"$\mathbf{r}$",
+}
 
-    mathname = {
-        "r_b e_1": r"$r_b\,\mathbf{e}_1$",
-        "q_1 m_1": r"$q_1\mathbf{m}_1$",
-        "l n_1": r"$l\,\mathbf{n}_1$",
-        "r_a cos(theta) s_1": r"$r_a\cos\theta\,\mathbf{s}_1$",
-        "r": r"$\mathbf{r}$",
-    }
+
+def _fig04_styles() -> tuple[dict[str, dict[str, Any]], dict[str, dict[str, Any]]]:
+    """The line styles of Fig. 4's segments and loop vectors, by kind (from the plot's kinds)."""
+    from parakin.plot import KIND_STYLES
+
     seg_style = {
         "base": {"color": KIND_STYLES["base"]["color"], "lw": 2.0, "label": "base (edge-on)"},
         "platform": {
@@ -499,6 +491,76 @@ def draw_fig04(frame: pd.DataFrame, path: Path) -> Path:
         "equivalent": {"color": KIND_STYLES["equivalent"]["color"], "lw": 1.6},
         "position": {"color": "0.4", "lw": 0.9, "ls": "--"},
     }
+    return seg_style, loop_style
+
+
+def _draw_fig04_panel(
+    a: Any,
+    g: pd.DataFrame,
+    styles: tuple[dict[str, dict[str, Any]], dict[str, dict[str, Any]]],
+    labelled: set[str | None],
+) -> None:
+    """One panel of Fig. 4 from its rows ``g``: segments (one legend entry per kind, over both
+    panels: ``labelled`` holds the labels used), loop vectors, unit vectors and points."""
+    seg_style, loop_style = styles
+    for r in g[g["element"] == "segment"].itertuples():
+        st = dict(seg_style[r.kind])
+        if st["label"] in labelled:
+            st["label"] = None  # one legend entry per kind
+        labelled.add(st["label"])
+        a.plot([r.h0, r.h1], [r.v0, r.v1], solid_capstyle="butt", **st)
+    for r in g[g["element"] == "loop"].itertuples():
+        st = loop_style[r.kind]
+        _arrow(a, r, 9, st["color"], st["lw"], st.get("ls", "-"))
+        a.annotate(
+            _FIG04_MATHNAME[r.name],
+            ((r.h0 + r.h1) / 2, (r.v0 + r.v1) / 2),
+            xytext=(6, -10 if r.name in ("r_b e_1", "r_a cos(theta) s_1") else 4),
+            textcoords="offset points",
+            fontsize="small",
+            color=st["color"],
+        )
+    for r in g[g["element"].isin(["unit", "axis"])].itertuples():
+        color = _FIG04_COLORS.get(r.kind, "0.3")
+        _arrow(a, r, 11, color, 2.2)
+        label = r"$z$" if r.element == "axis" else rf"$\mathbf{{{r.kind}}}_1$"
+        a.annotate(
+            label, (r.h1, r.v1), xytext=(3, 3), textcoords="offset points", color=color,
+            fontsize="small",
+        )  # fmt: skip
+    pts = g[g["element"] == "point"]
+    a.plot(pts["h0"], pts["v0"], "o", color="k", ms=3.5, zorder=6, label="point of §1.2")
+    for r in pts.itertuples():
+        a.annotate(
+            rf"${r.name}$" if len(r.name) == 1 else r.name,
+            (r.h0, r.v0),
+            xytext=(-9, 3),
+            textcoords="offset points",
+            fontsize="small",
+        )
+    a.set_aspect("equal", adjustable="datalim")
+
+
+def _fig04_joint_legend(ax: Any, axp: Any, loop_style: dict[str, dict[str, Any]]) -> None:
+    """One legend on panel (a) for both panels, with the loop vector and the equivalent rod."""
+    ax.plot([], [], color=loop_style["loop"]["color"], lw=1.0, label="loop vector of eq. (6)")
+    ax.plot([], [], color=loop_style["equivalent"]["color"], lw=1.6, label="equivalent rod c–d")
+    handles, labels = ax.get_legend_handles_labels()
+    more = axp.get_legend_handles_labels()
+    for h, lab in zip(*more):
+        if lab not in labels:
+            handles.append(h)
+            labels.append(lab)
+    ax.legend(handles, labels, fontsize="x-small", loc="upper left")
+
+
+def draw_fig04(frame: pd.DataFrame, path: Path) -> Path:
+    """Fig. 4 from its CSV: (a) limb 1 in its vertical plane with the vector loop of eq. (6) and
+    the unit vectors e_1, m_1, n_1, s_1; (b) its 4S parallelogram face-on with the equivalent rod
+    joining the midpoints c_1, d_1 of the short edges."""
+    from parakin.plot import new_figure, save_figure, use_style
+
+    styles = _fig04_styles()
     row = frame.iloc[0]
     labelled: set[str | None] = set()
     with use_style():
@@ -506,47 +568,7 @@ def draw_fig04(frame: pd.DataFrame, path: Path) -> Path:
         fig.clear()
         ax, axp = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.6, 1.0]})
         for panel, a in (("side", ax), ("parallelogram", axp)):
-            g = frame[frame["panel"] == panel]
-            for r in g[g["element"] == "segment"].itertuples():
-                st = dict(seg_style[r.kind])
-                if st["label"] in labelled:
-                    st["label"] = None  # one legend entry per kind
-                labelled.add(st["label"])
-                a.plot([r.h0, r.h1], [r.v0, r.v1], solid_capstyle="butt", **st)
-            for r in g[g["element"] == "loop"].itertuples():
-                st = loop_style[r.kind]
-                _arrow(a, r, 9, st["color"], st["lw"], st.get("ls", "-"))
-                a.annotate(
-                    mathname[r.name],
-                    ((r.h0 + r.h1) / 2, (r.v0 + r.v1) / 2),
-                    xytext=(6, -10 if r.name in ("r_b e_1", "r_a cos(theta) s_1") else 4),
-                    textcoords="offset points",
-                    fontsize="small",
-                    color=st["color"],
-                )
-            for r in g[g["element"].isin(["unit", "axis"])].itertuples():
-                color = _FIG04_COLORS.get(r.kind, "0.3")
-                _arrow(a, r, 11, color, 2.2)
-                label = r"$z$" if r.element == "axis" else rf"$\mathbf{{{r.kind}}}_1$"
-                a.annotate(
-                    label,
-                    (r.h1, r.v1),
-                    xytext=(3, 3),
-                    textcoords="offset points",
-                    color=color,
-                    fontsize="small",
-                )
-            pts = g[g["element"] == "point"]
-            a.plot(pts["h0"], pts["v0"], "o", color="k", ms=3.5, zorder=6, label="point of §1.2")
-            for r in pts.itertuples():
-                a.annotate(
-                    rf"${r.name}$" if len(r.name) == 1 else r.name,
-                    (r.h0, r.v0),
-                    xytext=(-9, 3),
-                    textcoords="offset points",
-                    fontsize="small",
-                )
-            a.set_aspect("equal", adjustable="datalim")
+            _draw_fig04_panel(a, frame[frame["panel"] == panel], styles, labelled)
         ax.set_xlabel(r"along $\mathbf{e}_1$ (m)")
         ax.set_ylabel(r"$z$ (m)")
         ax.set_title("(a) limb 1 in its vertical plane: loop of eq. (6)", fontsize="small")
@@ -556,30 +578,22 @@ def draw_fig04(frame: pd.DataFrame, path: Path) -> Path:
             f"(b) its 4S parallelogram: l = {row['l_m']:g} m, d = {row['d_m']:g} m",
             fontsize="small",
         )
-        ax.plot([], [], color=loop_style["loop"]["color"], lw=1.0, label="loop vector of eq. (6)")
-        ax.plot([], [], color=loop_style["equivalent"]["color"], lw=1.6, label="equivalent rod c–d")
-        handles, labels = ax.get_legend_handles_labels()
-        more = axp.get_legend_handles_labels()
-        for h, lab in zip(*more):
-            if lab not in labels:
-                handles.append(h)
-                labels.append(lab)
-        ax.legend(handles, labels, fontsize="x-small", loc="upper left")
+        _fig04_joint_legend(ax, axp, styles[1])
         fig.suptitle(f"{FIG04_TITLE}; stroke q_1 = {row['q_1_m']:.4f} m")
     return save_figure(fig, path)
 
 
-@artefact(
+@table_and_figure(
     "fig04",
-    outputs=["fig04_equivalent_limb.png", "fig04_equivalent_limb.csv"],
+    "fig04_equivalent_limb",
+    draw_fig04,
     tolerance=DESCRIPTIVE,
     caption="Fig. 4: the equivalent P(4S) limb and its unit vectors, drawn from our model",
-    draws=[("fig04_equivalent_limb.png", "fig04_equivalent_limb.csv", draw_fig04)],
 )
-def fig04(config: dict, outdir: Path) -> list[Path]:
+def fig04(config: dict) -> pd.DataFrame:
     """Fig. 4: the P(4S) limb and its equivalent rod with the unit vectors e_i, m_i, n_i, s_i of
     eq. (6) (the paper draws a schematic; we draw limb 1 of our model at the home pose)."""
-    return write_and_draw(_fig04_table(), outdir / "fig04_equivalent_limb.csv", draw_fig04)
+    return _fig04_table()
 
 
 # ---------------------------------------------------------------------------------------- report

@@ -20,6 +20,7 @@ section it stands in for:
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -42,10 +43,7 @@ from parakin.registry import EXACT, ROUNDING, TIMING, Tolerance
 #: corner it reaches (r_a, r_b and phi at their bounds) and the indices there (those seeds spread
 #: 3.6 % in sigma1); L, d and the near-zero composite objective f are flat directions, not compared;
 #: the published numbers are judged on the distribution over the runs (GA_RUNS, extra_ga_summary)
-GA = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+GA = Tolerance.statistical(
     "genetic algorithm: the bound-hitting design variables within 2 % of the box and the "
     "indices within 5 % (three seeds spread 3.6 %); flat directions (L, d, f) and the "
     "per-generation trajectories not compared",
@@ -964,10 +962,7 @@ def load_ga(config: dict) -> dict:
 
 #: the GA runs over independent seeds: each run is one chaotic trajectory (not compared); the
 #: statistics over the runs are, by the overlap of their 99 % confidence intervals of the median
-GA_RUNS = Tolerance(
-    "statistical",
-    0.0,
-    0.0,
+GA_RUNS = Tolerance.statistical(
     "independent GA runs: each run's design and trajectory is chaotic (not compared); per "
     "published quantity the number of runs exactly and the 99 % confidence interval of the "
     "median over the runs must overlap the record's",
@@ -1551,7 +1546,24 @@ def ga_claims(runs: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
 
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
     """The report's paragraphs for §3, read from the output CSVs."""
-    parts = []
+    paragraphs = (
+        _indices_paragraph,
+        _sensitivity_paragraph,
+        _quadrature_paragraph,
+        _benchmark_paragraph,
+        _ga_paragraph,
+        _pareto_paragraph,
+        _paper_box_paragraph,
+    )
+    parts = [text for make in paragraphs if (text := make(figdir, ref)) is not None]
+    return "\n\n".join(parts)
+
+
+def _printed_readers(
+    ref: pd.DataFrame,
+) -> tuple[Callable[[str, str], str], Callable[[str, str], float], Callable[[str, str], str]]:
+    """Readers of the reference: the printed string, it as a float, and a ``[min, max]`` range
+    (``<prefix>.min`` and ``<prefix>.max``)."""
 
     def pv(artefact: str, quantity: str) -> str:
         return printed_value(ref, artefact, quantity)
@@ -1562,6 +1574,12 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     def rng(artefact: str, prefix: str) -> str:
         return f"[{pv(artefact, prefix + '.min')}, {pv(artefact, prefix + '.max')}]"
 
+    return pv, pf, rng
+
+
+def _indices_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
+    """§3 indices (Figs 15-26): our before and after designs against the printed ones."""
+    pv, pf, rng = _printed_readers(ref)
     printed_gains = ", ".join(
         f"{x:.2f}"
         for x in (
@@ -1574,7 +1592,7 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
     if gpath.exists():
         g = pd.read_csv(gpath).set_index("design")
         b, a = g.loc["before"], g.loc["after"]
-        parts.append(
+        return (
             "**§3 indices (Figs 15-26).** Over our W, the before design gives "
             f"sigma1 = {b['sigma1']:.4g} kg (paper {pv('fig15', 'sigma1.before')}, "
             f"{100 * (b['sigma1'] / pf('fig15', 'sigma1.before') - 1):+.1f} %), "
@@ -1595,10 +1613,15 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
             "of W below); the stiffness index fits lambda_min, not eq 33's square root; the after values are not "
             "reached (our sigma3 after is far lower than the paper's)."
         )
+    return None
+
+
+def _sensitivity_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
+    """How the indices move over the readings of W and of the stiffness."""
     sp = figdir / "extra_index_sensitivity.csv"
     if sp.exists():
         s = pd.read_csv(sp)
-        parts.append(
+        return (
             f"Sensitivity (`extra_index_sensitivity.md`, {len(s)} readings of W and the stiffness): before sigma1 "
             f"error {s['sigma1_before_err_pct'].min():+.1f} to {s['sigma1_before_err_pct'].max():+.1f} %, sigma3 "
             f"{s['sigma3_before_err_pct'].min():+.1f} to {s['sigma3_before_err_pct'].max():+.1f} %; after sigma3 "
@@ -1606,6 +1629,11 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
             f"indices improve in {int(s['all_improve'].sum())}/{len(s)} readings; the after design matches within "
             f"5 % in {int(s['after_all_within_5pct'].sum())}."
         )
+    return None
+
+
+def _quadrature_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
+    """The quadrature's convergence (the next-finest Gauss rule against the finest)."""
     cv = figdir / "extra_index_convergence.csv"
     if cv.exists():
         c = pd.read_csv(cv)
@@ -1620,22 +1648,33 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
                 .to_numpy()
                 .max()
             )
-            parts.append(
+            return (
                 f"Quadrature: Gauss-Legendre with {n2} nodes per axis is within {worst:.1e} (relative) of "
                 f"{ns[-1]} nodes (`extra_index_convergence.md`)."
             )
+    return None
+
+
+def _benchmark_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
+    """The batched indices against a per-pose loop."""
     bm = figdir / "extra_index_benchmark.csv"
     if bm.exists():
         r = pd.read_csv(bm).iloc[0]
-        parts.append(
+        return (
             f"Benchmark: all indices on {int(r['poses'])} poses batched in {r['batched_s']:.3f} s vs "
             f"{r['loop_s_extrapolated']:.2f} s per-pose loop (x{r['ratio']:.0f})."
         )
+    return None
+
+
+def _ga_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
+    """The GA over independent runs (Fig. 14, Table 3)."""
+    pv, pf, rng = _printed_readers(ref)
     runs = figdir / "extra_ga_runs.csv"
     if runs.exists():
         ours = pd.read_csv(runs)
         gen = ours["convergence_generation"]
-        parts.append(
+        return (
             f"**GA (Fig. 14, Table 3).** Over {len(ours)} independent runs f = {ours['f'].min():.4f} to "
             f"{ours['f'].max():.4f} (paper f_min {pv('fig14', 'f_min')}), converged at generation "
             f"{gen.min()}-{gen.max()} (median {gen.median():g}; paper {pv('fig14', 'ga.convergence_generation')}); "
@@ -1647,23 +1686,33 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
             f"{ours['sigma2'].max():.4g}, sigma3 = {ours['sigma3'].min():.4g}-{ours['sigma3'].max():.4g} "
             "(`extra_ga_summary.md`)."
         )
+    return None
+
+
+def _pareto_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
+    """The NSGA-II front's extent."""
     pp = figdir / "extra_pareto.csv"
     if pp.exists():
         p = pd.read_csv(pp)
-        parts.append(
+        return (
             f"NSGA-II front: {len(p)} non-dominated designs, sigma1 {p['sigma1'].min():.4g}-"
             f"{p['sigma1'].max():.4g}, sigma2 {p['sigma2'].min():.4g}-{p['sigma2'].max():.4g}, sigma3 "
             f"{p['sigma3'].min():.4g}-{p['sigma3'].max():.4g} (`extra_pareto.png`)."
         )
+    return None
+
+
+def _paper_box_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
+    """Where the paper's optimum comes from: the GA inside the paper's box."""
     box = figdir / "extra_ga_paper_box.csv"
     if box.exists():
         b = pd.read_csv(box)
         hits = int(np.sum(b["dist_to_paper_after"] < 1e-3))
-        parts.append(
+        return (
             f"**Where the paper's optimum comes from (ours).** Run inside the smallest box that holds both of the "
             f"paper's designs (L, d fixed), the same GA lands on the paper's after design in {hits} of {len(b)} runs "
             f"(largest distance {b['dist_to_paper_after'].max():.1e} of a box side): the published optimum is the "
             "corner of such a box, so the 'optimisation' result reflects the unstated design bounds "
             "(`extra_ga_paper_box.md`)."
         )
-    return "\n\n".join(parts)
+    return None
