@@ -309,6 +309,8 @@ def test_figures_carry_their_paper_figure_number(tmp_path: Path) -> None:
         and figure_tag("extra_basin.png") == "Beyond the paper"
     )
     assert figure_tag("sketch.png") is None
+    # the temporary file an atomic write draws into tags as its target would
+    assert figure_tag(".extra_census.abc123.tmp.png") == "Beyond the paper"
     fig, ax = new_figure()
     ax.set_title("CM velocity")
     save_figure(fig, tmp_path / "fig05_cm_velocity.png", close=False)

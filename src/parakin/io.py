@@ -54,9 +54,15 @@ TIMING_WORDS = frozenset({"time", "timed", "latency", "throughput", "speedup", "
 
 def is_timing_column(name: str) -> bool:
     """True for a column that holds a timing: one of its ``_``-separated words is in
-    :data:`TIMING_WORDS` (``time_ms``, ``median_latency_us``, ``batched_s``; not ``iteration``)."""
+    :data:`TIMING_WORDS` (``time_ms``, ``median_latency_us``, ``batched_s``), or a rate per second (``inputs_per_s``;
+    not ``iteration``)."""
     name = name.lower()
-    return bool(TIMING_WORDS & set(name.split("_"))) or name.startswith(("batched_s", "loop_s"))
+    rate = name.endswith("_per_s")  # a rate per second of wall time (inputs_per_s)
+    return (
+        bool(TIMING_WORDS & set(name.split("_")))
+        or rate
+        or name.startswith(("batched_s", "loop_s"))
+    )
 
 
 def atomic_writer(path: str | os.PathLike, write: Callable[[Path], None]) -> Path:

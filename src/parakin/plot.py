@@ -177,7 +177,7 @@ def new_figure(
 def figure_tag(path: str | os.PathLike[str]) -> str | None:
     """What a figure file is, from its name: ``fig05_...`` -> ``"Fig. 5"`` (the paper's figure
     number), ``extra_...`` -> ``"Beyond the paper"``; None for anything else."""
-    stem = Path(path).stem
+    stem = Path(path).name.lstrip(".")  # also a temporary file ``.extra_x.tmp123.png`` beside it
     m = re.match(r"fig(\d+)", stem)
     if m:
         return f"Fig. {int(m.group(1))}"
