@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import collections
 import contextlib
+import dataclasses
 import functools
 import io
 import json
@@ -207,19 +208,24 @@ def _check_right_answer(argv: list[str], out: dict) -> None:
     params = {k: v for k, v in out["parameters"].items() if k in parameters_of(cls)}
     mech = cls(**params)
     q = to_si(np.asarray(out["joints"], dtype=float), out["joint_units"])
-    if "solutions" in out:  # --all: every printed solution of each input gives its joints back
-        pairs = [
-            (to_si(np.asarray(s["x"], dtype=float), out["pose_units"]), q[i])
+    if "solutions" in out:  # --all: every printed solution of each input gives its joints back,
+        # on its own assembly (a 2-UPS "branch -1" pose is one of UPS2(branch=-1))
+        triples = [
+            (
+                dataclasses.replace(mech, branch=-1) if "branch -1" in s["assembly"] else mech,
+                to_si(np.asarray(s["x"], dtype=float), out["pose_units"]),
+                q[i],
+            )
             for i, rows in enumerate(out["solutions"])
             for s in rows
         ]
         joint_tol = 1e-8
     else:
-        pairs = [(to_si(np.asarray(out["x"], dtype=float), out["pose_units"]), q)]
+        triples = [(mech, to_si(np.asarray(out["x"], dtype=float), out["pose_units"]), q)]
         tol = 1e-10 if "--tol" not in argv else float(argv[argv.index("--tol") + 1])
         joint_tol = max(1e-8, 100 * tol)
-    for x, qi in pairs:
-        assert np.max(np.abs(mech.ik(x) - qi)) <= joint_tol * (1 + 1e-9) + 1e-15, argv
+    for m, x, qi in triples:
+        assert np.max(np.abs(m.ik(x) - qi)) <= joint_tol * (1 + 1e-9) + 1e-15, argv
 
 
 def _check(argv: list[str]) -> None:

@@ -151,7 +151,7 @@ def draw_table3_consistency(frame: pd.DataFrame, path: Path) -> Path:
     ax.set_xlabel("base side b (platform side a = 1)")
     ax.set_ylabel("max |l_i(row) - l_i(row 1)| over the six legs")
     ax.set_title(
-        "Table 3: do rows 2-19 assemble with row 1's leg lengths, for any b?", fontsize="small"
+        "Table 3: do rows 2-19 assemble with\nrow 1's leg lengths, for any b?", fontsize="small"
     )
     ax.legend(fontsize="x-small")
     return save_figure(fig, path)
