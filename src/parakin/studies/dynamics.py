@@ -7,8 +7,8 @@ moves along one documented trajectory, :meth:`parakin.dynamics.trajectory.Harmon
 coordinate k about :meth:`Mechanism.home` by ``fraction`` of half its :meth:`pose_bounds` width at
 ``frequency (k + 1)`` Hz, phase k rad, over one period. Artefacts:
 
-* ``forces``: the actuator forces along it (``extra_actuator_forces.csv``, all mechanisms; one
-  figure ``extra_forces_<mechanism>.png`` each, drawn from that CSV);
+* ``forces_<mechanism>``: the actuator forces along it (``extra_forces_<mechanism>.{csv,png}``:
+  each figure is drawn from the table beside it);
 * ``checks``: per mechanism, the agreement of the generic inverse dynamics with MuJoCo (the
   ``mj_inverse`` recipe) and pinocchio (constrained dynamics; blank where the optional ``pin`` is
   not installed), the power balance, and Zhao's Newton-Euler for the 3-P(4S)
@@ -30,7 +30,7 @@ import pandas as pd
 from parakin import dynamics as D
 from parakin.dynamics.forward import computed_torque, simulate
 from parakin.dynamics.trajectory import Harmonic, power_balance
-from parakin.io import write_and_draw, write_csv, write_table
+from parakin.io import write_and_draw, write_table
 from parakin.mechanisms import P3P4S, REGISTRY
 from parakin.mechanisms.base import Mechanism
 from parakin.registry import Tolerance, artefact
@@ -66,28 +66,27 @@ def _unit(mech: Mechanism, k: int) -> str:
 
 
 # ---------------------------------------------------------------------------------------- forces
-def forces_data(config: dict) -> pd.DataFrame:
-    """The actuator forces of every mechanism along its trajectory: one row per sample and joint."""
-    frames = []
-    for mech in mechanisms():
-        tr = trajectory(mech, config)
-        t = np.linspace(0.0, tr.period, config[KEY]["trajectory"]["samples"])
-        res = D.inverse_dynamics(mech, *tr.state(t))
-        for k, joint in enumerate(mech.joint_names):
-            frames.append(
-                pd.DataFrame(
-                    {
-                        "mechanism": mech.name,
-                        "t_s": t,
-                        "joint": joint,
-                        "force": res.force[:, k],
-                        "unit": _unit(mech, k),
-                        "joint_rate": res.joint_rate[:, k],
-                        "joint_acceleration": res.joint_acceleration[:, k],
-                        "condition": res.condition,
-                    }
-                )
-            )
+def forces_data(config: dict, name: str) -> pd.DataFrame:
+    """The actuator forces of mechanism ``name`` along its trajectory: one row per sample and joint."""
+    mech = REGISTRY[name]()
+    tr = trajectory(mech, config)
+    t = np.linspace(0.0, tr.period, config[KEY]["trajectory"]["samples"])
+    res = D.inverse_dynamics(mech, *tr.state(t))
+    frames = [
+        pd.DataFrame(
+            {
+                "mechanism": mech.name,
+                "t_s": t,
+                "joint": joint,
+                "force": res.force[:, k],
+                "unit": _unit(mech, k),
+                "joint_rate": res.joint_rate[:, k],
+                "joint_acceleration": res.joint_acceleration[:, k],
+                "condition": res.condition,
+            }
+        )
+        for k, joint in enumerate(mech.joint_names)
+    ]
     return pd.concat(frames, ignore_index=True)
 
 
@@ -277,24 +276,43 @@ SIMULATION = Tolerance(
 
 
 NAMES = [m.name for m in mechanisms()]
-FORCES_CSV = "extra_actuator_forces.csv"
 
 
-@artefact(
-    KEY,
+def _per_mechanism(kind: str, data, draw, tolerance: Tolerance, config_keys, **options) -> None:
+    """Declare ``<kind>_<name>`` for every mechanism: one job each (they run in parallel), its
+    table ``extra_<kind>_<name>.csv`` and the figure drawn from it beside it."""
+    for name in NAMES:
+        stem = f"extra_{kind}_{name}"
+        plot = partial(draw, mechanism=name)
+
+        def make(config: dict, outdir: Path, name=name, stem=stem, plot=plot) -> list[Path]:
+            outdir = Path(outdir)
+            return write_and_draw(
+                data(config, name), outdir / f"{stem}.csv", plot, outdir / f"{stem}.png"
+            )
+
+        make.__name__ = make.__qualname__ = f"{kind}_{name}"
+        make.__doc__ = f"{kind.capitalize()} of {name}: the table and the figure drawn from it."
+        artefact(
+            KEY,
+            f"{kind}_{name}",
+            outputs=[f"{stem}.png", f"{stem}.csv"],
+            config=[f"{KEY}.{k}" for k in config_keys],
+            tolerance=tolerance,
+            reference=False,
+            draws=[(f"{stem}.png", f"{stem}.csv", plot)],
+            **options,
+        )(make)
+
+
+_per_mechanism(
     "forces",
-    outputs=[FORCES_CSV, *(f"extra_forces_{n}.png" for n in NAMES)],
-    config=[f"{KEY}.trajectory"],
-    tolerance=FORCES,
-    reference=False,
-    draws=[(f"extra_forces_{n}.png", FORCES_CSV, partial(draw_forces, mechanism=n)) for n in NAMES],
-    caption="Actuator forces of every mechanism along its documented trajectory.",
+    forces_data,
+    draw_forces,
+    FORCES,
+    ["trajectory"],
+    caption="Actuator forces of a mechanism along its documented trajectory.",
 )
-def forces(config: dict, outdir: Path) -> list[Path]:
-    """Actuator forces of every mechanism along its trajectory: one CSV, one figure each."""
-    path = write_csv(forces_data(config), Path(outdir) / FORCES_CSV)
-    frame = pd.read_csv(path)
-    return [draw_forces(frame, Path(outdir) / f"extra_forces_{n}.png", n) for n in NAMES] + [path]
 
 
 @artefact(
@@ -316,33 +334,15 @@ def checks(config: dict, outdir: Path) -> list[Path]:
     )
 
 
-def _simulation_artefact(name: str) -> None:
-    """Declare ``simulation_<name>``: one job per mechanism (they run in parallel)."""
-    stem = f"extra_simulation_{name}"
-    draw = partial(draw_simulation, mechanism=name)
-
-    def make(config: dict, outdir: Path) -> list[Path]:
-        outdir = Path(outdir)
-        return write_and_draw(
-            simulation_data(config, name), outdir / f"{stem}.csv", draw, outdir / f"{stem}.png"
-        )
-
-    make.__name__ = make.__qualname__ = f"simulation_{name}"
-    make.__doc__ = f"Computed-torque simulation of {name}: error decay against the analytic one, joint-space drift."
-    artefact(
-        KEY,
-        f"simulation_{name}",
-        outputs=[f"{stem}.png", f"{stem}.csv"],
-        config=[f"{KEY}.trajectory", f"{KEY}.simulation"],
-        tolerance=SIMULATION,
-        reference=False,
-        resources={"runtime": 30},
-        draws=[(f"{stem}.png", f"{stem}.csv", draw)],
-    )(make)
-
-
-for _name in NAMES:
-    _simulation_artefact(_name)
+# a computed-torque simulation: error decay against the analytic one, joint-space drift
+_per_mechanism(
+    "simulation",
+    simulation_data,
+    draw_simulation,
+    SIMULATION,
+    ["trajectory", "simulation"],
+    resources={"runtime": 30},
+)
 
 
 CHECK_NOTES = """
