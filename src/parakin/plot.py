@@ -33,6 +33,7 @@ from matplotlib.figure import Figure
 from matplotlib.legend_handler import HandlerTuple
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
+from matplotlib.text import Text
 from matplotlib.ticker import MaxNLocator
 from matplotlib.transforms import Bbox, offset_copy
 from mpl_toolkits.mplot3d import Axes3D, proj3d
@@ -194,12 +195,11 @@ def tag_figure(fig: Figure, tag: str | None) -> None:
         pattern = re.compile(rf"\bFigs?\.?\s*(\d+\s*[-–,]\s*)*{tag[5:]}\b", re.IGNORECASE)
     else:
         pattern = re.compile(r"beyond the paper|not in the paper|our addition", re.IGNORECASE)
-    sup = getattr(fig, "_suptitle", None)
-    titles = [ax.title for ax in fig.axes] + [getattr(ax, "_left_title", None) for ax in fig.axes]
-    texts = [t for t in [sup, *titles] if t is not None and t.get_text()]
-    if any(pattern.search(t.get_text()) for t in texts):
+    sup = _suptitle(fig)
+    titles = [ax.get_title(loc) for ax in fig.axes for loc in ("center", "left", "right")]
+    if any(pattern.search(t) for t in [fig.get_suptitle(), *titles]):
         return
-    if sup is not None and sup.get_text():
+    if sup is not None:
         sup.set_text(f"{tag}: {sup.get_text()}")
         return
     with_title = [ax for ax in fig.axes if ax.get_title()]
@@ -230,6 +230,7 @@ def save_figure(
     path = Path(path)
     if tag:
         tag_figure(fig, figure_tag(path))
+    fit_titles(fig)
     fmt = path.suffix.lstrip(".").lower() or "png"
     kwargs: dict[str, Any] = {"format": fmt, "dpi": DPI}
     if fmt == "png":
@@ -251,6 +252,78 @@ def save_figure(
         if close:
             _close(fig)
     return path
+
+
+def _suptitle(fig: Figure) -> Text | None:
+    """The suptitle's :class:`~matplotlib.text.Text` (``Figure.suptitle`` adds it to
+    ``fig.texts``), or None without one."""
+    title = fig.get_suptitle()
+    return next((t for t in fig.texts if t.get_text() == title), None) if title else None
+
+
+def _words(text: str) -> list[str]:
+    """``text`` split at the spaces outside mathtext (``$...$`` stays whole)."""
+    words, current, math = [], "", False
+    for ch in text:
+        if ch == " " and not math:
+            words.append(current)
+            current = ""
+            continue
+        math ^= ch == "$"
+        current += ch
+    return [w for w in [*words, current] if w]
+
+
+def _leaves_canvas(fig: Figure, text: Text, renderer) -> bool:
+    box = text.get_window_extent(renderer)
+    return box.x0 < 0.0 or box.x1 > fig.bbox.width
+
+
+def wrap_to_canvas(fig: Figure, text: Text, renderer, width: float | None = None) -> None:
+    """Break ``text`` (a title) at spaces into as few lines as keep it on the canvas.
+
+    Each line is at most ``width`` pixels wide (default: twice the distance from the text's
+    centre to the nearer canvas edge, less 4 px); existing line breaks are kept. A single word
+    wider than that stays on a line of its own."""
+    box = text.get_window_extent(renderer)
+    centre = 0.5 * (box.x0 + box.x1)
+    room = 2.0 * min(centre, fig.bbox.width - centre) - 8.0
+    room = room if width is None else min(room, width)
+    lines: list[str] = []
+    for paragraph in text.get_text().split("\n"):
+        line = ""
+        for word in _words(paragraph):
+            trial = f"{line} {word}" if line else word
+            text.set_text(trial)
+            if line and text.get_window_extent(renderer).width > room:
+                lines.append(line)
+                line = word
+            else:
+                line = trial
+        lines.append(line)
+    text.set_text("\n".join(lines))
+
+
+def fit_titles(fig: Figure) -> None:
+    """Wrap every title and the suptitle that leaves the canvas (:func:`wrap_to_canvas`); an
+    axes title that does is wrapped to the width of its axes. A title that needs it is first set
+    in the body's font size (a long title in the large title size takes four lines).
+
+    Titles are measured where they stand before layout; only a figure with a title past an edge
+    there is laid out (one draw) and measured again, so a figure whose titles fit is saved
+    exactly as without this step (a layout draw moves constrained-layout axes by a pixel or so)."""
+    texts = [(_suptitle(fig), None), *((ax.title, ax) for ax in fig.axes)]
+    texts = [(t, ax) for t, ax in texts if t is not None and t.get_visible() and t.get_text()]
+    with use_style():
+        renderer = fig.canvas.get_renderer()
+        near = [(t, ax) for t, ax in texts if _leaves_canvas(fig, t, renderer)]
+        if not near:
+            return
+        fig.draw_without_rendering()  # lays the figure out: title positions are final
+        for text, ax in near:
+            if _leaves_canvas(fig, text, renderer):  # an axes title: no wider than its axes
+                text.set_fontsize(min(text.get_fontsize(), mpl.rcParams["font.size"]))
+                wrap_to_canvas(fig, text, renderer, ax and ax.get_window_extent(renderer).width)
 
 
 def _close(fig: Figure) -> None:
@@ -633,7 +706,7 @@ def _place_labels(
     Works in display pixels: every line of the drawing (segments, polygon edges, frame arrows)
     is projected, and each label is tried in 24 directions at two distances from its anchor.
     A candidate's cost is the length of line its box covers, the area it shares with labels
-    already placed (heavily penalised), the named points it covers, and whether it leaves the
+    already placed (heavily penalised; within 6 px of one, prohibitively), the named points it covers, and whether it leaves the
     axes, minus a small bonus for pointing away from the drawing's centre. Frame labels are placed
     first, then points; the cheapest candidate wins (ties go to the first direction, so the
     result is deterministic).
@@ -743,6 +816,10 @@ def _best_label_box(
         cost = 2.0 * _clipped_length(grown, seg_px).sum(axis=1)
         if placed:
             cost += 0.5 * _overlap_area(grown, np.array(placed)).sum(axis=1)
+            # labels that touch read as one: keep 6 px clear of every label placed (the box
+            # estimated for a mathtext label runs a few pixels short of the drawn one)
+            near = _overlap_area(boxes + np.array([-6.0, -6.0, 6.0, 6.0]), np.array(placed))
+            cost += 1e4 * (near.sum(axis=1) > 0)
         if len(pts_px):
             inside = (
                 (pts_px[None, :, 0] > grown[:, None, 0])

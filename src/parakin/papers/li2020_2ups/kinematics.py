@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from matplotlib.ticker import MaxNLocator
 
 from parakin.claims import Claim, printed_value
 from parakin.config import rng
@@ -167,6 +168,10 @@ def draw_parasitic(frame: pd.DataFrame, path: Path) -> Path:
         ax.set_xlabel("β (deg)")
         ax.set_ylabel("Y (mm)")
         ax.set_xticks([-30, -15, 0, 15, 30])
+        # no tick at the lower y limit: its label would touch the x axis's first one at the corner
+        ax.yaxis.set_major_locator(
+            MaxNLocator(nbins="auto", steps=[1, 2, 2.5, 5, 10], prune="lower")
+        )
     fig.suptitle(f"Parasitic translations of B1 (a, b, c = {a:g}, {b:g}, {c:g} mm)")
     return save_figure(fig, path)
 

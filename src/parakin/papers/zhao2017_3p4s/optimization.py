@@ -240,6 +240,8 @@ def _grid_points(frame: pd.DataFrame, columns: list[str]) -> np.ndarray:
 
 
 def _sphere_figure(pts, path, title, labels, axes=None, semi=None):
+    from matplotlib.ticker import MaxNLocator
+
     from parakin.plot import new_figure, save_figure, use_style
 
     with use_style():
@@ -260,6 +262,8 @@ def _sphere_figure(pts, path, title, labels, axes=None, semi=None):
         lim = float(np.max(np.abs(pts)))
         ax.set_xlim(-lim, lim), ax.set_ylim(-lim, lim), ax.set_zlim(-lim, lim)
         ax.set_box_aspect((1, 1, 1))
+        for axis in (ax.xaxis, ax.yaxis, ax.zaxis):  # ticks 0.25 apart run together in 3-D
+            axis.set_major_locator(MaxNLocator(nbins=4, steps=[1, 2, 2.5, 5, 10]))
         ax.set_xlabel(labels[0]), ax.set_ylabel(labels[1]), ax.set_zlabel(labels[2])
         fig.suptitle(title)
     return save_figure(fig, path)
