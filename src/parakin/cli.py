@@ -962,7 +962,8 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _mechanism_args(p) -> None:
+def _mechanism_options(p) -> None:
+    """The mechanism and its geometry: ``MECH [--param NAME=VALUE]... [--geometry FILE]``."""
     p.add_argument("mechanism", choices=sorted(mechanisms.REGISTRY), help="mechanism name")
     p.add_argument(
         "--param",
@@ -974,11 +975,16 @@ def _mechanism_args(p) -> None:
     )
     p.add_argument(
         "--geometry",
+        type=nonempty,
         default=None,
         metavar="FILE",
         help="the mechanism's parameters from a YAML or JSON file (names of the Python API, "
         "arrays as lists); --param values override them",
     )
+
+
+def _mechanism_args(p) -> None:
+    _mechanism_options(p)
     p.add_argument(
         "--units", choices=["si", "paper"], default="si", help="units of input and output"
     )
@@ -1274,7 +1280,6 @@ def _add_dynamics(sub) -> None:
         "column t (s) and one column per pose coordinate (SI), optionally d_<name> rates and "
         "dd_<name> accelerations (else a cubic spline through the poses gives them).",
     )
-    p.add_argument("mechanism", choices=sorted(mechanisms.REGISTRY), help="mechanism name")
     p.add_argument(
         "--trajectory",
         required=True,
@@ -1282,20 +1287,7 @@ def _add_dynamics(sub) -> None:
         metavar="FILE",
         help="trajectory CSV (SI units)",
     )
-    p.add_argument(
-        "--param",
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="override a mechanism parameter",
-    )
-    p.add_argument(
-        "--geometry",
-        type=nonempty,
-        default=None,
-        metavar="FILE",
-        help="the mechanism's parameters from a YAML or JSON file; --param values override them",
-    )
+    _mechanism_options(p)
     p.add_argument(
         "--wrench",
         type=finite_float,

@@ -27,6 +27,7 @@ __all__ = [
     "skew",
     "unskew",
     "unit",
+    "quaternion",
 ]
 
 
@@ -145,3 +146,34 @@ def axis_angle(axis: ArrayLike, angle: ArrayLike) -> NDArray[np.float64]:
     k = skew(unit(axis))
     t = np.asarray(angle, dtype=float)[..., None, None]
     return np.eye(3) + np.sin(t) * k + (1.0 - np.cos(t)) * (k @ k)
+
+
+def quaternion(r: ArrayLike) -> NDArray[np.float64]:
+    """Unit quaternion ``(w, x, y, z)`` (w >= 0) of rotation matrices (..., 3, 3), Shepperd's
+    method (the largest of ``4w^2, 4x^2, 4y^2, 4z^2`` picks the stable formula)."""
+    r = np.asarray(r, dtype=float)
+    t = np.stack(
+        [
+            1 + r[..., 0, 0] + r[..., 1, 1] + r[..., 2, 2],
+            1 + r[..., 0, 0] - r[..., 1, 1] - r[..., 2, 2],
+            1 - r[..., 0, 0] + r[..., 1, 1] - r[..., 2, 2],
+            1 - r[..., 0, 0] - r[..., 1, 1] + r[..., 2, 2],
+        ],
+        -1,
+    )
+    k = np.argmax(t, axis=-1)
+    d = 0.5 * np.sqrt(np.maximum(np.take_along_axis(t, k[..., None], -1)[..., 0], 1e-300))
+    a, b, c = r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]
+    e, f, g = r[..., 0, 1] + r[..., 1, 0], r[..., 0, 2] + r[..., 2, 0], r[..., 1, 2] + r[..., 2, 1]
+    q4 = 4 * d
+    cand = np.stack(
+        [
+            np.stack([d, a / q4, b / q4, c / q4], -1),
+            np.stack([a / q4, d, e / q4, f / q4], -1),
+            np.stack([b / q4, e / q4, d, g / q4], -1),
+            np.stack([c / q4, f / q4, g / q4, d], -1),
+        ],
+        -2,
+    )
+    quat = np.take_along_axis(cand, k[..., None, None], -2)[..., 0, :]
+    return quat * np.where(quat[..., :1] < 0, -1.0, 1.0)

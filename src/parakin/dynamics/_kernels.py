@@ -183,6 +183,16 @@ def _norm1(a):
     return best
 
 
+@njit(cache=True)
+def _matvec(a, x, out):
+    """``out = a x``, each entry summed in the order of ``x``."""
+    for i in range(out.shape[0]):
+        acc = 0.0
+        for r in range(x.shape[0]):
+            acc += a[i, r] * x[r]
+        out[i] = acc
+
+
 @njit(cache=True, nogil=True)
 def forces(jac, load, force, cond, residual, ok):
     """For each sample: ``f`` with ``J^T f = Q`` (minimum norm when ``m > n``, least squares when
@@ -213,33 +223,13 @@ def forces(jac, load, force, cond, residual, ok):
         c = c if np.isfinite(c) else np.inf
         cond[s] = c if m == n else np.sqrt(c)
         if m == n:  # f = J^-T Q
-            for i in range(m):
-                acc = 0.0
-                for r in range(n):
-                    acc += inv[r, i] * q[r]
-                force[s, i] = acc
+            _matvec(inv.T, q, force[s])
         elif m > n:  # f = J (J^T J)^-1 Q
-            for i in range(n):
-                acc = 0.0
-                for r in range(n):
-                    acc += inv[i, r] * q[r]
-                y[i] = acc
-            for i in range(m):
-                acc = 0.0
-                for r in range(n):
-                    acc += j[i, r] * y[r]
-                force[s, i] = acc
+            _matvec(inv, q, y)
+            _matvec(j, y, force[s])
         else:  # f = (J J^T)^-1 J Q
-            for i in range(m):
-                acc = 0.0
-                for r in range(n):
-                    acc += j[i, r] * q[r]
-                y[i] = acc
-            for i in range(m):
-                acc = 0.0
-                for r in range(m):
-                    acc += inv[i, r] * y[r]
-                force[s, i] = acc
+            _matvec(j, q, y)
+            _matvec(inv, y, force[s])
         worst, scale = 0.0, 0.0
         for r in range(n):
             acc = -q[r]

@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike
 
 import parakin.dynamics.jet as jet
 from parakin.dynamics.model import MassModel, RigidBody, motion
+from parakin.geometry import quaternion
 from parakin.mechanisms.base import Array, Mechanism, as_batch
 
 __all__ = ["Assembly", "assemble", "joint_coordinates", "quaternion", "rotation_angle"]
@@ -114,37 +115,6 @@ def assemble(mech: Mechanism, pose: ArrayLike, mass: MassModel | None = None) ->
         bodies.platform,
         mass.gravity,
     )
-
-
-def quaternion(r: ArrayLike) -> Array:
-    """Unit quaternion ``(w, x, y, z)`` (w >= 0) of rotation matrices (..., 3, 3), Shepperd's
-    method (the largest of ``4w^2, 4x^2, 4y^2, 4z^2`` picks the stable formula)."""
-    r = np.asarray(r, dtype=float)
-    t = np.stack(
-        [
-            1 + r[..., 0, 0] + r[..., 1, 1] + r[..., 2, 2],
-            1 + r[..., 0, 0] - r[..., 1, 1] - r[..., 2, 2],
-            1 - r[..., 0, 0] + r[..., 1, 1] - r[..., 2, 2],
-            1 - r[..., 0, 0] - r[..., 1, 1] + r[..., 2, 2],
-        ],
-        -1,
-    )
-    k = np.argmax(t, axis=-1)
-    d = 0.5 * np.sqrt(np.take_along_axis(t, k[..., None], -1)[..., 0])
-    a, b, c = r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]
-    e, f, g = r[..., 0, 1] + r[..., 1, 0], r[..., 0, 2] + r[..., 2, 0], r[..., 1, 2] + r[..., 2, 1]
-    q4 = 4 * d
-    cand = np.stack(
-        [
-            np.stack([d, a / q4, b / q4, c / q4], -1),
-            np.stack([a / q4, d, e / q4, f / q4], -1),
-            np.stack([b / q4, e / q4, d, g / q4], -1),
-            np.stack([c / q4, f / q4, g / q4, d], -1),
-        ],
-        -2,
-    )
-    quat = np.take_along_axis(cand, k[..., None, None], -2)[..., 0, :]
-    return quat * np.where(quat[..., :1] < 0, -1.0, 1.0)
 
 
 def rotation_angle(r: ArrayLike, axis: ArrayLike) -> Array:

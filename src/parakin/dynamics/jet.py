@@ -66,8 +66,31 @@ __all__ = [
 ]
 
 
+class _Motion:
+    """What a :class:`Jet` and a :class:`Spin` share: ``tangents`` (n + 1, ..., *s) (the ``n`` pose
+    directions, then the rate) and ``bias`` (..., *s), the value's shape."""
+
+    tangents: Array
+    bias: Array
+
+    @property
+    def rate(self) -> Array:
+        """``dy/dt = J xdot`` (for a spin, ``omega`` (..., 3), rad/s)."""
+        return self.tangents[-1]
+
+    @property
+    def jacobian(self) -> Array:
+        """``dy/dx`` (for a spin, ``d omega / d xdot``) with the pose axis last, (..., *s, n)."""
+        return np.moveaxis(self.tangents[:-1], 0, -1)
+
+    def acceleration(self, xddot: ArrayLike) -> Array:
+        """``d2y/dt2 = J xddot + bias`` (for a spin, the angular acceleration ``alpha``) for pose
+        accelerations ``xddot`` (..., n)."""
+        return contract(self.tangents[:-1], xddot, self.bias.ndim) + self.bias
+
+
 @dataclass(frozen=True, eq=False)
-class Jet:
+class Jet(_Motion):
     """A batched quantity with its tangents along the pose directions and the rate, and its bias.
 
     ``value`` (..., *s); ``tangents`` (n + 1, ..., *s): ``J e_0 .. J e_{n-1}``, then ``J xdot``;
@@ -90,20 +113,6 @@ class Jet:
     @property
     def shape(self) -> tuple[int, ...]:
         return self.value.shape
-
-    @property
-    def rate(self) -> Array:
-        """``dy/dt = J xdot``."""
-        return self.tangents[-1]
-
-    @property
-    def jacobian(self) -> Array:
-        """``dy/dx`` with the pose axis last, (..., *s, n)."""
-        return np.moveaxis(self.tangents[:-1], 0, -1)
-
-    def acceleration(self, xddot: ArrayLike) -> Array:
-        """``d2y/dt2 = J xddot + bias`` for pose accelerations ``xddot`` (..., n)."""
-        return contract(self.tangents[:-1], xddot, self.value.ndim) + self.bias
 
     def reshape(self, shape: tuple[int, ...]) -> Jet:
         """The same jet with its value reshaped to ``shape`` (batch axes included)."""
@@ -159,26 +168,12 @@ class Jet:
 
 
 @dataclass(frozen=True, eq=False)
-class Spin:
+class Spin(_Motion):
     """Angular velocity of a batch of bodies: ``tangents`` (n + 1, ..., 3) (``J_w e_k``, then the
     angular velocity ``omega``) and ``bias`` (..., 3) (``alpha = J_w xddot + bias``)."""
 
     tangents: Array
     bias: Array
-
-    @property
-    def rate(self) -> Array:
-        """``omega`` (..., 3), rad/s."""
-        return self.tangents[-1]
-
-    @property
-    def jacobian(self) -> Array:
-        """``d omega / d xdot`` (..., 3, n)."""
-        return np.moveaxis(self.tangents[:-1], 0, -1)
-
-    def acceleration(self, xddot: ArrayLike) -> Array:
-        """Angular acceleration ``alpha = J_w xddot + bias`` (..., 3)."""
-        return contract(self.tangents[:-1], xddot, self.bias.ndim) + self.bias
 
 
 # ---------------------------------------------------------------------------------------- making

@@ -48,6 +48,7 @@ __all__ = [
     "import_mujoco",
     "site_jacobians",
     "open_loop",
+    "open_tree_forces",
     "track",
     "vector",
 ]
@@ -300,15 +301,7 @@ def inverse_dynamics(
 def _tree_forces(model, data, qacc: Array, jc: Array, sel: Array) -> Array:
     """Steps 3-4: ``mj_inverse`` of the open tree, then the minimum-norm ``u`` with
     ``Z^T S^T u = Z^T tau`` (``Z`` the null space of the loop Jacobian)."""
-    mujoco = import_mujoco()
-    bit = int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
-    model.opt.disableflags |= bit
-    try:
-        data.qacc[:] = qacc
-        mujoco.mj_inverse(model, data)
-        tau = np.array(data.qfrc_inverse)
-    finally:
-        model.opt.disableflags &= ~bit
+    tau = open_tree_forces(model, data, qacc)
     _, s, vt = np.linalg.svd(jc)
     rank = int(np.sum(s > s[0] * 1e-12)) if len(s) else 0
     z = vt[rank:].T
@@ -335,6 +328,20 @@ def _max_spin(mm: MujocoModel, data, qvel: Array) -> float:
 
 
 # ---------------------------------------------------------------------------------------- shared
+def open_tree_forces(model, data, qacc: Array) -> Array:
+    """Step 3 of the recipe: the generalised forces ``tau`` of the open tree (``mj_inverse`` with
+    the constraints disabled) at the state in ``data`` and the accelerations ``qacc``."""
+    mujoco = import_mujoco()
+    bit = int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
+    model.opt.disableflags |= bit
+    try:
+        data.qacc[:] = qacc
+        mujoco.mj_inverse(model, data)
+        return np.array(data.qfrc_inverse)
+    finally:
+        model.opt.disableflags &= ~bit
+
+
 def site_jacobians(model, data, pairs, with_dot: bool) -> tuple[Array, Array | None]:
     """Jacobians (and time derivatives, ``mj_jacDot``) of ``site1 - site2`` for each pair of
     site ids, stacked (3 rows a pair): the rows of ``connect`` loop closures."""

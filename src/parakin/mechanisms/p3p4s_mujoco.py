@@ -43,8 +43,8 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from parakin.dynamics.mujoco_check import Tracking, open_loop, open_tree_forces, site_jacobians
 from parakin.dynamics.mujoco_check import import_mujoco as _mujoco
-from parakin.dynamics.mujoco_check import open_loop, site_jacobians
 from parakin.dynamics.mujoco_check import vector as _vec
 from parakin.errors import ShapeError
 from parakin.mechanisms.base import Array, as_batch
@@ -347,7 +347,6 @@ def inverse_dynamics(
     sliders = np.array(mm.slider_dofs)
     sel = np.zeros((nv, 3))
     sel[sliders, np.arange(3)] = 1.0
-    constraint_bit = int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
     n_loop_rows = 3 * len(mm.site_pairs)
     ns = len(x)
     force, qdot, qddot = np.empty((ns, 3)), np.empty((ns, 3)), np.empty((ns, 3))
@@ -364,14 +363,7 @@ def inverse_dynamics(
         qacc[free] = np.linalg.lstsq(jc[:, free], -jdot @ qvel - jc[:, plat] @ a_plat, rcond=None)[
             0
         ]
-        # 3: generalised forces of the open tree, constraints off
-        model.opt.disableflags |= constraint_bit
-        try:
-            data.qacc[:] = qacc
-            mujoco.mj_inverse(model, data)
-            tau = np.array(data.qfrc_inverse)
-        finally:
-            model.opt.disableflags &= ~constraint_bit
+        tau = open_tree_forces(model, data, qacc)  # 3: the open tree, constraints off
         # 4: tau = S^T u + J_c^T lambda
         lhs = np.hstack([sel, jc.T])
         sol = np.linalg.lstsq(lhs, tau, rcond=None)[0]
@@ -392,18 +384,15 @@ def inverse_dynamics(
 
 
 @dataclass(frozen=True)
-class TrackingResult:
-    """An open-loop forward simulation: the platform's path against the target motion."""
-
-    t: Array  #: (n,) s
-    pose: Array  #: simulated platform position (n, 3), m
-    target: Array  #: the motion law at the same times (n, 3), m
-    loop_error: Array  #: max |efc_pos| of the loop closures (n,), m
+class TrackingResult(Tracking):
+    """An open-loop forward simulation: the platform's path against the target motion (the
+    generic :class:`~parakin.dynamics.mujoco_check.Tracking`; the platform only translates, so its
+    ``centre`` is its position, also ``pose``; ``loop_error`` max |efc_pos| of the loop closures)."""
 
     @property
-    def error(self) -> Array:
-        """``max_axis |pose - target|`` per sample (m)."""
-        return np.max(np.abs(self.pose - self.target), axis=-1)
+    def pose(self) -> Array:
+        """Simulated platform position (n, 3), m."""
+        return self.centre
 
 
 def track(
@@ -416,11 +405,8 @@ def track(
     ``model.opt.timestep`` (RK4) holds the force evaluated at the step's midpoint. With the right
     forces the platform follows ``motion``; a wrong force model makes it drift away.
     """
-    mujoco = _mujoco()
-    if not (np.isfinite(t_end) and t_end > 0):
-        raise ValueError(f"t_end = {t_end!r} s must be finite and > 0")
-    model = mm.model
-    data = mujoco.MjData(model)
+    model = mm.model  # open_loop checks t_end
+    data = _mujoco().MjData(model)
     p0 = np.asarray(motion.pose(0.0), dtype=float)
     _assemble(mm, data, p0, mm.mech.ik(p0), np.asarray(motion.velocity(0.0), dtype=float))
     plat = list(mm.platform_qpos)[:3]

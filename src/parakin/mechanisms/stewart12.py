@@ -41,6 +41,7 @@ import parakin.dynamics.jet as dj
 from parakin.dynamics.jet import Jet
 from parakin.dynamics.model import Bodies, MassModel, RigidBody, hexapod, hexapod_masses
 from parakin.errors import UnreachableError
+from parakin.geometry import quaternion
 from parakin.kernels import Kernel, evaluate
 from parakin.kernels import stewart12 as kernels
 from parakin.mechanisms.base import (
@@ -139,28 +140,7 @@ def _orientation_from_matrix(r: Array, convention: str) -> Array:
         a = np.arctan2(-r[..., 1, 2], r[..., 2, 2])
         c = np.arctan2(-r[..., 0, 1], r[..., 0, 0])
         return np.stack([a, b, c], -1)
-    # Shepperd's method: the largest of 4 w^2, 4 x^2, 4 y^2, 4 z^2 picks the stable branch
-    t = np.stack(
-        [
-            1 + r[..., 0, 0] + r[..., 1, 1] + r[..., 2, 2],
-            1 + r[..., 0, 0] - r[..., 1, 1] - r[..., 2, 2],
-            1 - r[..., 0, 0] + r[..., 1, 1] - r[..., 2, 2],
-            1 - r[..., 0, 0] - r[..., 1, 1] + r[..., 2, 2],
-        ],
-        -1,
-    )
-    k = np.argmax(t, axis=-1)
-    d = 0.5 * np.sqrt(np.maximum(np.take_along_axis(t, k[..., None], -1)[..., 0], 1e-300))
-    a, b, c = r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]
-    e, f, g = r[..., 0, 1] + r[..., 1, 0], r[..., 0, 2] + r[..., 2, 0], r[..., 1, 2] + r[..., 2, 1]
-    cand = [
-        np.stack([d, a / (4 * d), b / (4 * d), c / (4 * d)], -1),
-        np.stack([a / (4 * d), d, e / (4 * d), f / (4 * d)], -1),
-        np.stack([b / (4 * d), e / (4 * d), d, g / (4 * d)], -1),
-        np.stack([c / (4 * d), f / (4 * d), g / (4 * d), d], -1),
-    ]
-    quat = np.choose(k[..., None], cand)
-    quat = quat * np.where(quat[..., :1] < 0, -1.0, 1.0)
+    quat = quaternion(r)
     if convention == "euler_parameters":
         return quat[..., 1:]
     if convention == "cayley":
