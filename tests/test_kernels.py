@@ -12,6 +12,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from parakin import kernels, mechanisms
@@ -419,3 +420,53 @@ def test_stewart66_newton_compiled_equals_numpy(monkeypatch):
     np.testing.assert_array_equal(got.status, ref.status)
     assert got.success.mean() > 0.9
     np.testing.assert_allclose(got.x[got.success], ref.x[got.success], rtol=0, atol=1e-9)
+
+
+def test_kernel_goals_report_success_beside_speed():
+    """Every timed solve of the goals table carries the success rate of the solves it timed (the
+    6-6's pure Newton from home on its whole pose box fails there: a fast failure is not speed)."""
+    from parakin.bench import _sample, _solver_goals, format_goals
+
+    mech = MECHS["stewart66"]
+    rows = pd.DataFrame(_solver_goals(mech, n_single=4, n_batch=30, repeats=1))
+    rows = rows.set_index("what")
+    _, q1 = _sample(mech, 4, seed=17)
+    _, q2 = _sample(mech, 30, seed=18)
+    single = np.mean([bool(solve_fk(mech, q, method="newton", maxiter=100).success) for q in q1])
+    assert rows.loc["newton single call", "success_rate"] == single
+    assert rows.loc["newton single call vs scipy", "success_rate"] == single
+    batched = solve_fk(mech, q2, method="newton", maxiter=100).success.mean()
+    assert rows.loc["newton batched", "success_rate"] == batched
+    assert rows["success_rate"].between(0, 1).all()
+    table = format_goals(rows.reset_index())
+    assert "| success |" in table.splitlines()[0]
+    assert f"| {single:.1%} |" in table
+
+
+_ONE_PROCESS = """
+import numpy as np
+from parakin.mechanisms import Stewart36, Stewart66
+from parakin.solvers import solve_fk
+m36, m66 = Stewart36(), Stewart66()
+solve_fk(m66, m66.ik(m66.home()), method="newton")  # the 6-6's entries loaded first
+rng = np.random.default_rng(17)
+lo, hi = m36.pose_bounds()
+x = rng.uniform(lo, hi, (300, 6))
+q = m36.ik(x[m36.in_domain(x)][:100])
+r = [solve_fk(m36, qq, method="newton", maxiter=100) for qq in q]
+ok = np.array([bool(s.success) for s in r])
+print(int(ok.sum()), int(m36.on_assembly(np.array([s.x for s in r])[ok], q[ok]).sum()))
+"""
+
+
+def test_kernels_sharing_functions_keep_their_own_entries():
+    """The 6-6's kernel takes the 3-6's functions but not its assembly test: a process that loads
+    both kernels' cached entries (the second run here) verifies each solve by its own kernel (once,
+    the 3-6's single solves were judged by the 6-6's test: a third of their successes on the
+    wrong assembly)."""
+    for _ in range(2):  # the first run may compile and cache; the second loads both from the cache
+        out = subprocess.run(
+            [sys.executable, "-c", _ONE_PROCESS], capture_output=True, text=True, check=True
+        )
+        successes, on_assembly = map(int, out.stdout.split())
+        assert successes > 0 and on_assembly == successes

@@ -199,15 +199,23 @@ def kernel_goals(
 
 
 def _goal_row(
-    mech: str, what: str, value: float, unit: str, goal: float, higher: bool = True
+    mech: str,
+    what: str,
+    value: float,
+    unit: str,
+    goal: float,
+    higher: bool = True,
+    success: float = np.nan,
 ) -> dict[str, Any]:
     """One row of :func:`kernel_goals`; ``met`` when ``value`` is at least (``higher``) or at most
-    ``goal``."""
+    ``goal``; ``success``: the success rate of the solves timed (NaN where not a solve), beside the
+    speed, since a solver that fails fast is not fast."""
     return {
         "mechanism": mech,
         "what": what,
         "value": value,
         "unit": unit,
+        "success_rate": success,
         "goal": goal,
         "met": bool(value >= goal if higher else value <= goal),
     }
@@ -220,29 +228,31 @@ def _solver_goals(mech: Mechanism, n_single: int, n_batch: int, repeats: int) ->
     _, q1 = _sample(mech, n_single, seed=17)
     _, q2 = _sample(mech, n_batch, seed=18)
 
-    def latency(method: str) -> float:
+    def latency(method: str) -> tuple[float, float]:
+        """Median seconds of one call, and the success rate of those calls."""
         solve_fk(mech, q1[0], method=method, maxiter=100)  # warm-up: load the cached kernels
         lat = np.empty(len(q1))
+        ok = np.empty(len(q1), dtype=bool)
         for i in range(len(q1)):
             t0 = time.perf_counter()
-            solve_fk(mech, q1[i], method=method, maxiter=100)
+            r = solve_fk(mech, q1[i], method=method, maxiter=100)
             lat[i] = time.perf_counter() - t0
-        return float(np.median(lat))
+            ok[i] = r.success
+        return float(np.median(lat)), float(ok.mean())
 
-    base = latency(BASELINE)
-    rows.append(_goal_row(mech.name, "scipy.optimize.root single call", base * 1e6, "us", np.nan))
+    base, base_ok = latency(BASELINE)
+    name = mech.name
+    rows.append(_goal_row(name, "scipy.optimize.root single call", base * 1e6, "us", np.nan, success=base_ok))  # fmt: skip
     for method in ("newton", "lm", "broyden", "bfgs"):
-        t = latency(method)
-        rows.append(_goal_row(mech.name, f"{method} single call", t * 1e6, "us", np.nan))
-        rows.append(
-            _goal_row(
-                mech.name, f"{method} single call vs scipy", base / t, "x", GOALS["single_vs_scipy"]
-            )
-        )
+        t, ok = latency(method)
+        rows.append(_goal_row(name, f"{method} single call", t * 1e6, "us", np.nan, success=ok))
+        goal = GOALS["single_vs_scipy"]
+        rows.append(_goal_row(name, f"{method} single call vs scipy", base / t, "x", goal, success=ok))  # fmt: skip
     for method, goal in (("newton", GOALS["newton_per_s"]), ("lm", GOALS["lm_per_s"])):
         solve_fk(mech, q2[:1000], method=method, maxiter=100)
-        t = best_time(lambda: solve_fk(mech, q2, method=method, maxiter=100), repeats)  # noqa: B023
-        rows.append(_goal_row(mech.name, f"{method} batched", len(q2) / t, "solves/s", goal))
+        t, r = best_of(lambda: solve_fk(mech, q2, method=method, maxiter=100), repeats)  # noqa: B023
+        ok = float(np.mean(r.success))
+        rows.append(_goal_row(name, f"{method} batched", len(q2) / t, "solves/s", goal, success=ok))
     return rows
 
 
@@ -310,7 +320,10 @@ def _pso_goals(mech: Mechanism) -> list[dict]:
 
 def format_goals(df: pd.DataFrame) -> str:
     """The rows of :func:`kernel_goals` as a Markdown table."""
-    lines = ["| mechanism | measurement | value | goal | met |", "|---|---|---|---|---|"]
+    lines = [
+        "| mechanism | measurement | value | success | goal | met |",
+        "|---|---|---|---|---|---|",
+    ]
     for r in df.itertuples():
         goal = (
             ""
@@ -318,7 +331,11 @@ def format_goals(df: pd.DataFrame) -> str:
             else f"{'<=' if r.unit in ('s', 'ms/input') else '>='} {r.goal:.3g} {r.unit}"
         )
         met = "" if not np.isfinite(r.goal) else ("yes" if r.met else "no")
-        lines.append(f"| {r.mechanism} | {r.what} | {r.value:.3g} {r.unit} | {goal} | {met} |")
+        rate = getattr(r, "success_rate", np.nan)
+        success = f"{rate:.1%}" if np.isfinite(rate) else ""
+        lines.append(
+            f"| {r.mechanism} | {r.what} | {r.value:.3g} {r.unit} | {success} | {goal} | {met} |"
+        )
     return "\n".join(lines)
 
 

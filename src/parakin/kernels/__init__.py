@@ -375,7 +375,12 @@ def entries_of(module: types.ModuleType, group: str) -> types.SimpleNamespace:
         for name in names:
             fn = getattr(entries, name)
             copy = types.FunctionType(fn.__code__, glob, fn.__name__, fn.__defaults__)
-            copy.__qualname__, copy.__module__ = fn.__qualname__, fn.__module__
+            # a name of its own per kernel: numba names a compiled function by its qualified name
+            # and a per-process counter, so two kernels' cached copies of one entry can carry the
+            # same symbol, and a process that loads both links one kernel's calls to the other's
+            # (the 3-6's single solves verified by the 6-6's assembly test)
+            copy.__qualname__ = f"{fn.__qualname__}__{module.__name__.replace('.', '_')}"
+            copy.__module__ = fn.__module__
             glob[name] = numba.njit(parallel=name.endswith("parallel"), **_NJIT)(copy)
             out[name] = _Entry(glob[name], path)  # an unreadable file: the whole build is rebuilt
     return types.SimpleNamespace(**out)
