@@ -15,6 +15,7 @@ from parakin.config import rng
 from parakin.io import write_table
 from parakin.papers.li2020_2ups.common import KEY, artefact, mech, table_and_figure
 from parakin.papers.li2020_2ups.symbolic import derivation, loop_closure_model
+from parakin.papers.sections import table_text
 from parakin.plot import (
     draw_mechanism,
     new_figure,
@@ -452,43 +453,50 @@ def _equation_claims(df: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
     return out
 
 
+def _workspace_sentence(d: pd.DataFrame) -> str:
+    """Eq. (19)'s stroke limits and the sign of det J over Table 1's search box."""
+    sign_change = bool((d["det_J_m2"] > 0).any() and (d["det_J_m2"] < 0).any())
+    return (
+        f"**Singularities and workspace (ours).** Over Table 1's search box, eq. (19)'s stroke limits hold on "
+        f"{d['within_eq19'].mean():.0%} of the (beta, gamma, Y) grid; det J "
+        f"{'changes sign (a singularity crosses the box)' if sign_change else 'keeps its sign (no singularity in the box)'}"
+        f", max cond(J) = {d['cond_J'].max():.3g} (`extra_singularity_workspace.png`)."
+    )
+
+
+def _concomitant_sentence(checks: pd.DataFrame) -> str:
+    """What sympy and the loop-closure model say of the concomitant motion and of eq. (16)."""
+    df = checks.set_index("check")
+    ok = all(df.loc[k, "value"] == 1.0 for k in df.index if "closed form" in k or "eq (7)" in k)
+    return (
+        "Concomitant motion: sympy confirms eq (7) and that the first constraint of (6) reads "
+        f"`{df.loc['B2B3 . e_y', 'detail']} = 0`, so α = 0 (α = π is the flipped platform); an independent "
+        f"loop-closure model gives max |α| = {df.loc['max |alpha| (rad), loop-closure model', 'value']:.2g} rad. "
+        f"The vector IK (9)-(11) equals our scalar closed forms symbolically: {'yes' if ok else 'NO'}; the printed (16) "
+        f"differs from it by `{df.loc['printed (16)^2 - vector |l2|^2', 'detail'].split(' (')[0]}` (Y missing)."
+    )
+
+
+def _fk_solutions_sentence(df: pd.DataFrame) -> str:
+    """How many real FK solutions the poses of the box grid have."""
+    counts = df["n_real"].value_counts().sort_index()
+    return (
+        "Real FK solutions (ρ > 0 branch) over the box grid: "
+        + ", ".join(f"{int(k)}: {int(v)} poses" for k, v in counts.items())
+        + f"; solutions inside the Table 1 box: min {df['n_in_box'].min()}, max {df['n_in_box'].max()}."
+    )
+
+
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
-    parts = []
-    sw = figdir / "extra_singularity_workspace.csv"
-    if sw.exists():
-        d = pd.read_csv(sw)
-        sign_change = bool((d["det_J_m2"] > 0).any() and (d["det_J_m2"] < 0).any())
-        parts.append(
-            f"**Singularities and workspace (ours).** Over Table 1's search box, eq. (19)'s stroke limits hold on "
-            f"{d['within_eq19'].mean():.0%} of the (beta, gamma, Y) grid; det J "
-            f"{'changes sign (a singularity crosses the box)' if sign_change else 'keeps its sign (no singularity in the box)'}"
-            f", max cond(J) = {d['cond_J'].max():.3g} (`extra_singularity_workspace.png`)."
-        )
-    path = figdir / "extra_concomitant.csv"
-    if path.exists():
-        df = pd.read_csv(path).set_index("check")
-        ok = all(df.loc[k, "value"] == 1.0 for k in df.index if "closed form" in k or "eq (7)" in k)
-        parts.append(
-            "Concomitant motion: sympy confirms eq (7) and that the first constraint of (6) reads "
-            f"`{df.loc['B2B3 . e_y', 'detail']} = 0`, so α = 0 (α = π is the flipped platform); an independent "
-            f"loop-closure model gives max |α| = {df.loc['max |alpha| (rad), loop-closure model', 'value']:.2g} rad. "
-            f"The vector IK (9)-(11) equals our scalar closed forms symbolically: {'yes' if ok else 'NO'}; the printed (16) "
-            f"differs from it by `{df.loc['printed (16)^2 - vector |l2|^2', 'detail'].split(' (')[0]}` (Y missing)."
-        )
-    path = figdir / "extra_parasitic.csv"
-    if path.exists():
-        df = pd.read_csv(path)
-        parts.append(
-            f"Parasitic translations over the Table 1 box: |X| up to {df['X_mm'].abs().max():.1f} mm, "
-            f"ΔZ up to {df['dZ_mm'].max():.1f} mm — 'no concomitant motion' holds only for the rotation about z."
-        )
-    path = figdir / "extra_fk_solutions.csv"
-    if path.exists():
-        df = pd.read_csv(path)
-        counts = df["n_real"].value_counts().sort_index()
-        parts.append(
-            "Real FK solutions (ρ > 0 branch) over the box grid: "
-            + ", ".join(f"{int(k)}: {int(v)} poses" for k, v in counts.items())
-            + f"; solutions inside the Table 1 box: min {df['n_in_box'].min()}, max {df['n_in_box'].max()}."
-        )
-    return "\n\n".join(parts)
+    return table_text(
+        figdir,
+        {
+            "extra_singularity_workspace.csv": _workspace_sentence,
+            "extra_concomitant.csv": _concomitant_sentence,
+            "extra_parasitic.csv": lambda df: (
+                f"Parasitic translations over the Table 1 box: |X| up to {df['X_mm'].abs().max():.1f} mm, "
+                f"ΔZ up to {df['dZ_mm'].max():.1f} mm — 'no concomitant motion' holds only for the rotation about z."
+            ),
+            "extra_fk_solutions.csv": _fk_solutions_sentence,
+        },
+    )

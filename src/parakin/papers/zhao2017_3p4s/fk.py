@@ -22,6 +22,7 @@ from parakin.io import atomic_write_text, atomic_writer, write_and_draw, write_c
 from parakin.mechanisms import P3P4S
 from parakin.nn.bp import plateau_epoch
 from parakin.papers.runs import map_runs
+from parakin.papers.sections import table_text
 from parakin.papers.zhao2017_3p4s.common import KEY, artefact
 from parakin.papers.zhao2017_3p4s.kinematics import table1_inputs
 from parakin.registry import EXACT, ITERATIVE, Tolerance
@@ -1234,54 +1235,66 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     return out
 
 
+def _hybrid_paragraph(tab: pd.DataFrame, accuracy: pd.DataFrame, ref: pd.DataFrame) -> str:
+    """Table 2: the network's accuracy and the hybrid FK's iterations and time against the paper's."""
+    a = accuracy.iloc[0]
+    smallest = accuracy.iloc[-1]
+    e3 = [float(printed_value(ref, "table2", f"case{k}.e3")) for k in range(1, 6)]
+    return (
+        f"**Table 2 (hybrid FK).** Our 3-10-3 network, trained by Levenberg–Marquardt on {int(a['samples'])} IK "
+        f"samples over the whole workspace box, predicts the platform position with a test-set RMS error of "
+        f"{a['test_rms_m']:.2e} m (max {a['test_max_m']:.2e} m), "
+        f"{a['test_rms_m'] / float(printed_value(ref, 'text_s1.1', 'network_accuracy')):.0f}× the paper's "
+        f"'{printed_value(ref, 'text_s1.1', 'network_accuracy')} level', which depends on a sampling region the paper "
+        f"does not state: the same training on the box {smallest['box']!r} gives {smallest['test_rms_m']:.1e} m "
+        "(`extra_bp_accuracy.md`). Broyden's quasi-Newton method from that "
+        f"guess, stopped at the paper's eps = {printed_value(ref, 'text_s1.1', 'epsilon')}, gives E_3 between "
+        f"{tab['e3'].min():.1e} and {tab['e3'].max():.1e} m in {int(tab['iterations'].min())}–"
+        f"{int(tab['iterations'].max())} iterations and {tab['time_ms'].min():.2f}–{tab['time_ms'].max():.2f} ms per "
+        f"solve on this machine (paper: E_3 {min(e3):.2e}–{max(e3):.2e} m, "
+        f"{printed_value(ref, 'text_s1.1', 'fk_iterations')} iterations, "
+        f"< {printed_value(ref, 'text_s1.1', 'fk_time_max')} ms). Rows 2 and 4 of the printed table are internally "
+        "inconsistent (see the notes of the reference CSV)."
+    )
+
+
+def _convergence_paragraph(convergence: pd.DataFrame, ref: pd.DataFrame) -> str:
+    """The network's accuracy when trained to convergence, per sampling region."""
+    c = convergence.set_index("region")
+    row = lambda role: c[c["role"] == role].iloc[0]  # noqa: E731
+    ours, paper = row("ours (the pipeline's network)"), row("the paper's working poses")
+    return (
+        f"**Network accuracy trained to convergence.** With a convergence rule fixed before the runs "
+        f"(best validation error not {ours['min_improvement']:.0%} better over {int(ours['window'])} "
+        f"epochs), {int(c['converged_runs'].sum())} of {int(c['restarts'].sum())} trainings converged; "
+        f"median test RMS error {ours['test_rms_median_m']:.1e} m on our box, "
+        f"{paper['test_rms_median_m']:.1e} m on Table 1's box, "
+        f"{c['test_rms_median_m'].min():.1e} m on the smallest, against the paper's "
+        f"'{printed_value(ref, 'text_s1.1', 'network_accuracy')} level' "
+        "(`zhao2017_3p4s/extra_bp_convergence.md`; the cause is judged in the table above)."
+    )
+
+
+def _benchmark_paragraph(b: pd.DataFrame) -> str:
+    """The FK solvers' single-solve latency and batched throughput."""
+    h = b[b["method"] == "hybrid"].iloc[0]
+    c = b[b["method"] == "closed-form"].iloc[0]
+    r = b[b["method"] == "scipy-root"].iloc[0]
+    return (
+        f"**FK benchmark (ours).** Median single solve: hybrid {h['median_latency_us']:.0f} µs "
+        f"({h['speedup_vs_paper_20ms']:.0f}× under the paper's 20 ms), closed form {c['median_latency_us']:.0f} µs, "
+        f"scipy.optimize.root {r['median_latency_us']:.0f} µs. Batched throughput: hybrid "
+        f"{h['throughput_per_s']:.3g}/s, closed form {c['throughput_per_s']:.3g}/s, against {r['throughput_per_s']:.3g}/s "
+        "for a loop over scipy.optimize.root (`zhao2017_3p4s/fk_benchmark.md`)."
+    )
+
+
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
-    parts = []
-    if (figdir / "table2.csv").exists() and (figdir / "extra_bp_accuracy.csv").exists():
-        tab = pd.read_csv(figdir / "table2.csv")
-        accuracy = pd.read_csv(figdir / "extra_bp_accuracy.csv")
-        a = accuracy.iloc[0]
-        smallest = accuracy.iloc[-1]
-        e3 = [float(printed_value(ref, "table2", f"case{k}.e3")) for k in range(1, 6)]
-        parts.append(
-            f"**Table 2 (hybrid FK).** Our 3-10-3 network, trained by Levenberg–Marquardt on {int(a['samples'])} IK "
-            f"samples over the whole workspace box, predicts the platform position with a test-set RMS error of "
-            f"{a['test_rms_m']:.2e} m (max {a['test_max_m']:.2e} m), "
-            f"{a['test_rms_m'] / float(printed_value(ref, 'text_s1.1', 'network_accuracy')):.0f}× the paper's "
-            f"'{printed_value(ref, 'text_s1.1', 'network_accuracy')} level', which depends on a sampling region the paper "
-            f"does not state: the same training on the box {smallest['box']!r} gives {smallest['test_rms_m']:.1e} m "
-            "(`extra_bp_accuracy.md`). Broyden's quasi-Newton method from that "
-            f"guess, stopped at the paper's eps = {printed_value(ref, 'text_s1.1', 'epsilon')}, gives E_3 between "
-            f"{tab['e3'].min():.1e} and {tab['e3'].max():.1e} m in {int(tab['iterations'].min())}–"
-            f"{int(tab['iterations'].max())} iterations and {tab['time_ms'].min():.2f}–{tab['time_ms'].max():.2f} ms per "
-            f"solve on this machine (paper: E_3 {min(e3):.2e}–{max(e3):.2e} m, "
-            f"{printed_value(ref, 'text_s1.1', 'fk_iterations')} iterations, "
-            f"< {printed_value(ref, 'text_s1.1', 'fk_time_max')} ms). Rows 2 and 4 of the printed table are internally "
-            "inconsistent (see the notes of the reference CSV)."
-        )
-    if (figdir / "extra_bp_convergence.csv").exists():
-        c = pd.read_csv(figdir / "extra_bp_convergence.csv").set_index("region")
-        row = lambda role: c[c["role"] == role].iloc[0]  # noqa: E731
-        ours, paper = row("ours (the pipeline's network)"), row("the paper's working poses")
-        parts.append(
-            f"**Network accuracy trained to convergence.** With a convergence rule fixed before the runs "
-            f"(best validation error not {ours['min_improvement']:.0%} better over {int(ours['window'])} "
-            f"epochs), {int(c['converged_runs'].sum())} of {int(c['restarts'].sum())} trainings converged; "
-            f"median test RMS error {ours['test_rms_median_m']:.1e} m on our box, "
-            f"{paper['test_rms_median_m']:.1e} m on Table 1's box, "
-            f"{c['test_rms_median_m'].min():.1e} m on the smallest, against the paper's "
-            f"'{printed_value(ref, 'text_s1.1', 'network_accuracy')} level' "
-            "(`zhao2017_3p4s/extra_bp_convergence.md`; the cause is judged in the table above)."
-        )
-    if (figdir / "fk_benchmark.csv").exists():
-        b = pd.read_csv(figdir / "fk_benchmark.csv")
-        h = b[b["method"] == "hybrid"].iloc[0]
-        c = b[b["method"] == "closed-form"].iloc[0]
-        r = b[b["method"] == "scipy-root"].iloc[0]
-        parts.append(
-            f"**FK benchmark (ours).** Median single solve: hybrid {h['median_latency_us']:.0f} µs "
-            f"({h['speedup_vs_paper_20ms']:.0f}× under the paper's 20 ms), closed form {c['median_latency_us']:.0f} µs, "
-            f"scipy.optimize.root {r['median_latency_us']:.0f} µs. Batched throughput: hybrid "
-            f"{h['throughput_per_s']:.3g}/s, closed form {c['throughput_per_s']:.3g}/s, against {r['throughput_per_s']:.3g}/s "
-            "for a loop over scipy.optimize.root (`zhao2017_3p4s/fk_benchmark.md`)."
-        )
-    return "\n\n".join(parts)
+    return table_text(
+        figdir,
+        {
+            ("table2.csv", "extra_bp_accuracy.csv"): lambda t, a: _hybrid_paragraph(t, a, ref),
+            "extra_bp_convergence.csv": lambda c: _convergence_paragraph(c, ref),
+            "fk_benchmark.csv": _benchmark_paragraph,
+        },
+    )
