@@ -499,12 +499,12 @@ def _paper_fitness(ref: pd.DataFrame) -> list[str]:
 
 def _weights_sentence(t: pd.DataFrame) -> str:
     """Table 1: the chaotic weights per 0.1 bin against the arcsine law."""
-    cols = [c for c in t.columns if c.startswith("count_mu")]
     return (
         "Chaotic weights per 0.1 bin: "
         + "; ".join(
             f"{c.replace('count_mu', 'mu = ')}: {', '.join(str(int(v)) for v in t[c])}"
-            for c in cols
+            for c in t.columns
+            if c.startswith("count_mu")
         )
         + f" (arcsine law: {', '.join(f'{v:.1f}' for v in t['arcsine_expected'])})."
     )

@@ -781,11 +781,12 @@ def _counts_b_sentence(c: pd.DataFrame, ref: pd.DataFrame) -> str:
 
 def _table3_sentence(t: pd.DataFrame) -> str:
     """Table 3's rows 2-19 under the lengths of row 1."""
-    fcols = [col for col in t.columns if col.startswith("F_b")]
     return (
         "Table 3 rows 2-19 under L = IK(row 1): F (eq. 4) from "
         + "; ".join(
-            f"{col[2:]}: {t[col].iloc[1:].min():.2g}…{t[col].iloc[1:].max():.2g}" for col in fcols
+            f"{col[2:]}: {t[col].iloc[1:].min():.2g}…{t[col].iloc[1:].max():.2g}"
+            for col in t.columns
+            if col.startswith("F_b")
         )
         + f" (a solution has F ~ 1e-30); {int((~t['inside_sec4_ranges'].astype(bool)).sum())} of 19 rows lie outside the §4 ranges."
     )

@@ -464,9 +464,9 @@ def _workspace_sentence(d: pd.DataFrame) -> str:
     )
 
 
-def _concomitant_sentence(checks: pd.DataFrame) -> str:
-    """What sympy and the loop-closure model say of the concomitant motion and of eq. (16)."""
-    df = checks.set_index("check")
+def _concomitant_sentence(df: pd.DataFrame) -> str:
+    """What sympy and the loop-closure model say of the concomitant motion and of eq. (16), from
+    the checks indexed by name."""
     ok = all(df.loc[k, "value"] == 1.0 for k in df.index if "closed form" in k or "eq (7)" in k)
     return (
         "Concomitant motion: sympy confirms eq (7) and that the first constraint of (6) reads "
@@ -492,7 +492,7 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
         figdir,
         {
             "extra_singularity_workspace.csv": _workspace_sentence,
-            "extra_concomitant.csv": _concomitant_sentence,
+            "extra_concomitant.csv": lambda c: _concomitant_sentence(c.set_index("check")),
             "extra_parasitic.csv": lambda df: (
                 f"Parasitic translations over the Table 1 box: |X| up to {df['X_mm'].abs().max():.1f} mm, "
                 f"ΔZ up to {df['dZ_mm'].max():.1f} mm — 'no concomitant motion' holds only for the rotation about z."
