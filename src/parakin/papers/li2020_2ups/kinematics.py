@@ -380,61 +380,70 @@ def _equation_claims(df: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
     extra_concomitant.csv (sympy identities encoded 1 = holds, numeric residuals encoded as 0)."""
     enc = "encoding: printed 1 = the paper's equation; ours 1 = sympy proves the identity, 0 = it fails"
     v = df["value"]
-    out = [
-        Claim(
+
+    def check(
+        artefact: str,
+        quantity: str,
+        name: str,
+        unit: str,
+        variant: str,
+        reason: str,
+        scale: float = 1.0,
+    ) -> Claim:
+        """The claim ``artefact.quantity`` that the check ``name`` of extra_concomitant decides."""
+        ours = float(v[name]) * scale
+        return Claim(
             KEY,
+            artefact,
+            quantity,
+            printed_value(ref, artefact, quantity),
+            ours,
+            unit,
+            variant=variant,
+            reason=reason,
+        )
+
+    out = [
+        check(
             "eq7",
             "B2B3_identity",
-            printed_value(ref, "eq7", "B2B3_identity"),
-            float(v["B2B3 = R (B3' - B2') equals eq (7)"]),
+            "B2B3 = R (B3' - B2') equals eq (7)",
             "1",
-            variant="sympy: R(alpha, beta, gamma) (eq 1) applied to B3' - B2' (eq 5) minus eq (7)",
-            reason=enc + " (the extracted 'S_beta' is read as sin(beta))",
+            "sympy: R(alpha, beta, gamma) (eq 1) applied to B3' - B2' (eq 5) minus eq (7)",
+            enc + " (the extracted 'S_beta' is read as sin(beta))",
         ),
-        Claim(
-            KEY,
+        check(
             "eq14",
             "P_identity",
-            printed_value(ref, "eq14", "P_identity"),
-            float(v["eq (14) satisfies (6) and (12)"]),
+            "eq (14) satisfies (6) and (12)",
             "1",
-            variant="sympy: P = (sin b sqrt(c^2 - Y^2), Y, cos b sqrt(c^2 - Y^2)) satisfies (6) and (12)",
-            reason=enc,
-        ),
-        Claim(
-            KEY,
-            "eq14",
-            "X_residual",
-            printed_value(ref, "eq14", "X_residual"),
-            float(v["max |X - rho sin beta| (m)"]) * 1e3,
-            "mm",
-            variant="max |X - sin(b) sqrt(c^2 - Y^2)| over an independent loop-closure model",
-            reason="numeric residual of eq (14), tolerance 1e-9 mm (round-off)",
-        ),
-        Claim(
-            KEY,
-            "eq14",
-            "Z_residual",
-            printed_value(ref, "eq14", "Z_residual"),
-            float(v["max |Z - rho cos beta| (m)"]) * 1e3,
-            "mm",
-            variant="max |Z - cos(b) sqrt(c^2 - Y^2)| over an independent loop-closure model",
-            reason="numeric residual of eq (14), tolerance 1e-9 mm (round-off)",
+            "sympy: P = (sin b sqrt(c^2 - Y^2), Y, cos b sqrt(c^2 - Y^2)) satisfies (6) and (12)",
+            enc,
         ),
     ]
-    for j in (1, 2, 3):
-        out.append(
-            Claim(
-                KEY,
-                "eq9-11",
-                f"l{j}_identity",
-                printed_value(ref, "eq9-11", f"l{j}_identity"),
-                float(v[f"|l{j}|^2 vector form = closed form"]),
-                "1",
-                variant=f"sympy: |l{j}|^2 of the vector form (eqs 9-11, 14) = our scalar closed form",
-                reason=enc,
-            )
+    out += [
+        check(
+            "eq14",
+            f"{x}_residual",
+            f"max |{x} - rho {trig} beta| (m)",
+            "mm",
+            f"max |{x} - {trig}(b) sqrt(c^2 - Y^2)| over an independent loop-closure model",
+            "numeric residual of eq (14), tolerance 1e-9 mm (round-off)",
+            scale=1e3,
         )
+        for x, trig in (("X", "sin"), ("Z", "cos"))
+    ]
+    out += [
+        check(
+            "eq9-11",
+            f"l{j}_identity",
+            f"|l{j}|^2 vector form = closed form",
+            "1",
+            f"sympy: |l{j}|^2 of the vector form (eqs 9-11, 14) = our scalar closed form",
+            enc,
+        )
+        for j in (1, 2, 3)
+    ]
     diff = df.loc["printed (16)^2 - vector |l2|^2"]
     out.append(
         Claim(
