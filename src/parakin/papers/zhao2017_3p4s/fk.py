@@ -373,6 +373,73 @@ def _convergence_run(config_json: str, name: str, k: int) -> dict:
     return {"summary": s, "curve": curve, "samples": len(poses), "weights": net.n_weights}
 
 
+def _convergence_row(name: str, box, mine: list[dict], config: dict, printed: str) -> dict:
+    """The row of extra_bp_convergence for region ``name`` (``box``: its low and high corners)
+    from its trainings ``mine`` (each as :func:`_convergence_run` returns it)."""
+    cfg = convergence_settings(config)
+    fk_cfg = config[KEY]["fk"]
+    lo, hi = box
+    runs = [r["summary"] for r in mine]
+    rms = np.array([s["test_rms_m"] for s in runs])
+    e3 = float(np.median([s["test_mean_abs_axis_m"] for s in runs]))
+    stats = run_summary(rms)
+    role = (
+        "ours (the pipeline's network)"
+        if name == OURS
+        else "the paper's working poses"
+        if name == cfg["paper_region"]
+        else "a smaller box"
+    )
+    return {
+        "region": name,
+        "role": role,
+        "low": _fmt_box(lo),
+        "high": _fmt_box(hi),
+        "samples": mine[0]["samples"],
+        "hidden": fk_cfg["hidden"],
+        "weights": mine[0]["weights"],
+        "restarts": len(runs),
+        "window": cfg["window"],
+        "min_improvement": cfg["min_improvement"],
+        "max_epochs": cfg["max_epochs"],
+        "converged_runs": sum(s["stop_reason"] != "max_epochs" for s in runs),
+        "epochs_median": float(np.median([s["epochs"] for s in runs])),
+        "test_rms_median_m": stats["median"],
+        "test_rms_ci_low_m": stats["ci_low"],
+        "test_rms_ci_high_m": stats["ci_high"],
+        "test_rms_min_m": stats["min"],
+        "test_rms_max_m": stats["max"],
+        "test_p95_median_m": float(np.median([s["test_p95_m"] for s in runs])),
+        "test_e3_median_m": e3,
+        "range_at_paper_level": judge(
+            printed, stats["median"], kind="order", spread=(stats["min"], stats["max"])
+        )
+        == REPRODUCED,
+        "e3_median_at_paper_level": judge(printed, e3, kind="order") == REPRODUCED,
+    }
+
+
+def _convergence_notes(cfg: dict, fk_cfg: dict, printed: str) -> str:
+    """The notes of extra_bp_convergence: the sampling, the convergence rule, the error measures."""
+    return (
+        f"Each region: {cfg['samples']} IK samples uniform in the box (m), the 3-{fk_cfg['hidden']}-3 network "
+        f"trained {cfg['restarts']} times from different seeds, "
+        f"{1 - fk_cfg['val_fraction'] - fk_cfg['test_fraction']:.0%}/{fk_cfg['val_fraction']:.0%}/"
+        f"{fk_cfg['test_fraction']:.0%} split, LM as MATLAB trainlm but without its 6-failure validation stop. "
+        f"Convergence rule, fixed before the runs: stop when the best validation RMS error has not improved by "
+        f"{cfg['min_improvement']:.0%} over the last {cfg['window']} epochs ('mu_max' and 'min_grad' also mean no "
+        f"further progress); a run reaching the cap of {cfg['max_epochs']} epochs has not converged. Errors: "
+        "|predicted - true| platform position (m, 3-D) of each best-validation network on its test set; median, "
+        f"its {100 * CI_LEVEL:g} % confidence interval (order statistics; with 10 runs the whole range), min and max "
+        "over the runs; test_e3_median_m: median over the runs of the mean absolute coordinate "
+        "error (Table 2's E_3 averaged over the test set). The paper (§1.1) claims a "
+        f"'{printed} level' without stating the region or the error measure; range_at_paper_level: some run "
+        "within half a decade of it (the reference CSV's tolerance; the paper reports one training), "
+        "e3_median_at_paper_level: the median E_3 within half a decade. Runs side by side on the job's "
+        "cores, each on one thread from its own seed."
+    )
+
+
 @artefact(
     "network_convergence",
     outputs=[
@@ -396,7 +463,6 @@ def network_convergence(config: dict, outdir: Path) -> list[Path]:
     (§1.1: "1e-4 level") comes from the epoch limit of the pipeline's training or from the region
     sampled (docs/zhao2017_3p4s.md#s4.5)."""
     cfg = convergence_settings(config)
-    fk_cfg = config[KEY]["fk"]
     printed = printed_value(_ref(), "text_s1.1", "network_accuracy")
     tasks = [
         (json.dumps(config, sort_keys=True, default=list), name, k)
@@ -405,75 +471,19 @@ def network_convergence(config: dict, outdir: Path) -> list[Path]:
     ]
     results = map_runs(_convergence_run, tasks, label="network_convergence: trainings")
     rows, curves = [], []
-    for name, (lo, hi) in cfg["regions"].items():
+    for name, box in cfg["regions"].items():
         mine = [r for (_, region, _), r in zip(tasks, results) if region == name]
-        runs = [r["summary"] for r in mine]
         curves += [
             pd.DataFrame({"region": name, **r["curve"], "paper_accuracy_m": float(printed)})
             for r in mine
         ]
-        rms = np.array([s["test_rms_m"] for s in runs])
-        e3 = float(np.median([s["test_mean_abs_axis_m"] for s in runs]))
-        stats = run_summary(rms)
-        role = (
-            "ours (the pipeline's network)"
-            if name == OURS
-            else "the paper's working poses"
-            if name == cfg["paper_region"]
-            else "a smaller box"
-        )
-        rows.append(
-            {
-                "region": name,
-                "role": role,
-                "low": _fmt_box(lo),
-                "high": _fmt_box(hi),
-                "samples": mine[0]["samples"],
-                "hidden": fk_cfg["hidden"],
-                "weights": mine[0]["weights"],
-                "restarts": len(runs),
-                "window": cfg["window"],
-                "min_improvement": cfg["min_improvement"],
-                "max_epochs": cfg["max_epochs"],
-                "converged_runs": sum(s["stop_reason"] != "max_epochs" for s in runs),
-                "epochs_median": float(np.median([s["epochs"] for s in runs])),
-                "test_rms_median_m": stats["median"],
-                "test_rms_ci_low_m": stats["ci_low"],
-                "test_rms_ci_high_m": stats["ci_high"],
-                "test_rms_min_m": stats["min"],
-                "test_rms_max_m": stats["max"],
-                "test_p95_median_m": float(np.median([s["test_p95_m"] for s in runs])),
-                "test_e3_median_m": e3,
-                "range_at_paper_level": judge(
-                    printed, stats["median"], kind="order", spread=(stats["min"], stats["max"])
-                )
-                == REPRODUCED,
-                "e3_median_at_paper_level": judge(printed, e3, kind="order") == REPRODUCED,
-            }
-        )
+        rows.append(_convergence_row(name, box, mine, config, printed))
     tab = pd.DataFrame(rows)
-    notes = (
-        f"Each region: {cfg['samples']} IK samples uniform in the box (m), the 3-{fk_cfg['hidden']}-3 network "
-        f"trained {cfg['restarts']} times from different seeds, "
-        f"{1 - fk_cfg['val_fraction'] - fk_cfg['test_fraction']:.0%}/{fk_cfg['val_fraction']:.0%}/"
-        f"{fk_cfg['test_fraction']:.0%} split, LM as MATLAB trainlm but without its 6-failure validation stop. "
-        f"Convergence rule, fixed before the runs: stop when the best validation RMS error has not improved by "
-        f"{cfg['min_improvement']:.0%} over the last {cfg['window']} epochs ('mu_max' and 'min_grad' also mean no "
-        f"further progress); a run reaching the cap of {cfg['max_epochs']} epochs has not converged. Errors: "
-        "|predicted - true| platform position (m, 3-D) of each best-validation network on its test set; median, "
-        f"its {100 * CI_LEVEL:g} % confidence interval (order statistics; with 10 runs the whole range), min and max "
-        "over the runs; test_e3_median_m: median over the runs of the mean absolute coordinate "
-        "error (Table 2's E_3 averaged over the test set). The paper (§1.1) claims a "
-        f"'{printed} level' without stating the region or the error measure; range_at_paper_level: some run "
-        "within half a decade of it (the reference CSV's tolerance; the paper reports one training), "
-        "e3_median_at_paper_level: the median E_3 within half a decade. Runs side by side on the job's "
-        "cores, each on one thread from its own seed."
-    )
     paths = write_table(
         tab,
         outdir / "extra_bp_convergence",
         title="BP network trained to convergence on each sampling region",
-        notes=notes,
+        notes=_convergence_notes(cfg, config[KEY]["fk"], printed),
     )
     paths += write_and_draw(
         pd.concat(curves, ignore_index=True),
