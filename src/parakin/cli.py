@@ -19,7 +19,7 @@ import math
 import os
 import re
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -236,6 +236,11 @@ def _dumps(obj) -> str:
     return json.dumps(obj, allow_nan=False)
 
 
+def _print_json(mech, fields: dict) -> None:
+    """One JSON object on stdout: the mechanism, its parameters, then ``fields``."""
+    print(_dumps({"mechanism": mech.name, "parameters": mech.parameters(), **fields}))
+
+
 def _batch(values: Sequence[float], n: int, what: str, names: Sequence[str]) -> np.ndarray:
     if len(values) == 0 or len(values) % n:
         raise ValueError(
@@ -324,17 +329,14 @@ def cmd_ik(args) -> int:
             file=sys.stderr,
         )
     if args.json:
-        print(
-            _dumps(
-                {
-                    "mechanism": mech.name,
-                    "parameters": mech.parameters(),
-                    "pose": given.tolist(),
-                    "pose_units": pu,
-                    "joints": joints.tolist(),
-                    "joint_units": ju,
-                }
-            )
+        _print_json(
+            mech,
+            {
+                "pose": given.tolist(),
+                "pose_units": pu,
+                "joints": joints.tolist(),
+                "joint_units": ju,
+            },
         )
     elif args.output is None:
         for q in np.atleast_2d(joints):
@@ -362,8 +364,6 @@ def cmd_fk(args) -> int:
         _write_fk(args.output, mech, pu, pose, res, near)
     if args.json:
         out = {
-            "mechanism": mech.name,
-            "parameters": mech.parameters(),
             "joints": given.tolist(),
             "joint_units": ju,
             "pose_units": pu,
@@ -371,7 +371,7 @@ def cmd_fk(args) -> int:
             **_conditioning_fields(res, pu),
         }
         out["x"] = pose.tolist()
-        print(_dumps(out))
+        _print_json(mech, out)
     elif args.output is None:
         for x in np.atleast_2d(pose):
             print(_fmt_vector(mech.pose_names, x, pu))
@@ -551,24 +551,21 @@ def _fk_all(args, mech, given, joints, pu, ju) -> int:
             file=sys.stderr,
         )
     if args.json:
-        print(
-            _dumps(
-                {
-                    "mechanism": mech.name,
-                    "parameters": mech.parameters(),
-                    "joints": np.atleast_2d(given).tolist(),
-                    "joint_units": ju,
-                    "pose_units": pu,
-                    "n_real": counts,
-                    "solutions": [
-                        [
-                            {"assembly": label, "working": work, "x": from_si(x, pu).tolist()}
-                            for label, x, work in rows
-                        ]
-                        for rows in found
-                    ],
-                }
-            )
+        _print_json(
+            mech,
+            {
+                "joints": np.atleast_2d(given).tolist(),
+                "joint_units": ju,
+                "pose_units": pu,
+                "n_real": counts,
+                "solutions": [
+                    [
+                        {"assembly": label, "working": work, "x": from_si(x, pu).tolist()}
+                        for label, x, work in rows
+                    ]
+                    for rows in found
+                ],
+            },
         )
     elif args.output is None:
         q = np.atleast_2d(given)
@@ -716,10 +713,13 @@ def cmd_kernels(args) -> int:
 
 
 def _add_kernels(sub) -> None:
-    p = sub.add_parser("kernels", help="the cache of compiled kernels: status (default) or --clear")
+    p = sub.add_parser(
+        "kernels",
+        help="the cache of compiled kernels: status (default) or --clear",
+        func=cmd_kernels,
+    )
     p.add_argument("--status", action="store_true", help="list the cached builds (default)")
     p.add_argument("--clear", action="store_true", help="remove every cached build")
-    p.set_defaults(func=cmd_kernels)
 
 
 def cmd_readme(args) -> int:
@@ -913,9 +913,14 @@ class _Commands:
         self.action = action
         self.helps: dict[str, str] = {}
 
-    def add_parser(self, name: str, *, help: str = "", **kwargs) -> argparse.ArgumentParser:
+    def add_parser(
+        self, name: str, *, func: Callable[..., int], help: str = "", **kwargs
+    ) -> argparse.ArgumentParser:
+        """The parser of command ``name``, which ``func(args)`` runs."""
         self.helps[name] = help
-        return self.action.add_parser(name, **kwargs)
+        parser = self.action.add_parser(name, **kwargs)
+        parser.set_defaults(func=func)
+        return parser
 
     def listing(self) -> str:
         """``commands:`` and one line per command: its name and its help."""
@@ -962,6 +967,11 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _text_option(p, flag: str, **kwargs) -> None:
+    """An option that takes a non-empty text (a file, a folder, a name); None when not given."""
+    p.add_argument(flag, type=nonempty, default=None, **kwargs)
+
+
 def _mechanism_options(p) -> None:
     """The mechanism and its geometry: ``MECH [--param NAME=VALUE]... [--geometry FILE]``."""
     p.add_argument("mechanism", choices=sorted(mechanisms.REGISTRY), help="mechanism name")
@@ -973,10 +983,9 @@ def _mechanism_options(p) -> None:
         help="set a mechanism parameter, by its name in the Python API: a number (SI, or with "
         "a unit: phi=35deg, d=120mm) or an array as a YAML/JSON list (base=[[0,0,0],...])",
     )
-    p.add_argument(
+    _text_option(
+        p,
         "--geometry",
-        type=nonempty,
-        default=None,
         metavar="FILE",
         help="the mechanism's parameters from a YAML or JSON file (names of the Python API, "
         "arrays as lists); --param values override them",
@@ -992,17 +1001,15 @@ def _mechanism_args(p) -> None:
 
 
 def _file_args(p, what: str) -> None:
-    p.add_argument(
+    _text_option(
+        p,
         "--input",
-        type=nonempty,
-        default=None,
         metavar="FILE",
         help=f"read many {what}s from FILE (.csv, optional header 'name [unit]', or .npy), one per row",
     )
-    p.add_argument(
+    _text_option(
+        p,
         "--output",
-        type=nonempty,
-        default=None,
         metavar="FILE",
         help="write the results to FILE (.csv with a header, or .npy) instead of printing them",
     )
@@ -1018,10 +1025,9 @@ def _config_args(p) -> None:
         help="config overlay(s) merged onto config/config.yaml in order, as snakemake "
         "--configfile (e.g. config/quick.yaml)",
     )
-    p.add_argument(
+    _text_option(
+        p,
         "--config-json",
-        type=nonempty,
-        default=None,
         help="the whole config as JSON (what Snakemake passes)",
     )
     p.add_argument(
@@ -1032,51 +1038,57 @@ def _config_args(p) -> None:
     )
 
 
-def _add_ik(sub) -> None:
+def _kinematics_parser(
+    sub, name: str, help: str, epilog: str, values: str, each: str, what: str, func
+):
+    """The parser of ``ik``/``fk``: the mechanism options, ``--VALUES`` (one vector or a batch,
+    ``each`` says how many per input) and ``--input``/``--output`` files of ``what``s."""
     p = sub.add_parser(
-        "ik",
-        help="inverse kinematics: joints of a pose",
-        epilog=_mechanism_help("pose"),
+        name,
+        help=help,
+        epilog=epilog,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        func=func,
     )
     _mechanism_args(p)
-    p.add_argument(
-        "--pose",
-        type=finite_float,
-        nargs="+",
-        default=None,
-        help="pose value(s), n per pose (several poses: n values each, one after the other)",
+    p.add_argument("--" + values, type=finite_float, nargs="+", default=None, help=each)
+    _file_args(p, what)
+    return p
+
+
+def _add_ik(sub) -> None:
+    _kinematics_parser(
+        sub,
+        "ik",
+        "inverse kinematics: joints of a pose",
+        _mechanism_help("pose"),
+        "pose",
+        "pose value(s), n per pose (several poses: n values each, one after the other)",
+        "pose",
+        func=cmd_ik,
     )
-    _file_args(p, "pose")
-    p.set_defaults(func=cmd_ik)
 
 
 def _add_fk(sub) -> None:
-    p = sub.add_parser(
+    p = _kinematics_parser(
+        sub,
         "fk",
-        help="forward kinematics: pose of joint values",
-        epilog=_solver_help() + "\n\n" + _mechanism_help("joints"),
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        "forward kinematics: pose of joint values",
+        _solver_help() + "\n\n" + _mechanism_help("joints"),
+        "joints",
+        "joint value(s), m per pose (several inputs: m values each, one after the other)",
+        "joint vector",
+        func=cmd_fk,
     )
-    _mechanism_args(p)
-    p.add_argument(
-        "--joints",
-        type=finite_float,
-        nargs="+",
-        default=None,
-        help="joint value(s), m per pose (several inputs: m values each, one after the other)",
-    )
-    _file_args(p, "joint vector")
     p.add_argument(
         "--all",
         action="store_true",
         help="list every real solution with its assembly label (mechanisms with an all-solutions "
         f"method: {', '.join(all_solution_mechanisms())})",
     )
-    p.add_argument(
+    _text_option(
+        p,
         "--solver",
-        type=nonempty,
-        default=None,
         metavar="NAME",
         help="solver (default: closed-form where one exists, else newton); the list is below",
     )
@@ -1102,18 +1114,18 @@ def _add_fk(sub) -> None:
         default=50,
         help=f"iteration limit (default 50, at most {MAXITER_LIMIT})",
     )
-    p.add_argument(
+    _text_option(
+        p,
         "--network",
-        type=nonempty,
-        default=None,
         help="trained network for --solver hybrid (default: the pipeline's)",
     )
-    p.set_defaults(func=cmd_fk)
 
 
 def _add_bench(sub) -> None:
     p = sub.add_parser(
-        "bench", help="run benchmarks (every solver, same inputs, ratios against scipy in one run)"
+        "bench",
+        help="run benchmarks (every solver, same inputs, ratios against scipy in one run)",
+        func=cmd_bench,
     )
     p.add_argument(
         "name",
@@ -1121,10 +1133,9 @@ def _add_bench(sub) -> None:
         help=f"benchmark(s): atlas, kernels, {', '.join(BENCHES)} (default: all, and the summary)",
     )
     p.add_argument("--quick", action="store_true", help="small sizes (config/quick.yaml)")
-    p.add_argument(
+    _text_option(
+        p,
         "--outdir",
-        type=nonempty,
-        default=None,
         help="figures folder (default: figures_dir of the config)",
     )
     p.add_argument("--json", action="store_true", help="print the tables as JSON records")
@@ -1137,72 +1148,66 @@ def _add_bench(sub) -> None:
         help="the 6-6 all-solutions FK against Bertini 2 (if installed) and, given a local copy "
         "of martyushev/fkSGP, its elimination-template solver: same inputs, one run",
     )
-    p.set_defaults(func=cmd_bench)
 
 
 def _add_readme(sub) -> None:
     p = sub.add_parser(
-        "readme", help="copy the benchmark summary block of figures/benchmarks.md into README.md"
+        "readme",
+        help="copy the benchmark summary block of figures/benchmarks.md into README.md",
+        func=cmd_readme,
     )
-    p.add_argument(
-        "--readme", type=nonempty, default=None, help="README file (default: the project's)"
-    )
-    p.add_argument(
+    _text_option(p, "--readme", help="README file (default: the project's)")
+    _text_option(
+        p,
         "--benchmarks",
-        type=nonempty,
-        default=None,
         help="benchmarks.md (default: figures/benchmarks.md)",
     )
     p.add_argument("--check", action="store_true", help="only compare; exit 1 if they differ")
-    p.set_defaults(func=cmd_readme)
 
 
 def _add_reproduce(sub) -> None:
     p = sub.add_parser(
-        "reproduce", help="compute one artefact (table or figure) of a paper or study"
+        "reproduce",
+        help="compute one artefact (table or figure) of a paper or study",
+        func=cmd_reproduce,
     )
     p.add_argument(
         "paper",
         help="study key, e.g. zhao2017_3p4s, or 'extra' (beyond the papers: solver atlas, benchmarks)",
     )
     p.add_argument("artefact", help="artefact name, e.g. table1, or 'all'")
-    p.add_argument(
+    _text_option(
+        p,
         "--outdir",
-        type=nonempty,
-        default=None,
         help="output folder (default: <figures_dir>/<paper>)",
     )
-    p.add_argument(
+    _text_option(
+        p,
         "--module",
-        type=nonempty,
-        default=None,
         help="the study's module (default: those the config lists)",
     )
     _config_args(p)
-    p.set_defaults(func=cmd_reproduce)
 
 
 def _add_check(sub) -> None:
     p = sub.add_parser(
         "check",
         help="check a run's outputs against the committed record, within declared tolerances",
+        func=cmd_check,
     )
-    p.add_argument(
+    _text_option(
+        p,
         "--results",
-        type=nonempty,
-        default=None,
         help="the run's figures folder (default: figures_dir of the config)",
     )
-    p.add_argument(
+    _text_option(
+        p,
         "--record",
-        type=nonempty,
-        default=None,
         help="the record (default: record_dir of the config, figures/)",
     )
-    p.add_argument(
+    _text_option(
+        p,
         "--out",
-        type=nonempty,
-        default=None,
         help="output stem (default: <results>/../reproduction_check)",
     )
     p.add_argument(
@@ -1217,32 +1222,32 @@ def _add_check(sub) -> None:
         help="config overlay(s) merged onto config/config.yaml (e.g. config/quick.yaml)",
     )
     p.add_argument("--strict", action="store_true", help="exit 1 if anything differs or is missing")
-    p.set_defaults(func=cmd_check)
 
 
 def _add_which(sub) -> None:
-    p = sub.add_parser("which", help="which function and rule make a committed figure or table")
+    p = sub.add_parser(
+        "which", help="which function and rule make a committed figure or table", func=cmd_which
+    )
     p.add_argument("path", nargs="*", help="file(s), e.g. figures/zhao2017_3p4s/table1.csv")
     p.add_argument(
         "--list", action="store_true", help="list every registered output file and its artefact"
     )
-    p.set_defaults(func=cmd_which)
 
 
 def _add_record(sub) -> None:
     p = sub.add_parser(
-        "record", help="copy a finished run (results/) into the committed record (figures/)"
+        "record",
+        help="copy a finished run (results/) into the committed record (figures/)",
+        func=cmd_record,
     )
-    p.add_argument(
+    _text_option(
+        p,
         "--results",
-        type=nonempty,
-        default=None,
         help="the run's figures folder (default: figures_dir of the config)",
     )
-    p.add_argument(
+    _text_option(
+        p,
         "--record",
-        type=nonempty,
-        default=None,
         help="the record (default: record_dir of the config)",
     )
     p.add_argument(
@@ -1251,22 +1256,17 @@ def _add_record(sub) -> None:
         action="store_false",
         help="do not copy the benchmark block into README",
     )
-    p.set_defaults(func=cmd_record)
 
 
 def _add_report(sub) -> None:
-    p = sub.add_parser("report", help="write the claim-by-claim REPORT.md")
-    p.add_argument(
+    p = sub.add_parser("report", help="write the claim-by-claim REPORT.md", func=cmd_report)
+    _text_option(
+        p,
         "--figures",
-        type=nonempty,
-        default=None,
         help="figures folder (default: figures_dir of the config)",
     )
-    p.add_argument(
-        "--out", type=nonempty, default=None, help="output file (default: <figures>/REPORT.md)"
-    )
+    _text_option(p, "--out", help="output file (default: <figures>/REPORT.md)")
     _config_args(p)
-    p.set_defaults(func=cmd_report)
 
 
 # ---------------------------------------------------------------------------------------- dynamics
@@ -1279,6 +1279,7 @@ def _add_dynamics(sub) -> None:
         "declared bodies and masses (mass_model() defaults). The trajectory FILE is a CSV with a "
         "column t (s) and one column per pose coordinate (SI), optionally d_<name> rates and "
         "dd_<name> accelerations (else a cubic spline through the poses gives them).",
+        func=cmd_dynamics,
     )
     p.add_argument(
         "--trajectory",
@@ -1301,15 +1302,13 @@ def _add_dynamics(sub) -> None:
         action="store_true",
         help="report singular or unbalanced samples (NaN forces) instead of stopping",
     )
-    p.add_argument(
+    _text_option(
+        p,
         "--output",
-        type=nonempty,
-        default=None,
         metavar="FILE",
         help="write the forces to FILE (.csv or .npy)",
     )
     p.add_argument("--json", action="store_true", help="print a JSON object")
-    p.set_defaults(func=cmd_dynamics)
 
 
 def cmd_dynamics(args) -> int:

@@ -1,12 +1,13 @@
 """A paper's reproduction is a list of section modules; this joins them into one.
 
 Each section module declares its artefacts with ``@artefact`` (:mod:`parakin.registry`) and has
-``claims(figdir, ref) -> list[Claim]`` and ``summary(figdir, ref) -> str``.
+``claims(figdir, ref) -> list[Claim]`` and ``summary(figdir, ref) -> str``; a summary says what the
+tables in ``figdir`` show so far (:func:`table_text`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from types import ModuleType
 
@@ -31,3 +32,23 @@ def combine(sections: Sequence[ModuleType]) -> tuple[dict[str, Callable], Callab
         return "\n\n".join(p for section in sections if (p := section.summary(figdir, ref).strip()))
 
     return artefacts, claims, summary
+
+
+def table_text(
+    figdir: Path,
+    sentences: Mapping[str | tuple[str, ...], Callable[..., str | None]],
+    sep: str = "\n\n",
+) -> str:
+    """The report text the tables in ``figdir`` support so far.
+
+    ``sentences`` maps a CSV name (or a tuple of names) to a function of that table (those tables,
+    in the order named) returning its text, or None where the tables do not say enough yet; an entry
+    whose tables are not all there yet is left out. The texts are joined by ``sep`` in order."""
+    parts = []
+    for names, say in sentences.items():
+        names = (names,) if isinstance(names, str) else names
+        if all((figdir / name).exists() for name in names):
+            text = say(*(pd.read_csv(figdir / name) for name in names))
+            if text is not None:
+                parts.append(text)
+    return sep.join(parts)

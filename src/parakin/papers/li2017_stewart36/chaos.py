@@ -29,6 +29,7 @@ from parakin.papers.li2017_stewart36.common import (
     mech,
     table_and_figure,
 )
+from parakin.papers.sections import table_text
 from parakin.plot import new_figure, save_figure, use_style
 from parakin.progress import Progress
 from parakin.registry import Tolerance
@@ -496,30 +497,37 @@ def _paper_fitness(ref: pd.DataFrame) -> list[str]:
     return [printed_value(ref, "sec3", f"fitness_{x}") for x in ("best", "worst", "mean")]
 
 
+def _weights_sentence(t: pd.DataFrame) -> str:
+    """Table 1: the chaotic weights per 0.1 bin against the arcsine law."""
+    return (
+        "Chaotic weights per 0.1 bin: "
+        + "; ".join(
+            f"{c.replace('count_mu', 'mu = ')}: {', '.join(str(int(v)) for v in t[c])}"
+            for c in t.columns
+            if c.startswith("count_mu")
+        )
+        + f" (arcsine law: {', '.join(f'{v:.1f}' for v in t['arcsine_expected'])})."
+    )
+
+
+def _fitness_sentence(st: pd.DataFrame, ref: pd.DataFrame) -> str:
+    """The fitness over the runs of each PSO variant against the paper's."""
+    return (
+        "Fitness over the runs (best / median / worst; runs < 1e-25): "
+        + "; ".join(
+            f"{r['variant']}: {r['best']:.2g} / {r['median']:.2g} / {r['worst']:.2g}; "
+            f"{int(r['runs_below_1e-25'])}/{int(r['runs'])}"
+            for _, r in st.iterrows()
+        )
+        + ". Paper: {} / – / {} (mean {}).".format(*_paper_fitness(ref))
+    )
+
+
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
-    parts = []
-    path = figdir / "table1.csv"
-    if path.exists():
-        t = pd.read_csv(path)
-        cols = [c for c in t.columns if c.startswith("count_mu")]
-        parts.append(
-            "Chaotic weights per 0.1 bin: "
-            + "; ".join(
-                f"{c.replace('count_mu', 'mu = ')}: {', '.join(str(int(v)) for v in t[c])}"
-                for c in cols
-            )
-            + f" (arcsine law: {', '.join(f'{v:.1f}' for v in t['arcsine_expected'])})."
-        )
-    path = figdir / "fitness_stats.csv"
-    if path.exists():
-        st = pd.read_csv(path)
-        parts.append(
-            "Fitness over the runs (best / median / worst; runs < 1e-25): "
-            + "; ".join(
-                f"{r['variant']}: {r['best']:.2g} / {r['median']:.2g} / {r['worst']:.2g}; "
-                f"{int(r['runs_below_1e-25'])}/{int(r['runs'])}"
-                for _, r in st.iterrows()
-            )
-            + ". Paper: {} / – / {} (mean {}).".format(*_paper_fitness(ref))
-        )
-    return "\n\n".join(parts)
+    return table_text(
+        figdir,
+        {
+            "table1.csv": _weights_sentence,
+            "fitness_stats.csv": lambda st: _fitness_sentence(st, ref),
+        },
+    )

@@ -26,6 +26,7 @@ from parakin.papers.li2017_stewart36.common import (
     mech,
     table3,
 )
+from parakin.papers.sections import table_text
 from parakin.plot import (
     draw_mechanism,
     new_figure,
@@ -765,51 +766,58 @@ def _table3_row_claims(
     return out
 
 
+def _counts_b_sentence(c: pd.DataFrame, ref: pd.DataFrame) -> str:
+    """The certified all-solutions FK of the reconstructed input, per base side b."""
+    return (
+        "Certified all-solutions FK of the reconstructed input: "
+        + "; ".join(
+            f"b = {r.b:g}: {int(r.complex_roots)} complex, {int(r.real)} real, {int(r.above_base)} above the base "
+            f"({r.wall_time_ms:.2g} ms)"
+            for r in c.itertuples()
+        )
+        + f". The paper lists {printed_value(ref, 'table3', 'n_solutions')} 'solutions', all above the base."
+    )
+
+
+def _table3_sentence(t: pd.DataFrame) -> str:
+    """Table 3's rows 2-19 under the lengths of row 1."""
+    return (
+        "Table 3 rows 2-19 under L = IK(row 1): F (eq. 4) from "
+        + "; ".join(
+            f"{col[2:]}: {t[col].iloc[1:].min():.2g}…{t[col].iloc[1:].max():.2g}"
+            for col in t.columns
+            if col.startswith("F_b")
+        )
+        + f" (a solution has F ~ 1e-30); {int((~t['inside_sec4_ranges'].astype(bool)).sum())} of 19 rows lie outside the §4 ranges."
+    )
+
+
+def _counts_sentence(c: pd.DataFrame) -> str:
+    """The real solutions over random inputs, per base side b."""
+    cols = [col for col in c.columns if col.startswith("real_")]
+    return (
+        "Real solutions over random inputs: "
+        + "; ".join(
+            f"b = {r['b']:g}: "
+            + ", ".join(f"{col[5:]}: {int(r[col])}" for col in cols if r[col])
+            + f" (no circles: {int(r['no_circles'])}; max above base {int(r['max_above_base'])}; "
+            f"{r['wall_time_ms_per_input']:.2g} ms/input)"
+            for _, r in c.iterrows()
+        )
+        + "."
+    )
+
+
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
-    parts = []
-    path = figdir / "extra_solution_counts_b.csv"
-    if path.exists():
-        c = pd.read_csv(path)
-        parts.append(
-            "Certified all-solutions FK of the reconstructed input: "
-            + "; ".join(
-                f"b = {r.b:g}: {int(r.complex_roots)} complex, {int(r.real)} real, {int(r.above_base)} above the base "
-                f"({r.wall_time_ms:.2g} ms)"
-                for r in c.itertuples()
-            )
-            + f". The paper lists {printed_value(ref, 'table3', 'n_solutions')} 'solutions', all above the base."
-        )
-    path = figdir / "table3.csv"
-    if path.exists():
-        t = pd.read_csv(path)
-        fcols = [col for col in t.columns if col.startswith("F_b")]
-        parts.append(
-            "Table 3 rows 2-19 under L = IK(row 1): F (eq. 4) from "
-            + "; ".join(
-                f"{col[2:]}: {t[col].iloc[1:].min():.2g}…{t[col].iloc[1:].max():.2g}"
-                for col in fcols
-            )
-            + f" (a solution has F ~ 1e-30); {int((~t['inside_sec4_ranges'].astype(bool)).sum())} of 19 rows lie outside the §4 ranges."
-        )
-    path = figdir / "extra_solution_counts.csv"
-    if path.exists():
-        c = pd.read_csv(path)
-        cols = [col for col in c.columns if col.startswith("real_")]
-        parts.append(
-            "Real solutions over random inputs: "
-            + "; ".join(
-                f"b = {r['b']:g}: "
-                + ", ".join(f"{col[5:]}: {int(r[col])}" for col in cols if r[col])
-                + f" (no circles: {int(r['no_circles'])}; max above base {int(r['max_above_base'])}; "
-                f"{r['wall_time_ms_per_input']:.2g} ms/input)"
-                for _, r in c.iterrows()
-            )
-            + "."
-        )
-    path = figdir / "extra_adams_surrogate.csv"
-    if path.exists():
-        s = pd.read_csv(path).set_index("quantity")
-        parts.append(
-            f"Adams surrogate: round-trip error of the warm-started Newton FK {s.loc['max_roundtrip_error', 'ours_max']:.2g}."
-        )
-    return "\n\n".join(parts)
+    return table_text(
+        figdir,
+        {
+            "extra_solution_counts_b.csv": lambda c: _counts_b_sentence(c, ref),
+            "table3.csv": _table3_sentence,
+            "extra_solution_counts.csv": _counts_sentence,
+            "extra_adams_surrogate.csv": lambda s: (
+                "Adams surrogate: round-trip error of the warm-started Newton FK "
+                f"{s.set_index('quantity').loc['max_roundtrip_error', 'ours_max']:.2g}."
+            ),
+        },
+    )

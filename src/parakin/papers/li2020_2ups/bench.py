@@ -25,6 +25,7 @@ from parakin.mechanisms.base import Array
 from parakin.mechanisms.ups2 import UPS2
 from parakin.papers.li2020_2ups.common import KEY, artefact, mech, table2_inputs
 from parakin.papers.li2020_2ups.fk import pso_options, seeds
+from parakin.papers.sections import table_text
 from parakin.registry import TIMING
 from parakin.solvers import solve_fk
 from parakin.solvers.pso import _BLOCK, inertia_schedule
@@ -288,14 +289,11 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list:
     return []
 
 
-def summary(figdir: Path, ref: pd.DataFrame) -> str:
-    path = figdir / "extra_benchmark.csv"
-    if not path.exists():
-        return ""
-    d = pd.read_csv(path)
+def _benchmark_sentences(d: pd.DataFrame) -> str:
+    """The vectorised PSO against its reference loop, then the FK solvers' latency and throughput."""
     p = d[d["part"] == "pso"]
     f = d[d["part"] == "fk"].set_index("solver")
-    parts = [
+    pso = (
         "**Benchmarks (ours, this machine).** PSO as Table 1 sets it up: "
         + "; ".join(
             f"{r.variant}, {r.task}: {r.vectorised_time_s:.3g} s vectorised vs {r.reference_time_s:.3g} s "
@@ -303,8 +301,8 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
             for r in p.itertuples()
         )
         + "."
-    ]
-    parts.append(
+    )
+    fk = (
         "FK: "
         + "; ".join(
             f"{name}: {r.median_latency_us:.3g} µs single, {r.throughput_per_s:.3g} solves/s"
@@ -317,4 +315,8 @@ def summary(figdir: Path, ref: pd.DataFrame) -> str:
         )
         + "."
     )
-    return " ".join(parts)
+    return f"{pso} {fk}"
+
+
+def summary(figdir: Path, ref: pd.DataFrame) -> str:
+    return table_text(figdir, {"extra_benchmark.csv": _benchmark_sentences})

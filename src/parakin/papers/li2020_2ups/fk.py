@@ -28,6 +28,7 @@ from parakin.papers.li2020_2ups.common import (
     table_and_figure,
     to_paper,
 )
+from parakin.papers.sections import table_text
 from parakin.plot import new_figure, save_figure
 from parakin.progress import Progress
 from parakin.registry import ROUNDING, Tolerance
@@ -684,55 +685,61 @@ def _failure_claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     return out
 
 
+def _pso_paragraphs(df: pd.DataFrame) -> str:
+    """Table 2: each PSO variant's convergence, then our converged poses against the paper's."""
+    agg = df.groupby("variant", sort=False).agg(
+        conv=("converged", "sum"),
+        runs=("runs", "sum"),
+        F=("F_median_mm", "median"),
+        nit=("nit_median", "median"),
+    )
+    runs = (
+        "PSO on Table 2's inputs: "
+        + "; ".join(
+            f"{v}: {int(r.conv)}/{int(r.runs)} runs reach F < threshold, median final F = {r.F:.3g} mm, median "
+            f"iterations {r.nit:.0f}"
+            for v, r in agg.iterrows()
+        )
+        + "."
+    )
+    d = df[df["variant"] == "improved_clamped"]
+    poses = (
+        "Our converged poses vs the paper's (β°, γ°, Y mm): "
+        + "; ".join(
+            f"case {int(r.case)}: ({r.beta_median:.3f}, {r.gamma_median:.3f}, {r.Y_median:.3f}) vs "
+            f"({r.beta_paper:.3f}, {r.gamma_paper:.3f}, {r.Y_paper:.3f})"
+            for r in d.itertuples()
+        )
+        + "."
+    )
+    return f"{runs}\n\n{poses}"
+
+
+def _consistency_sentence(checks: pd.DataFrame) -> str:
+    """Why Table 2 cannot satisfy the paper's own IK."""
+    c = checks.set_index("check")["value"]
+    return (
+        "Table 2 cannot satisfy the paper's own IK for any geometry: cases 1 and 2 share l_i1 = 0 but their Y "
+        f"differ by {c['same_l1_Y_spread_mm']:.3f} mm; {int(c['order_violations'])} pair(s) violate the monotone "
+        f"Y(l1); cases 1 and 3 together need a ≤ {c['a_max_mm']:.1f} mm and c ≤ {c['c_max_mm']:.1f} mm "
+        f"(and no a at all once case 3's l1 must be positive: a_max = {c['a_max_with_positive_l1_mm']:.1f} mm); "
+        f"{int(c['sign_violations'])} of 5 rows have sign(β) ≠ sign(l_i3 − l_i2)."
+    )
+
+
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
-    parts = []
-    path = figdir / "table2.csv"
-    if path.exists():
-        df = pd.read_csv(path)
-        agg = df.groupby("variant", sort=False).agg(
-            conv=("converged", "sum"),
-            runs=("runs", "sum"),
-            F=("F_median_mm", "median"),
-            nit=("nit_median", "median"),
-        )
-        parts.append(
-            "PSO on Table 2's inputs: "
-            + "; ".join(
-                f"{v}: {int(r.conv)}/{int(r.runs)} runs reach F < threshold, median final F = {r.F:.3g} mm, median "
-                f"iterations {r.nit:.0f}"
-                for v, r in agg.iterrows()
-            )
-            + "."
-        )
-        d = df[df["variant"] == "improved_clamped"]
-        parts.append(
-            "Our converged poses vs the paper's (β°, γ°, Y mm): "
-            + "; ".join(
-                f"case {int(r.case)}: ({r.beta_median:.3f}, {r.gamma_median:.3f}, {r.Y_median:.3f}) vs "
-                f"({r.beta_paper:.3f}, {r.gamma_paper:.3f}, {r.Y_paper:.3f})"
-                for r in d.itertuples()
-            )
-            + "."
-        )
-    path = figdir / "table2_consistency.csv"
-    if path.exists():
-        c = pd.read_csv(path).set_index("check")["value"]
-        parts.append(
-            "Table 2 cannot satisfy the paper's own IK for any geometry: cases 1 and 2 share l_i1 = 0 but their Y "
-            f"differ by {c['same_l1_Y_spread_mm']:.3f} mm; {int(c['order_violations'])} pair(s) violate the monotone "
-            f"Y(l1); cases 1 and 3 together need a ≤ {c['a_max_mm']:.1f} mm and c ≤ {c['c_max_mm']:.1f} mm "
-            f"(and no a at all once case 3's l1 must be positive: a_max = {c['a_max_with_positive_l1_mm']:.1f} mm); "
-            f"{int(c['sign_violations'])} of 5 rows have sign(β) ≠ sign(l_i3 − l_i2)."
-        )
-    path = figdir / "extra_solvers.csv"
-    if path.exists():
-        s = pd.read_csv(path)
-        parts.append(
-            "FK solvers on random box poses: "
-            + "; ".join(
-                f"{r.method}: {r.correct}/{r.poses} correct, {r.wall_ms_per_pose:.3g} ms/pose"
-                for r in s.itertuples()
-            )
-            + "."
-        )
-    return "\n\n".join(parts)
+    return table_text(
+        figdir,
+        {
+            "table2.csv": _pso_paragraphs,
+            "table2_consistency.csv": _consistency_sentence,
+            "extra_solvers.csv": lambda s: (
+                "FK solvers on random box poses: "
+                + "; ".join(
+                    f"{r.method}: {r.correct}/{r.poses} correct, {r.wall_ms_per_pose:.3g} ms/pose"
+                    for r in s.itertuples()
+                )
+                + "."
+            ),
+        },
+    )

@@ -15,6 +15,7 @@ from parakin.config import rng
 from parakin.io import write_table
 from parakin.papers.li2020_2ups.common import KEY, artefact, mech, table_and_figure
 from parakin.papers.li2020_2ups.symbolic import derivation, loop_closure_model
+from parakin.papers.sections import table_text
 from parakin.plot import (
     draw_mechanism,
     new_figure,
@@ -379,61 +380,70 @@ def _equation_claims(df: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
     extra_concomitant.csv (sympy identities encoded 1 = holds, numeric residuals encoded as 0)."""
     enc = "encoding: printed 1 = the paper's equation; ours 1 = sympy proves the identity, 0 = it fails"
     v = df["value"]
-    out = [
-        Claim(
+
+    def check(
+        artefact: str,
+        quantity: str,
+        name: str,
+        unit: str,
+        variant: str,
+        reason: str,
+        scale: float = 1.0,
+    ) -> Claim:
+        """The claim ``artefact.quantity`` that the check ``name`` of extra_concomitant decides."""
+        ours = float(v[name]) * scale
+        return Claim(
             KEY,
+            artefact,
+            quantity,
+            printed_value(ref, artefact, quantity),
+            ours,
+            unit,
+            variant=variant,
+            reason=reason,
+        )
+
+    out = [
+        check(
             "eq7",
             "B2B3_identity",
-            printed_value(ref, "eq7", "B2B3_identity"),
-            float(v["B2B3 = R (B3' - B2') equals eq (7)"]),
+            "B2B3 = R (B3' - B2') equals eq (7)",
             "1",
-            variant="sympy: R(alpha, beta, gamma) (eq 1) applied to B3' - B2' (eq 5) minus eq (7)",
-            reason=enc + " (the extracted 'S_beta' is read as sin(beta))",
+            "sympy: R(alpha, beta, gamma) (eq 1) applied to B3' - B2' (eq 5) minus eq (7)",
+            enc + " (the extracted 'S_beta' is read as sin(beta))",
         ),
-        Claim(
-            KEY,
+        check(
             "eq14",
             "P_identity",
-            printed_value(ref, "eq14", "P_identity"),
-            float(v["eq (14) satisfies (6) and (12)"]),
+            "eq (14) satisfies (6) and (12)",
             "1",
-            variant="sympy: P = (sin b sqrt(c^2 - Y^2), Y, cos b sqrt(c^2 - Y^2)) satisfies (6) and (12)",
-            reason=enc,
-        ),
-        Claim(
-            KEY,
-            "eq14",
-            "X_residual",
-            printed_value(ref, "eq14", "X_residual"),
-            float(v["max |X - rho sin beta| (m)"]) * 1e3,
-            "mm",
-            variant="max |X - sin(b) sqrt(c^2 - Y^2)| over an independent loop-closure model",
-            reason="numeric residual of eq (14), tolerance 1e-9 mm (round-off)",
-        ),
-        Claim(
-            KEY,
-            "eq14",
-            "Z_residual",
-            printed_value(ref, "eq14", "Z_residual"),
-            float(v["max |Z - rho cos beta| (m)"]) * 1e3,
-            "mm",
-            variant="max |Z - cos(b) sqrt(c^2 - Y^2)| over an independent loop-closure model",
-            reason="numeric residual of eq (14), tolerance 1e-9 mm (round-off)",
+            "sympy: P = (sin b sqrt(c^2 - Y^2), Y, cos b sqrt(c^2 - Y^2)) satisfies (6) and (12)",
+            enc,
         ),
     ]
-    for j in (1, 2, 3):
-        out.append(
-            Claim(
-                KEY,
-                "eq9-11",
-                f"l{j}_identity",
-                printed_value(ref, "eq9-11", f"l{j}_identity"),
-                float(v[f"|l{j}|^2 vector form = closed form"]),
-                "1",
-                variant=f"sympy: |l{j}|^2 of the vector form (eqs 9-11, 14) = our scalar closed form",
-                reason=enc,
-            )
+    out += [
+        check(
+            "eq14",
+            f"{x}_residual",
+            f"max |{x} - rho {trig} beta| (m)",
+            "mm",
+            f"max |{x} - {trig}(b) sqrt(c^2 - Y^2)| over an independent loop-closure model",
+            "numeric residual of eq (14), tolerance 1e-9 mm (round-off)",
+            scale=1e3,
         )
+        for x, trig in (("X", "sin"), ("Z", "cos"))
+    ]
+    out += [
+        check(
+            "eq9-11",
+            f"l{j}_identity",
+            f"|l{j}|^2 vector form = closed form",
+            "1",
+            f"sympy: |l{j}|^2 of the vector form (eqs 9-11, 14) = our scalar closed form",
+            enc,
+        )
+        for j in (1, 2, 3)
+    ]
     diff = df.loc["printed (16)^2 - vector |l2|^2"]
     out.append(
         Claim(
@@ -452,43 +462,50 @@ def _equation_claims(df: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
     return out
 
 
+def _workspace_sentence(d: pd.DataFrame) -> str:
+    """Eq. (19)'s stroke limits and the sign of det J over Table 1's search box."""
+    sign_change = bool((d["det_J_m2"] > 0).any() and (d["det_J_m2"] < 0).any())
+    return (
+        f"**Singularities and workspace (ours).** Over Table 1's search box, eq. (19)'s stroke limits hold on "
+        f"{d['within_eq19'].mean():.0%} of the (beta, gamma, Y) grid; det J "
+        f"{'changes sign (a singularity crosses the box)' if sign_change else 'keeps its sign (no singularity in the box)'}"
+        f", max cond(J) = {d['cond_J'].max():.3g} (`extra_singularity_workspace.png`)."
+    )
+
+
+def _concomitant_sentence(df: pd.DataFrame) -> str:
+    """What sympy and the loop-closure model say of the concomitant motion and of eq. (16), from
+    the checks indexed by name."""
+    ok = all(df.loc[k, "value"] == 1.0 for k in df.index if "closed form" in k or "eq (7)" in k)
+    return (
+        "Concomitant motion: sympy confirms eq (7) and that the first constraint of (6) reads "
+        f"`{df.loc['B2B3 . e_y', 'detail']} = 0`, so α = 0 (α = π is the flipped platform); an independent "
+        f"loop-closure model gives max |α| = {df.loc['max |alpha| (rad), loop-closure model', 'value']:.2g} rad. "
+        f"The vector IK (9)-(11) equals our scalar closed forms symbolically: {'yes' if ok else 'NO'}; the printed (16) "
+        f"differs from it by `{df.loc['printed (16)^2 - vector |l2|^2', 'detail'].split(' (')[0]}` (Y missing)."
+    )
+
+
+def _fk_solutions_sentence(df: pd.DataFrame) -> str:
+    """How many real FK solutions the poses of the box grid have."""
+    counts = df["n_real"].value_counts().sort_index()
+    return (
+        "Real FK solutions (ρ > 0 branch) over the box grid: "
+        + ", ".join(f"{int(k)}: {int(v)} poses" for k, v in counts.items())
+        + f"; solutions inside the Table 1 box: min {df['n_in_box'].min()}, max {df['n_in_box'].max()}."
+    )
+
+
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
-    parts = []
-    sw = figdir / "extra_singularity_workspace.csv"
-    if sw.exists():
-        d = pd.read_csv(sw)
-        sign_change = bool((d["det_J_m2"] > 0).any() and (d["det_J_m2"] < 0).any())
-        parts.append(
-            f"**Singularities and workspace (ours).** Over Table 1's search box, eq. (19)'s stroke limits hold on "
-            f"{d['within_eq19'].mean():.0%} of the (beta, gamma, Y) grid; det J "
-            f"{'changes sign (a singularity crosses the box)' if sign_change else 'keeps its sign (no singularity in the box)'}"
-            f", max cond(J) = {d['cond_J'].max():.3g} (`extra_singularity_workspace.png`)."
-        )
-    path = figdir / "extra_concomitant.csv"
-    if path.exists():
-        df = pd.read_csv(path).set_index("check")
-        ok = all(df.loc[k, "value"] == 1.0 for k in df.index if "closed form" in k or "eq (7)" in k)
-        parts.append(
-            "Concomitant motion: sympy confirms eq (7) and that the first constraint of (6) reads "
-            f"`{df.loc['B2B3 . e_y', 'detail']} = 0`, so α = 0 (α = π is the flipped platform); an independent "
-            f"loop-closure model gives max |α| = {df.loc['max |alpha| (rad), loop-closure model', 'value']:.2g} rad. "
-            f"The vector IK (9)-(11) equals our scalar closed forms symbolically: {'yes' if ok else 'NO'}; the printed (16) "
-            f"differs from it by `{df.loc['printed (16)^2 - vector |l2|^2', 'detail'].split(' (')[0]}` (Y missing)."
-        )
-    path = figdir / "extra_parasitic.csv"
-    if path.exists():
-        df = pd.read_csv(path)
-        parts.append(
-            f"Parasitic translations over the Table 1 box: |X| up to {df['X_mm'].abs().max():.1f} mm, "
-            f"ΔZ up to {df['dZ_mm'].max():.1f} mm — 'no concomitant motion' holds only for the rotation about z."
-        )
-    path = figdir / "extra_fk_solutions.csv"
-    if path.exists():
-        df = pd.read_csv(path)
-        counts = df["n_real"].value_counts().sort_index()
-        parts.append(
-            "Real FK solutions (ρ > 0 branch) over the box grid: "
-            + ", ".join(f"{int(k)}: {int(v)} poses" for k, v in counts.items())
-            + f"; solutions inside the Table 1 box: min {df['n_in_box'].min()}, max {df['n_in_box'].max()}."
-        )
-    return "\n\n".join(parts)
+    return table_text(
+        figdir,
+        {
+            "extra_singularity_workspace.csv": _workspace_sentence,
+            "extra_concomitant.csv": lambda c: _concomitant_sentence(c.set_index("check")),
+            "extra_parasitic.csv": lambda df: (
+                f"Parasitic translations over the Table 1 box: |X| up to {df['X_mm'].abs().max():.1f} mm, "
+                f"ΔZ up to {df['dZ_mm'].max():.1f} mm — 'no concomitant motion' holds only for the rotation about z."
+            ),
+            "extra_fk_solutions.csv": _fk_solutions_sentence,
+        },
+    )

@@ -12,6 +12,7 @@ import pandas as pd
 from parakin.claims import Claim
 from parakin.config import rng
 from parakin.io import draw_from_csv, write_csv, write_table
+from parakin.papers.sections import table_text
 from parakin.papers.ye_stewart12.common import (
     KEY,
     artefact,
@@ -290,23 +291,20 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
 
 
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
-    parts = []
-    p = figdir / "table1_random.csv"
-    if p.exists():
-        t = pd.read_csv(p).iloc[0]
-        parts.append(
-            f"Closed-form FK (Table 1): max error {t['max_position_error_mm']:.2g} mm / "
-            f"{t['max_lambda_error']:.2g} over {int(t['poses'])} random poses."
-        )
-    p = figdir / "extra_fk_speed.csv"
-    if p.exists():
-        t = pd.read_csv(p).iloc[0]
-        parts.append(f"Batched FK throughput {t['throughput_poses_per_s']:.3g} poses/s.")
-    p = figdir / "table3.csv"
-    if p.exists():
-        t = pd.read_csv(p)
-        parts.append(
-            f"Compatibility errors (Table 3): composite {t['composite'].iloc[0]:.2g} mm^2 at the initial "
-            f"state, {t['composite'].iloc[1]:.2g} mm^2 at the test pose (rounding)."
-        )
-    return " ".join(parts)
+    return table_text(
+        figdir,
+        {
+            "table1_random.csv": lambda t: (
+                f"Closed-form FK (Table 1): max error {t['max_position_error_mm'].iloc[0]:.2g} mm / "
+                f"{t['max_lambda_error'].iloc[0]:.2g} over {int(t['poses'].iloc[0])} random poses."
+            ),
+            "extra_fk_speed.csv": lambda t: (
+                f"Batched FK throughput {t['throughput_poses_per_s'].iloc[0]:.3g} poses/s."
+            ),
+            "table3.csv": lambda t: (
+                f"Compatibility errors (Table 3): composite {t['composite'].iloc[0]:.2g} mm^2 at the initial "
+                f"state, {t['composite'].iloc[1]:.2g} mm^2 at the test pose (rounding)."
+            ),
+        },
+        sep=" ",
+    )

@@ -23,6 +23,7 @@ import pandas as pd
 from parakin.claims import Claim, printed_value
 from parakin.io import draw_from_csv, write_csv, write_table
 from parakin.mechanisms.stewart12 import NESTED_PASSIVE, ActiveLegs, DriveMode
+from parakin.papers.sections import table_text
 from parakin.papers.ye_stewart12.common import (
     KEY,
     METHOD_LABELS,
@@ -985,45 +986,49 @@ def _assumed(c: Claim) -> list[str]:
     return [x for x in (c.basis, PASSIVE_ASSUMED, P_ASSUMED if uses_p else "") if x]
 
 
+def _table6_sentence(t: pd.DataFrame) -> str:
+    """Table 6: the performance index P of each drive mode, per solver."""
+    modes = t.iloc[:-1]
+    composite = t.iloc[-1]
+
+    def per_mode(col: str) -> str:
+        return ", ".join(f"R{int(r['R'])} {r[col]:.2f}" for _, r in modes.iterrows())
+
+    return (
+        "Table 6 (ours, configured P reading): N-R "
+        + per_mode("nr_P")
+        + "; Broyden (the paper's inverse update) "
+        + per_mode("broyden_P")
+        + f"; composite {composite['nr_P']:.2f} / {composite['broyden_P']:.2f}"
+        + (
+            "; the direct Broyden update (beyond the paper) "
+            + per_mode("broyden_direct_P")
+            + f", composite {composite['broyden_direct_P']:.2f}"
+            if "broyden_direct_P" in t.columns
+            else ""
+        )
+        + "."
+    )
+
+
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
-    parts = []
-    p = figdir / "table6.csv"
-    if p.exists():
-        t = pd.read_csv(p)
-        parts.append(
-            "Table 6 (ours, configured P reading): N-R "
-            + ", ".join(f"R{int(r['R'])} {r['nr_P']:.2f}" for _, r in t.iloc[:-1].iterrows())
-            + "; Broyden (the paper's inverse update) "
-            + ", ".join(f"R{int(r['R'])} {r['broyden_P']:.2f}" for _, r in t.iloc[:-1].iterrows())
-            + f"; composite {t.iloc[-1]['nr_P']:.2f} / {t.iloc[-1]['broyden_P']:.2f}"
-            + (
-                "; the direct Broyden update (beyond the paper) "
+    return table_text(
+        figdir,
+        {
+            "table6.csv": _table6_sentence,
+            "extra_conditioning.csv": lambda t: (
+                "cond(dF/dX) per mode at the test pose: "
                 + ", ".join(
-                    f"R{int(r['R'])} {r['broyden_direct_P']:.2f}" for _, r in t.iloc[:-1].iterrows()
+                    f"R{int(r['R'])} {r['cond_dF_dX']:.3g} (d_max N-R {r['nr_d_max_pct']:g} %, Broyden "
+                    f"{r['broyden_d_max_pct']:g} %, LM-pose {r['lm_pose_d_max_pct']:g} %)"
+                    for _, r in t.iterrows()
                 )
-                + f", composite {t.iloc[-1]['broyden_direct_P']:.2f}"
-                if "broyden_direct_P" in t.columns
-                else ""
-            )
-            + "."
-        )
-    p = figdir / "extra_conditioning.csv"
-    if p.exists():
-        t = pd.read_csv(p)
-        parts.append(
-            "cond(dF/dX) per mode at the test pose: "
-            + ", ".join(
-                f"R{int(r['R'])} {r['cond_dF_dX']:.3g} (d_max N-R {r['nr_d_max_pct']:g} %, Broyden "
-                f"{r['broyden_d_max_pct']:g} %, LM-pose {r['lm_pose_d_max_pct']:g} %)"
-                for _, r in t.iterrows()
-            )
-            + "."
-        )
-    p = figdir / "extra_scan_speed.csv"
-    if p.exists():
-        t = pd.read_csv(p).iloc[0]
-        parts.append(
-            f"Fig. 12 scan: {int(t['cases'])} solves in {t['scan_wall_s']:.1f} s (batched over d; "
-            f"{t['speedup']:.1f}x a per-case loop)."
-        )
-    return " ".join(parts)
+                + "."
+            ),
+            "extra_scan_speed.csv": lambda t: (
+                f"Fig. 12 scan: {int(t['cases'].iloc[0])} solves in {t['scan_wall_s'].iloc[0]:.1f} s "
+                f"(batched over d; {t['speedup'].iloc[0]:.1f}x a per-case loop)."
+            ),
+        },
+        sep=" ",
+    )

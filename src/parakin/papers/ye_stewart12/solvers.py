@@ -18,6 +18,7 @@ import pandas as pd
 
 from parakin.claims import Claim, printed_value
 from parakin.io import draw_from_csv, write_csv, write_table
+from parakin.papers.sections import table_text
 from parakin.papers.ye_stewart12.common import (
     KEY,
     METHOD_LABELS,
@@ -368,40 +369,41 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     return out
 
 
+def _table5_sentence(t: pd.DataFrame) -> str:
+    """Table 5: the steps of each solver per d, and Broyden's time against N-R's."""
+    r, mean = t.iloc[:-1], t.iloc[-1]
+    return (
+        "Table 5 steps (d = 20..25 %): N-R "
+        + ",".join(str(int(v)) for v in r["nr_steps"])
+        + ", Broyden "
+        + ",".join(str(int(v)) for v in r["broyden_steps"])
+        + f" (means {mean['nr_steps']:.2f} / {mean['broyden_steps']:.2f}; Broyden is the "
+        "paper's inverse update"
+        + (
+            f", the direct one takes {mean['broyden_direct_steps']:.2f} on average"
+            if "broyden_direct_steps" in t
+            else ""
+        )
+        + "); Broyden time "
+        f"{100 * mean['broyden_time_ms'] / mean['nr_time_ms']:.0f} % of N-R's here."
+    )
+
+
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
-    parts = []
-    p = figdir / "table5.csv"
-    if p.exists():
-        t = pd.read_csv(p)
-        r, mean = t.iloc[:-1], t.iloc[-1]
-        parts.append(
-            "Table 5 steps (d = 20..25 %): N-R "
-            + ",".join(str(int(v)) for v in r["nr_steps"])
-            + ", Broyden "
-            + ",".join(str(int(v)) for v in r["broyden_steps"])
-            + f" (means {mean['nr_steps']:.2f} / {mean['broyden_steps']:.2f}; Broyden is the "
-            "paper's inverse update"
-            + (
-                f", the direct one takes {mean['broyden_direct_steps']:.2f} on average"
-                if "broyden_direct_steps" in t
-                else ""
-            )
-            + "); Broyden time "
-            f"{100 * mean['broyden_time_ms'] / mean['nr_time_ms']:.0f} % of N-R's here."
-        )
-    p = figdir / "table4_summary.csv"
-    if p.exists():
-        t = pd.read_csv(p).iloc[0]
-        parts.append(
-            f"Accuracy at tol 1e-6: N-R {t['nr_max_error_mm']:.2g} mm vs Broyden "
-            f"{t['broyden_max_error_mm']:.2g} mm (factor {t['accuracy_factor']:.3g})."
-        )
-    p = figdir / "fig08_convergence.csv"
-    if p.exists():
-        t = pd.read_csv(p)
-        parts.append(
-            f"Fig. 8 (30 %): composite length first within {MATCH_MM} mm at step {_match_step(t, 'nr'):g} (N-R) "
-            f"vs {_match_step(t, 'broyden'):g} (Broyden); staying within from step "
-            f"{_match_step(t, 'nr', 'stays within'):g} and {_match_step(t, 'broyden', 'stays within'):g}."
-        )
-    return " ".join(parts)
+    return table_text(
+        figdir,
+        {
+            "table5.csv": _table5_sentence,
+            "table4_summary.csv": lambda t: (
+                f"Accuracy at tol 1e-6: N-R {t['nr_max_error_mm'].iloc[0]:.2g} mm vs Broyden "
+                f"{t['broyden_max_error_mm'].iloc[0]:.2g} mm "
+                f"(factor {t['accuracy_factor'].iloc[0]:.3g})."
+            ),
+            "fig08_convergence.csv": lambda t: (
+                f"Fig. 8 (30 %): composite length first within {MATCH_MM} mm at step {_match_step(t, 'nr'):g} (N-R) "
+                f"vs {_match_step(t, 'broyden'):g} (Broyden); staying within from step "
+                f"{_match_step(t, 'nr', 'stays within'):g} and {_match_step(t, 'broyden', 'stays within'):g}."
+            ),
+        },
+        sep=" ",
+    )

@@ -18,6 +18,7 @@ import sympy as sp
 
 from parakin.claims import Claim, printed_value
 from parakin.io import write_table
+from parakin.papers.sections import table_text
 from parakin.papers.ye_stewart12.common import KEY, artefact
 from parakin.registry import EXACT
 
@@ -148,14 +149,16 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     return out
 
 
-def summary(figdir: Path, ref: pd.DataFrame) -> str:
-    p = figdir / "table2.csv"
-    if not p.exists():
-        return ""
-    t = pd.read_csv(p).set_index("feature")
+def _table2_sentence(table: pd.DataFrame) -> str:
+    """Table 2: the equations and degrees before and after the elimination."""
+    t = table.set_index("feature")
     return (
         f"Table 2 (sympy): {int(t.loc['equations', 'before'])} -> {int(t.loc['equations', 'after'])} equations, "
         f"highest degree {int(t.loc['highest_degree', 'before'])} -> {int(t.loc['highest_degree', 'after'])}, "
         f"highest-degree terms {int(t.loc['highest_terms', 'before'])} -> {int(t.loc['highest_terms', 'after'])}; "
         f"f, g, v drop to degree {int(t.loc['max degree of f, g, v (before: of (12)-(17))', 'after'])}."
     )
+
+
+def summary(figdir: Path, ref: pd.DataFrame) -> str:
+    return table_text(figdir, {"table2.csv": _table2_sentence})

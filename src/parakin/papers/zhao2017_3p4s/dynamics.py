@@ -29,6 +29,7 @@ from parakin.errors import ConfigError
 from parakin.io import write_table
 from parakin.mechanisms import P3P4S
 from parakin.mechanisms import p3p4s_dynamics as dyn
+from parakin.papers.sections import table_text
 from parakin.papers.zhao2017_3p4s.common import KEY, artefact, table_and_figure
 from parakin.registry import ROUNDING
 
@@ -1111,91 +1112,110 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     return out
 
 
+def _forces_paragraph(df: pd.DataFrame) -> str:
+    """Figs 5-10: the motion law and the range of each motor force along its rail (Fig. 9)."""
+    f = df[[f"f{i}_N" for i in (1, 2, 3)]].to_numpy()
+    span = f"{df['t_s'].iloc[0]:g}-{df['t_s'].iloc[-1]:g} s"
+    return (
+        f"**Figs 5-10 (velocities, accelerations, driving forces).** Motion x = y = 0.001 sin(40 pi t) m at "
+        f"z = {df['z_m'].iloc[0]:g} m (§2.4; also used for Figs 5-8, where §1.4 gives no height), {span}, "
+        f"{len(df)} samples. Motor forces along the rails (Fig. 9): drive 1 {f[:, 0].min():.1f} to "
+        f"{f[:, 0].max():.1f} N, drive 2 {f[:, 1].min():.1f} to {f[:, 1].max():.1f} N, drive 3 "
+        f"{f[:, 2].min():.1f} to {f[:, 2].max():.1f} N (means {f[:, 0].mean():.1f}, {f[:, 1].mean():.1f}, "
+        f"{f[:, 2].mean():.1f} N; static load at the centre {df['static_centre_N'].iloc[0]:.2f} N per motor)."
+    )
+
+
+#: the independent checks the summary quotes: (table, difference column, reference column, what)
+_CHECKS = (
+    (
+        "fig07_velocity_check.csv",
+        "diff{i}_fd_m_s",
+        "qdot{i}_eq8_m_s",
+        "eq 8 vs IK finite differences",
+    ),
+    ("fig07_velocity_check.csv", "diff{i}_mujoco_m_s", "qdot{i}_eq8_m_s", "eq 8 vs MuJoCo"),
+    (
+        "fig08_acceleration_check.csv",
+        "diff{i}_fd_m_s2",
+        "qddot{i}_eq13_m_s2",
+        "eq 13 vs IK finite differences",
+    ),
+    (
+        "fig08_acceleration_check.csv",
+        "diff{i}_mujoco_m_s2",
+        "qddot{i}_eq13_m_s2",
+        "eq 13 vs MuJoCo",
+    ),
+    (
+        "fig10_mujoco_forces.csv",
+        "diff{i}_mujoco_equivalent_N",
+        "f{i}_ours_N",
+        "forces vs MuJoCo (equivalent rods)",
+    ),
+    (
+        "fig10_mujoco_forces.csv",
+        "diff{i}_mujoco_parallelogram_N",
+        "f{i}_ours_N",
+        "forces vs MuJoCo (6 side rods)",
+    ),
+)
+
+
+def _checks_sentence(figdir: Path) -> str:
+    """The largest relative difference of each independent check whose table is there."""
+    checks = [
+        f"{what} {_max_rel(pd.read_csv(figdir / name), diff, refcol):.1e}"
+        for name, diff, refcol, what in _CHECKS
+        if (figdir / name).exists()
+    ]
+    return (
+        "Independent checks, max |difference| / peak: " + "; ".join(checks) + "." if checks else ""
+    )
+
+
+def _tracking_sentence(df: pd.DataFrame) -> str:
+    """MuJoCo's forward dynamics driven open loop by our forces and by the printed ones."""
+    ours = max(df["error_ours_equivalent_m"].max(), df["error_ours_parallelogram_m"].max())
+    return (
+        f"Driven open loop by our forces, MuJoCo's forward dynamics (RK4, stiff loops) keeps the platform within "
+        f"{ours:.1e} m of the motion law over {df['t_s'].iloc[-1]:g} s (both models); with the forces of the "
+        f"printed equations it strays {df['error_printed_equivalent_m'].max():.1e} m "
+        f"(`extra_mujoco_tracking.png`)."
+    )
+
+
+def _slips_sentence(slips: pd.DataFrame) -> str:
+    """What each slip of the printed dynamics changes."""
+    df = slips.set_index("variant")
+    items = []
+    for label, *_ in VARIANTS[1:]:
+        r = df.loc[label]
+        items.append(
+            f"{label} [{r['equations']}]: {r['verdict']}; it changes Fig. 9 by up to "
+            f"{r['max_force_change_N']:.2f} N ({r['force_change_pct_of_peak']:.2g} % of the peak force) and the "
+            f"static load at the centre by {r['static_centre_change_N']:+.2f} N; power-balance error "
+            f"{r['power_balance_rel']:.1e}, distance to MuJoCo {r['mujoco_force_rel']:.1e} of peak"
+        )
+    return "Slips of the printed dynamics (`extra_dynamics_slips.md`): " + "; ".join(items) + "."
+
+
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
     """A paragraph for the report, built from the pipeline outputs of this section."""
-    parts = []
-    f9 = figdir / "fig09_driving_forces.csv"
-    if f9.exists():
-        df = pd.read_csv(f9)
-        f = df[[f"f{i}_N" for i in (1, 2, 3)]].to_numpy()
-        span = f"{df['t_s'].iloc[0]:g}-{df['t_s'].iloc[-1]:g} s"
-        parts.append(
-            f"**Figs 5-10 (velocities, accelerations, driving forces).** Motion x = y = 0.001 sin(40 pi t) m at "
-            f"z = {df['z_m'].iloc[0]:g} m (§2.4; also used for Figs 5-8, where §1.4 gives no height), {span}, "
-            f"{len(df)} samples. Motor forces along the rails (Fig. 9): drive 1 {f[:, 0].min():.1f} to "
-            f"{f[:, 0].max():.1f} N, drive 2 {f[:, 1].min():.1f} to {f[:, 1].max():.1f} N, drive 3 "
-            f"{f[:, 2].min():.1f} to {f[:, 2].max():.1f} N (means {f[:, 0].mean():.1f}, {f[:, 1].mean():.1f}, "
-            f"{f[:, 2].mean():.1f} N; static load at the centre {df['static_centre_N'].iloc[0]:.2f} N per motor)."
-        )
-    checks = []
-    for name, diff, refcol, what in (
-        (
-            "fig07_velocity_check.csv",
-            "diff{i}_fd_m_s",
-            "qdot{i}_eq8_m_s",
-            "eq 8 vs IK finite differences",
+    parts = (
+        table_text(figdir, {"fig09_driving_forces.csv": _forces_paragraph}),
+        _checks_sentence(figdir),
+        table_text(
+            figdir,
+            {
+                "extra_power_balance.csv": lambda df: (
+                    f"Power balance (energy of all 10 bodies from positions and velocities only): max |sum f qdot - dE/dt| "
+                    f"= {np.abs(df['residual_W']).max():.1e} W against max |dE/dt| = {np.abs(df['dEdt_W']).max():.2f} W "
+                    f"(relative {np.abs(df['residual_W']).max() / np.abs(df['dEdt_W']).max():.1e})."
+                ),
+                "extra_mujoco_tracking.csv": _tracking_sentence,
+                "extra_dynamics_slips.csv": _slips_sentence,
+            },
         ),
-        ("fig07_velocity_check.csv", "diff{i}_mujoco_m_s", "qdot{i}_eq8_m_s", "eq 8 vs MuJoCo"),
-        (
-            "fig08_acceleration_check.csv",
-            "diff{i}_fd_m_s2",
-            "qddot{i}_eq13_m_s2",
-            "eq 13 vs IK finite differences",
-        ),
-        (
-            "fig08_acceleration_check.csv",
-            "diff{i}_mujoco_m_s2",
-            "qddot{i}_eq13_m_s2",
-            "eq 13 vs MuJoCo",
-        ),
-        (
-            "fig10_mujoco_forces.csv",
-            "diff{i}_mujoco_equivalent_N",
-            "f{i}_ours_N",
-            "forces vs MuJoCo (equivalent rods)",
-        ),
-        (
-            "fig10_mujoco_forces.csv",
-            "diff{i}_mujoco_parallelogram_N",
-            "f{i}_ours_N",
-            "forces vs MuJoCo (6 side rods)",
-        ),
-    ):
-        if (figdir / name).exists():
-            checks.append(f"{what} {_max_rel(pd.read_csv(figdir / name), diff, refcol):.1e}")
-    if checks:
-        parts.append("Independent checks, max |difference| / peak: " + "; ".join(checks) + ".")
-    pb = figdir / "extra_power_balance.csv"
-    if pb.exists():
-        df = pd.read_csv(pb)
-        parts.append(
-            f"Power balance (energy of all 10 bodies from positions and velocities only): max |sum f qdot - dE/dt| "
-            f"= {np.abs(df['residual_W']).max():.1e} W against max |dE/dt| = {np.abs(df['dEdt_W']).max():.2f} W "
-            f"(relative {np.abs(df['residual_W']).max() / np.abs(df['dEdt_W']).max():.1e})."
-        )
-    tk = figdir / "extra_mujoco_tracking.csv"
-    if tk.exists():
-        df = pd.read_csv(tk)
-        ours = max(df["error_ours_equivalent_m"].max(), df["error_ours_parallelogram_m"].max())
-        parts.append(
-            f"Driven open loop by our forces, MuJoCo's forward dynamics (RK4, stiff loops) keeps the platform within "
-            f"{ours:.1e} m of the motion law over {df['t_s'].iloc[-1]:g} s (both models); with the forces of the "
-            f"printed equations it strays {df['error_printed_equivalent_m'].max():.1e} m "
-            f"(`extra_mujoco_tracking.png`)."
-        )
-    sl = figdir / "extra_dynamics_slips.csv"
-    if sl.exists():
-        df = pd.read_csv(sl).set_index("variant")
-        items = []
-        for label, *_ in VARIANTS[1:]:
-            r = df.loc[label]
-            items.append(
-                f"{label} [{r['equations']}]: {r['verdict']}; it changes Fig. 9 by up to "
-                f"{r['max_force_change_N']:.2f} N ({r['force_change_pct_of_peak']:.2g} % of the peak force) and the "
-                f"static load at the centre by {r['static_centre_change_N']:+.2f} N; power-balance error "
-                f"{r['power_balance_rel']:.1e}, distance to MuJoCo {r['mujoco_force_rel']:.1e} of peak"
-            )
-        parts.append(
-            "Slips of the printed dynamics (`extra_dynamics_slips.md`): " + "; ".join(items) + "."
-        )
-    return "\n\n".join(parts)
+    )
+    return "\n\n".join(p for p in parts if p)

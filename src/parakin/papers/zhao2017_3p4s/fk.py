@@ -22,6 +22,7 @@ from parakin.io import atomic_write_text, atomic_writer, write_and_draw, write_c
 from parakin.mechanisms import P3P4S
 from parakin.nn.bp import plateau_epoch
 from parakin.papers.runs import map_runs
+from parakin.papers.sections import table_text
 from parakin.papers.zhao2017_3p4s.common import KEY, artefact
 from parakin.papers.zhao2017_3p4s.kinematics import table1_inputs
 from parakin.registry import EXACT, ITERATIVE, Tolerance
@@ -372,6 +373,73 @@ def _convergence_run(config_json: str, name: str, k: int) -> dict:
     return {"summary": s, "curve": curve, "samples": len(poses), "weights": net.n_weights}
 
 
+def _convergence_row(name: str, box, mine: list[dict], config: dict, printed: str) -> dict:
+    """The row of extra_bp_convergence for region ``name`` (``box``: its low and high corners)
+    from its trainings ``mine`` (each as :func:`_convergence_run` returns it)."""
+    cfg = convergence_settings(config)
+    fk_cfg = config[KEY]["fk"]
+    lo, hi = box
+    runs = [r["summary"] for r in mine]
+    rms = np.array([s["test_rms_m"] for s in runs])
+    e3 = float(np.median([s["test_mean_abs_axis_m"] for s in runs]))
+    stats = run_summary(rms)
+    role = (
+        "ours (the pipeline's network)"
+        if name == OURS
+        else "the paper's working poses"
+        if name == cfg["paper_region"]
+        else "a smaller box"
+    )
+    return {
+        "region": name,
+        "role": role,
+        "low": _fmt_box(lo),
+        "high": _fmt_box(hi),
+        "samples": mine[0]["samples"],
+        "hidden": fk_cfg["hidden"],
+        "weights": mine[0]["weights"],
+        "restarts": len(runs),
+        "window": cfg["window"],
+        "min_improvement": cfg["min_improvement"],
+        "max_epochs": cfg["max_epochs"],
+        "converged_runs": sum(s["stop_reason"] != "max_epochs" for s in runs),
+        "epochs_median": float(np.median([s["epochs"] for s in runs])),
+        "test_rms_median_m": stats["median"],
+        "test_rms_ci_low_m": stats["ci_low"],
+        "test_rms_ci_high_m": stats["ci_high"],
+        "test_rms_min_m": stats["min"],
+        "test_rms_max_m": stats["max"],
+        "test_p95_median_m": float(np.median([s["test_p95_m"] for s in runs])),
+        "test_e3_median_m": e3,
+        "range_at_paper_level": judge(
+            printed, stats["median"], kind="order", spread=(stats["min"], stats["max"])
+        )
+        == REPRODUCED,
+        "e3_median_at_paper_level": judge(printed, e3, kind="order") == REPRODUCED,
+    }
+
+
+def _convergence_notes(cfg: dict, fk_cfg: dict, printed: str) -> str:
+    """The notes of extra_bp_convergence: the sampling, the convergence rule, the error measures."""
+    return (
+        f"Each region: {cfg['samples']} IK samples uniform in the box (m), the 3-{fk_cfg['hidden']}-3 network "
+        f"trained {cfg['restarts']} times from different seeds, "
+        f"{1 - fk_cfg['val_fraction'] - fk_cfg['test_fraction']:.0%}/{fk_cfg['val_fraction']:.0%}/"
+        f"{fk_cfg['test_fraction']:.0%} split, LM as MATLAB trainlm but without its 6-failure validation stop. "
+        f"Convergence rule, fixed before the runs: stop when the best validation RMS error has not improved by "
+        f"{cfg['min_improvement']:.0%} over the last {cfg['window']} epochs ('mu_max' and 'min_grad' also mean no "
+        f"further progress); a run reaching the cap of {cfg['max_epochs']} epochs has not converged. Errors: "
+        "|predicted - true| platform position (m, 3-D) of each best-validation network on its test set; median, "
+        f"its {100 * CI_LEVEL:g} % confidence interval (order statistics; with 10 runs the whole range), min and max "
+        "over the runs; test_e3_median_m: median over the runs of the mean absolute coordinate "
+        "error (Table 2's E_3 averaged over the test set). The paper (§1.1) claims a "
+        f"'{printed} level' without stating the region or the error measure; range_at_paper_level: some run "
+        "within half a decade of it (the reference CSV's tolerance; the paper reports one training), "
+        "e3_median_at_paper_level: the median E_3 within half a decade. Runs side by side on the job's "
+        "cores, each on one thread from its own seed."
+    )
+
+
 @artefact(
     "network_convergence",
     outputs=[
@@ -395,7 +463,6 @@ def network_convergence(config: dict, outdir: Path) -> list[Path]:
     (§1.1: "1e-4 level") comes from the epoch limit of the pipeline's training or from the region
     sampled (docs/zhao2017_3p4s.md#s4.5)."""
     cfg = convergence_settings(config)
-    fk_cfg = config[KEY]["fk"]
     printed = printed_value(_ref(), "text_s1.1", "network_accuracy")
     tasks = [
         (json.dumps(config, sort_keys=True, default=list), name, k)
@@ -404,75 +471,19 @@ def network_convergence(config: dict, outdir: Path) -> list[Path]:
     ]
     results = map_runs(_convergence_run, tasks, label="network_convergence: trainings")
     rows, curves = [], []
-    for name, (lo, hi) in cfg["regions"].items():
+    for name, box in cfg["regions"].items():
         mine = [r for (_, region, _), r in zip(tasks, results) if region == name]
-        runs = [r["summary"] for r in mine]
         curves += [
             pd.DataFrame({"region": name, **r["curve"], "paper_accuracy_m": float(printed)})
             for r in mine
         ]
-        rms = np.array([s["test_rms_m"] for s in runs])
-        e3 = float(np.median([s["test_mean_abs_axis_m"] for s in runs]))
-        stats = run_summary(rms)
-        role = (
-            "ours (the pipeline's network)"
-            if name == OURS
-            else "the paper's working poses"
-            if name == cfg["paper_region"]
-            else "a smaller box"
-        )
-        rows.append(
-            {
-                "region": name,
-                "role": role,
-                "low": _fmt_box(lo),
-                "high": _fmt_box(hi),
-                "samples": mine[0]["samples"],
-                "hidden": fk_cfg["hidden"],
-                "weights": mine[0]["weights"],
-                "restarts": len(runs),
-                "window": cfg["window"],
-                "min_improvement": cfg["min_improvement"],
-                "max_epochs": cfg["max_epochs"],
-                "converged_runs": sum(s["stop_reason"] != "max_epochs" for s in runs),
-                "epochs_median": float(np.median([s["epochs"] for s in runs])),
-                "test_rms_median_m": stats["median"],
-                "test_rms_ci_low_m": stats["ci_low"],
-                "test_rms_ci_high_m": stats["ci_high"],
-                "test_rms_min_m": stats["min"],
-                "test_rms_max_m": stats["max"],
-                "test_p95_median_m": float(np.median([s["test_p95_m"] for s in runs])),
-                "test_e3_median_m": e3,
-                "range_at_paper_level": judge(
-                    printed, stats["median"], kind="order", spread=(stats["min"], stats["max"])
-                )
-                == REPRODUCED,
-                "e3_median_at_paper_level": judge(printed, e3, kind="order") == REPRODUCED,
-            }
-        )
+        rows.append(_convergence_row(name, box, mine, config, printed))
     tab = pd.DataFrame(rows)
-    notes = (
-        f"Each region: {cfg['samples']} IK samples uniform in the box (m), the 3-{fk_cfg['hidden']}-3 network "
-        f"trained {cfg['restarts']} times from different seeds, "
-        f"{1 - fk_cfg['val_fraction'] - fk_cfg['test_fraction']:.0%}/{fk_cfg['val_fraction']:.0%}/"
-        f"{fk_cfg['test_fraction']:.0%} split, LM as MATLAB trainlm but without its 6-failure validation stop. "
-        f"Convergence rule, fixed before the runs: stop when the best validation RMS error has not improved by "
-        f"{cfg['min_improvement']:.0%} over the last {cfg['window']} epochs ('mu_max' and 'min_grad' also mean no "
-        f"further progress); a run reaching the cap of {cfg['max_epochs']} epochs has not converged. Errors: "
-        "|predicted - true| platform position (m, 3-D) of each best-validation network on its test set; median, "
-        f"its {100 * CI_LEVEL:g} % confidence interval (order statistics; with 10 runs the whole range), min and max "
-        "over the runs; test_e3_median_m: median over the runs of the mean absolute coordinate "
-        "error (Table 2's E_3 averaged over the test set). The paper (§1.1) claims a "
-        f"'{printed} level' without stating the region or the error measure; range_at_paper_level: some run "
-        "within half a decade of it (the reference CSV's tolerance; the paper reports one training), "
-        "e3_median_at_paper_level: the median E_3 within half a decade. Runs side by side on the job's "
-        "cores, each on one thread from its own seed."
-    )
     paths = write_table(
         tab,
         outdir / "extra_bp_convergence",
         title="BP network trained to convergence on each sampling region",
-        notes=notes,
+        notes=_convergence_notes(cfg, config[KEY]["fk"], printed),
     )
     paths += write_and_draw(
         pd.concat(curves, ignore_index=True),
@@ -1234,54 +1245,66 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     return out
 
 
+def _hybrid_paragraph(tab: pd.DataFrame, accuracy: pd.DataFrame, ref: pd.DataFrame) -> str:
+    """Table 2: the network's accuracy and the hybrid FK's iterations and time against the paper's."""
+    a = accuracy.iloc[0]
+    smallest = accuracy.iloc[-1]
+    e3 = [float(printed_value(ref, "table2", f"case{k}.e3")) for k in range(1, 6)]
+    return (
+        f"**Table 2 (hybrid FK).** Our 3-10-3 network, trained by Levenberg–Marquardt on {int(a['samples'])} IK "
+        f"samples over the whole workspace box, predicts the platform position with a test-set RMS error of "
+        f"{a['test_rms_m']:.2e} m (max {a['test_max_m']:.2e} m), "
+        f"{a['test_rms_m'] / float(printed_value(ref, 'text_s1.1', 'network_accuracy')):.0f}× the paper's "
+        f"'{printed_value(ref, 'text_s1.1', 'network_accuracy')} level', which depends on a sampling region the paper "
+        f"does not state: the same training on the box {smallest['box']!r} gives {smallest['test_rms_m']:.1e} m "
+        "(`extra_bp_accuracy.md`). Broyden's quasi-Newton method from that "
+        f"guess, stopped at the paper's eps = {printed_value(ref, 'text_s1.1', 'epsilon')}, gives E_3 between "
+        f"{tab['e3'].min():.1e} and {tab['e3'].max():.1e} m in {int(tab['iterations'].min())}–"
+        f"{int(tab['iterations'].max())} iterations and {tab['time_ms'].min():.2f}–{tab['time_ms'].max():.2f} ms per "
+        f"solve on this machine (paper: E_3 {min(e3):.2e}–{max(e3):.2e} m, "
+        f"{printed_value(ref, 'text_s1.1', 'fk_iterations')} iterations, "
+        f"< {printed_value(ref, 'text_s1.1', 'fk_time_max')} ms). Rows 2 and 4 of the printed table are internally "
+        "inconsistent (see the notes of the reference CSV)."
+    )
+
+
+def _convergence_paragraph(convergence: pd.DataFrame, ref: pd.DataFrame) -> str:
+    """The network's accuracy when trained to convergence, per sampling region."""
+    c = convergence.set_index("region")
+    row = lambda role: c[c["role"] == role].iloc[0]  # noqa: E731
+    ours, paper = row("ours (the pipeline's network)"), row("the paper's working poses")
+    return (
+        f"**Network accuracy trained to convergence.** With a convergence rule fixed before the runs "
+        f"(best validation error not {ours['min_improvement']:.0%} better over {int(ours['window'])} "
+        f"epochs), {int(c['converged_runs'].sum())} of {int(c['restarts'].sum())} trainings converged; "
+        f"median test RMS error {ours['test_rms_median_m']:.1e} m on our box, "
+        f"{paper['test_rms_median_m']:.1e} m on Table 1's box, "
+        f"{c['test_rms_median_m'].min():.1e} m on the smallest, against the paper's "
+        f"'{printed_value(ref, 'text_s1.1', 'network_accuracy')} level' "
+        "(`zhao2017_3p4s/extra_bp_convergence.md`; the cause is judged in the table above)."
+    )
+
+
+def _benchmark_paragraph(b: pd.DataFrame) -> str:
+    """The FK solvers' single-solve latency and batched throughput."""
+    h = b[b["method"] == "hybrid"].iloc[0]
+    c = b[b["method"] == "closed-form"].iloc[0]
+    r = b[b["method"] == "scipy-root"].iloc[0]
+    return (
+        f"**FK benchmark (ours).** Median single solve: hybrid {h['median_latency_us']:.0f} µs "
+        f"({h['speedup_vs_paper_20ms']:.0f}× under the paper's 20 ms), closed form {c['median_latency_us']:.0f} µs, "
+        f"scipy.optimize.root {r['median_latency_us']:.0f} µs. Batched throughput: hybrid "
+        f"{h['throughput_per_s']:.3g}/s, closed form {c['throughput_per_s']:.3g}/s, against {r['throughput_per_s']:.3g}/s "
+        "for a loop over scipy.optimize.root (`zhao2017_3p4s/fk_benchmark.md`)."
+    )
+
+
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
-    parts = []
-    if (figdir / "table2.csv").exists() and (figdir / "extra_bp_accuracy.csv").exists():
-        tab = pd.read_csv(figdir / "table2.csv")
-        accuracy = pd.read_csv(figdir / "extra_bp_accuracy.csv")
-        a = accuracy.iloc[0]
-        smallest = accuracy.iloc[-1]
-        e3 = [float(printed_value(ref, "table2", f"case{k}.e3")) for k in range(1, 6)]
-        parts.append(
-            f"**Table 2 (hybrid FK).** Our 3-10-3 network, trained by Levenberg–Marquardt on {int(a['samples'])} IK "
-            f"samples over the whole workspace box, predicts the platform position with a test-set RMS error of "
-            f"{a['test_rms_m']:.2e} m (max {a['test_max_m']:.2e} m), "
-            f"{a['test_rms_m'] / float(printed_value(ref, 'text_s1.1', 'network_accuracy')):.0f}× the paper's "
-            f"'{printed_value(ref, 'text_s1.1', 'network_accuracy')} level', which depends on a sampling region the paper "
-            f"does not state: the same training on the box {smallest['box']!r} gives {smallest['test_rms_m']:.1e} m "
-            "(`extra_bp_accuracy.md`). Broyden's quasi-Newton method from that "
-            f"guess, stopped at the paper's eps = {printed_value(ref, 'text_s1.1', 'epsilon')}, gives E_3 between "
-            f"{tab['e3'].min():.1e} and {tab['e3'].max():.1e} m in {int(tab['iterations'].min())}–"
-            f"{int(tab['iterations'].max())} iterations and {tab['time_ms'].min():.2f}–{tab['time_ms'].max():.2f} ms per "
-            f"solve on this machine (paper: E_3 {min(e3):.2e}–{max(e3):.2e} m, "
-            f"{printed_value(ref, 'text_s1.1', 'fk_iterations')} iterations, "
-            f"< {printed_value(ref, 'text_s1.1', 'fk_time_max')} ms). Rows 2 and 4 of the printed table are internally "
-            "inconsistent (see the notes of the reference CSV)."
-        )
-    if (figdir / "extra_bp_convergence.csv").exists():
-        c = pd.read_csv(figdir / "extra_bp_convergence.csv").set_index("region")
-        row = lambda role: c[c["role"] == role].iloc[0]  # noqa: E731
-        ours, paper = row("ours (the pipeline's network)"), row("the paper's working poses")
-        parts.append(
-            f"**Network accuracy trained to convergence.** With a convergence rule fixed before the runs "
-            f"(best validation error not {ours['min_improvement']:.0%} better over {int(ours['window'])} "
-            f"epochs), {int(c['converged_runs'].sum())} of {int(c['restarts'].sum())} trainings converged; "
-            f"median test RMS error {ours['test_rms_median_m']:.1e} m on our box, "
-            f"{paper['test_rms_median_m']:.1e} m on Table 1's box, "
-            f"{c['test_rms_median_m'].min():.1e} m on the smallest, against the paper's "
-            f"'{printed_value(ref, 'text_s1.1', 'network_accuracy')} level' "
-            "(`zhao2017_3p4s/extra_bp_convergence.md`; the cause is judged in the table above)."
-        )
-    if (figdir / "fk_benchmark.csv").exists():
-        b = pd.read_csv(figdir / "fk_benchmark.csv")
-        h = b[b["method"] == "hybrid"].iloc[0]
-        c = b[b["method"] == "closed-form"].iloc[0]
-        r = b[b["method"] == "scipy-root"].iloc[0]
-        parts.append(
-            f"**FK benchmark (ours).** Median single solve: hybrid {h['median_latency_us']:.0f} µs "
-            f"({h['speedup_vs_paper_20ms']:.0f}× under the paper's 20 ms), closed form {c['median_latency_us']:.0f} µs, "
-            f"scipy.optimize.root {r['median_latency_us']:.0f} µs. Batched throughput: hybrid "
-            f"{h['throughput_per_s']:.3g}/s, closed form {c['throughput_per_s']:.3g}/s, against {r['throughput_per_s']:.3g}/s "
-            "for a loop over scipy.optimize.root (`zhao2017_3p4s/fk_benchmark.md`)."
-        )
-    return "\n\n".join(parts)
+    return table_text(
+        figdir,
+        {
+            ("table2.csv", "extra_bp_accuracy.csv"): lambda t, a: _hybrid_paragraph(t, a, ref),
+            "extra_bp_convergence.csv": lambda c: _convergence_paragraph(c, ref),
+            "fk_benchmark.csv": _benchmark_paragraph,
+        },
+    )

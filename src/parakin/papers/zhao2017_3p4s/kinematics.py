@@ -13,6 +13,7 @@ from scipy.optimize import least_squares, minimize
 from parakin.claims import Claim, load_reference, printed_value
 from parakin.io import write_and_draw, write_table
 from parakin.mechanisms import P3P4S
+from parakin.papers.sections import table_text
 from parakin.papers.zhao2017_3p4s.common import KEY, artefact, table_and_figure
 from parakin.registry import DESCRIPTIVE, ROUNDING
 
@@ -643,27 +644,29 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     return out
 
 
+def _table1_paragraph(fit: pd.DataFrame) -> str:
+    """Table 1 (IK): the stated geometry against the fitted ones and the optimised design."""
+    geo = fit.set_index("geometry")
+    s, f, mm, o = (
+        geo.loc["stated"],
+        geo.loc["best fit"],
+        geo.loc["minimax"],
+        geo.loc["optimised"],
+    )
+    return (
+        f"**Table 1 (IK).** With the parameters the paper states (phi {s['phi_deg']:.0f} deg, delta "
+        f"{s['delta']:.4f} m) our IK misses the printed strokes by up to {s['max_abs_err']:.4f} m "
+        f"({int(s['n_within_rounding'])}/15 within rounding). Fitting (delta, phi) at L = {f['L']} m gives "
+        f"delta = {f['delta']:.4f} m, phi = {f['phi_deg']:.2f} deg, max error {f['max_abs_err']:.4f} m "
+        f"({int(f['n_within_rounding'])}/15 within rounding); minimising the largest error instead gives "
+        f"delta = {mm['delta']:.4f} m, phi = {mm['phi_deg']:.2f} deg, max error {mm['max_abs_err']:.4f} m "
+        f"({int(mm['n_within_rounding'])}/15 within rounding). Both lie next to the paper's optimised design "
+        f"(phi {o['phi_deg']:.0f} deg, delta {o['delta']:.4f} m: max error {o['max_abs_err']:.4f} m). "
+        "Table 1 was most likely computed with a geometry near the optimised one, not the stated one "
+        "(map: `zhao2017_3p4s/extra_table1_region.png`)."
+    )
+
+
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
     """A paragraph for the report, built from the pipeline outputs."""
-    parts = []
-    if (figdir / "extra_table1_fit.csv").exists():
-        geo = _geometry_rows(figdir)
-        s, f, mm, o = (
-            geo.loc["stated"],
-            geo.loc["best fit"],
-            geo.loc["minimax"],
-            geo.loc["optimised"],
-        )
-        parts.append(
-            f"**Table 1 (IK).** With the parameters the paper states (phi {s['phi_deg']:.0f} deg, delta "
-            f"{s['delta']:.4f} m) our IK misses the printed strokes by up to {s['max_abs_err']:.4f} m "
-            f"({int(s['n_within_rounding'])}/15 within rounding). Fitting (delta, phi) at L = {f['L']} m gives "
-            f"delta = {f['delta']:.4f} m, phi = {f['phi_deg']:.2f} deg, max error {f['max_abs_err']:.4f} m "
-            f"({int(f['n_within_rounding'])}/15 within rounding); minimising the largest error instead gives "
-            f"delta = {mm['delta']:.4f} m, phi = {mm['phi_deg']:.2f} deg, max error {mm['max_abs_err']:.4f} m "
-            f"({int(mm['n_within_rounding'])}/15 within rounding). Both lie next to the paper's optimised design "
-            f"(phi {o['phi_deg']:.0f} deg, delta {o['delta']:.4f} m: max error {o['max_abs_err']:.4f} m). "
-            "Table 1 was most likely computed with a geometry near the optimised one, not the stated one "
-            "(map: `zhao2017_3p4s/extra_table1_region.png`)."
-        )
-    return "\n\n".join(parts)
+    return table_text(figdir, {"extra_table1_fit.csv": _table1_paragraph})

@@ -34,6 +34,7 @@ from parakin.mechanisms import P3P4S
 from parakin.mechanisms import p3p4s_indices as ix
 from parakin.optimize import GAOptions, ga, normalised_sum, nsga2
 from parakin.papers.runs import map_runs
+from parakin.papers.sections import table_text
 from parakin.papers.zhao2017_3p4s.common import KEY, artefact
 from parakin.progress import Progress, counting
 from parakin.registry import EXACT, ROUNDING, TIMING, Tolerance
@@ -1550,17 +1551,18 @@ def ga_claims(runs: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
 
 def summary(figdir: Path, ref: pd.DataFrame) -> str:
     """The report's paragraphs for §3, read from the output CSVs."""
-    paragraphs = (
-        _indices_paragraph,
-        _sensitivity_paragraph,
-        _quadrature_paragraph,
-        _benchmark_paragraph,
-        _ga_paragraph,
-        _pareto_paragraph,
-        _paper_box_paragraph,
+    return table_text(
+        figdir,
+        {
+            "extra_global_indices.csv": lambda g: _indices_paragraph(g, ref),
+            "extra_index_sensitivity.csv": _sensitivity_paragraph,
+            "extra_index_convergence.csv": _quadrature_paragraph,
+            "extra_index_benchmark.csv": _benchmark_paragraph,
+            "extra_ga_runs.csv": lambda runs: _ga_paragraph(runs, ref),
+            "extra_pareto.csv": _pareto_paragraph,
+            "extra_ga_paper_box.csv": _paper_box_paragraph,
+        },
     )
-    parts = [text for make in paragraphs if (text := make(figdir, ref)) is not None]
-    return "\n\n".join(parts)
 
 
 def _printed_readers(
@@ -1581,7 +1583,7 @@ def _printed_readers(
     return pv, pf, rng
 
 
-def _indices_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
+def _indices_paragraph(table: pd.DataFrame, ref: pd.DataFrame) -> str:
     """§3 indices (Figs 15-26): our before and after designs against the printed ones."""
     pv, pf, rng = _printed_readers(ref)
     printed_gains = ", ".join(
@@ -1592,131 +1594,106 @@ def _indices_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
             pf("fig23", "sigma3.before") / pf("fig25", "sigma3.after"),
         )
     )
-    gpath = figdir / "extra_global_indices.csv"
-    if gpath.exists():
-        g = pd.read_csv(gpath).set_index("design")
-        b, a = g.loc["before"], g.loc["after"]
-        return (
-            "**§3 indices (Figs 15-26).** Over our W, the before design gives "
-            f"sigma1 = {b['sigma1']:.4g} kg (paper {pv('fig15', 'sigma1.before')}, "
-            f"{100 * (b['sigma1'] / pf('fig15', 'sigma1.before') - 1):+.1f} %), "
-            f"sigma3 = {b['sigma3']:.4g} (paper {pv('fig23', 'sigma3.before')}, "
-            f"{100 * (b['sigma3'] / pf('fig23', 'sigma3.before') - 1):+.1f} %), "
-            f"stiffness mean lambda_min = {b['sigma2_lambda']:.4g} (paper {pv('fig19', 'sigma2.before')}) or sqrt "
-            f"form {b['sigma2_sqrt']:.4g}; ranges sigma [{b['dynamic_min']:.3g}, {b['dynamic_max']:.3g}] (paper "
-            f"{rng('fig15', 'sigma.range.before')}), lambda_min [{b['stiffness_lambda_min']:.3g}, "
-            f"{b['stiffness_lambda_max']:.3g}] (paper {rng('fig19', 'sigma_star.range.before')}), cond "
-            f"[{b['speed_min']:.3g}, {b['speed_max']:.3g}] (paper {rng('fig23', 'sigma_hat.range.before')}). "
-            f"The after design gives sigma1 = {a['sigma1']:.4g} (paper {pv('fig17', 'sigma1.after')}), lambda_min "
-            f"mean {a['sigma2_lambda']:.4g} (paper {pv('fig21', 'sigma2.after')}), sigma3 = {a['sigma3']:.4g} "
-            f"(paper {pv('fig25', 'sigma3.after')}): gains x{b['sigma1'] / a['sigma1']:.2f}, "
-            f"x{a['sigma2_lambda'] / b['sigma2_lambda']:.2f}, x{b['sigma3'] / a['sigma3']:.2f} (paper "
-            f"{pv('abstract', 'gain.dynamic')}, {pv('abstract', 'gain.stiffness')}, {pv('abstract', 'gain.speed')}; "
-            f"printed values give {printed_gains}). The before sigma1 and sigma3 agree within a "
-            "few per cent on a workspace we assumed (so: consistent after assuming, not reproduced; other readings "
-            "of W below); the stiffness index fits lambda_min, not eq 33's square root; the after values are not "
-            "reached (our sigma3 after is far lower than the paper's)."
-        )
-    return None
+    g = table.set_index("design")
+    b, a = g.loc["before"], g.loc["after"]
+    return (
+        "**§3 indices (Figs 15-26).** Over our W, the before design gives "
+        f"sigma1 = {b['sigma1']:.4g} kg (paper {pv('fig15', 'sigma1.before')}, "
+        f"{100 * (b['sigma1'] / pf('fig15', 'sigma1.before') - 1):+.1f} %), "
+        f"sigma3 = {b['sigma3']:.4g} (paper {pv('fig23', 'sigma3.before')}, "
+        f"{100 * (b['sigma3'] / pf('fig23', 'sigma3.before') - 1):+.1f} %), "
+        f"stiffness mean lambda_min = {b['sigma2_lambda']:.4g} (paper {pv('fig19', 'sigma2.before')}) or sqrt "
+        f"form {b['sigma2_sqrt']:.4g}; ranges sigma [{b['dynamic_min']:.3g}, {b['dynamic_max']:.3g}] (paper "
+        f"{rng('fig15', 'sigma.range.before')}), lambda_min [{b['stiffness_lambda_min']:.3g}, "
+        f"{b['stiffness_lambda_max']:.3g}] (paper {rng('fig19', 'sigma_star.range.before')}), cond "
+        f"[{b['speed_min']:.3g}, {b['speed_max']:.3g}] (paper {rng('fig23', 'sigma_hat.range.before')}). "
+        f"The after design gives sigma1 = {a['sigma1']:.4g} (paper {pv('fig17', 'sigma1.after')}), lambda_min "
+        f"mean {a['sigma2_lambda']:.4g} (paper {pv('fig21', 'sigma2.after')}), sigma3 = {a['sigma3']:.4g} "
+        f"(paper {pv('fig25', 'sigma3.after')}): gains x{b['sigma1'] / a['sigma1']:.2f}, "
+        f"x{a['sigma2_lambda'] / b['sigma2_lambda']:.2f}, x{b['sigma3'] / a['sigma3']:.2f} (paper "
+        f"{pv('abstract', 'gain.dynamic')}, {pv('abstract', 'gain.stiffness')}, {pv('abstract', 'gain.speed')}; "
+        f"printed values give {printed_gains}). The before sigma1 and sigma3 agree within a "
+        "few per cent on a workspace we assumed (so: consistent after assuming, not reproduced; other readings "
+        "of W below); the stiffness index fits lambda_min, not eq 33's square root; the after values are not "
+        "reached (our sigma3 after is far lower than the paper's)."
+    )
 
 
-def _sensitivity_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
+def _sensitivity_paragraph(s: pd.DataFrame) -> str:
     """How the indices move over the readings of W and of the stiffness."""
-    sp = figdir / "extra_index_sensitivity.csv"
-    if sp.exists():
-        s = pd.read_csv(sp)
-        return (
-            f"Sensitivity (`extra_index_sensitivity.md`, {len(s)} readings of W and the stiffness): before sigma1 "
-            f"error {s['sigma1_before_err_pct'].min():+.1f} to {s['sigma1_before_err_pct'].max():+.1f} %, sigma3 "
-            f"{s['sigma3_before_err_pct'].min():+.1f} to {s['sigma3_before_err_pct'].max():+.1f} %; after sigma3 "
-            f"error {s['sigma3_after_err_pct'].min():+.1f} to {s['sigma3_after_err_pct'].max():+.1f} %. All three "
-            f"indices improve in {int(s['all_improve'].sum())}/{len(s)} readings; the after design matches within "
-            f"5 % in {int(s['after_all_within_5pct'].sum())}."
-        )
-    return None
+    return (
+        f"Sensitivity (`extra_index_sensitivity.md`, {len(s)} readings of W and the stiffness): before sigma1 "
+        f"error {s['sigma1_before_err_pct'].min():+.1f} to {s['sigma1_before_err_pct'].max():+.1f} %, sigma3 "
+        f"{s['sigma3_before_err_pct'].min():+.1f} to {s['sigma3_before_err_pct'].max():+.1f} %; after sigma3 "
+        f"error {s['sigma3_after_err_pct'].min():+.1f} to {s['sigma3_after_err_pct'].max():+.1f} %. All three "
+        f"indices improve in {int(s['all_improve'].sum())}/{len(s)} readings; the after design matches within "
+        f"5 % in {int(s['after_all_within_5pct'].sum())}."
+    )
 
 
-def _quadrature_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
+def _quadrature_paragraph(c: pd.DataFrame) -> str | None:
     """The quadrature's convergence (the next-finest Gauss rule against the finest)."""
-    cv = figdir / "extra_index_convergence.csv"
-    if cv.exists():
-        c = pd.read_csv(cv)
-        gs = c[c["rule"] == "gauss"].sort_values("n")
-        ns = sorted(gs["n"].unique())
-        if len(ns) >= 3:
-            n2 = ns[-2]
-            worst = (
-                gs[gs["n"] == n2][
-                    ["sigma1_rel_to_finest", "sigma2_lambda_rel_to_finest", "sigma3_rel_to_finest"]
-                ]
-                .to_numpy()
-                .max()
-            )
-            return (
-                f"Quadrature: Gauss-Legendre with {n2} nodes per axis is within {worst:.1e} (relative) of "
-                f"{ns[-1]} nodes (`extra_index_convergence.md`)."
-            )
-    return None
-
-
-def _benchmark_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
-    """The batched indices against a per-pose loop."""
-    bm = figdir / "extra_index_benchmark.csv"
-    if bm.exists():
-        r = pd.read_csv(bm).iloc[0]
+    gs = c[c["rule"] == "gauss"].sort_values("n")
+    ns = sorted(gs["n"].unique())
+    if len(ns) >= 3:
+        n2 = ns[-2]
+        worst = (
+            gs[gs["n"] == n2][
+                ["sigma1_rel_to_finest", "sigma2_lambda_rel_to_finest", "sigma3_rel_to_finest"]
+            ]
+            .to_numpy()
+            .max()
+        )
         return (
-            f"Benchmark: all indices on {int(r['poses'])} poses batched in {r['batched_s']:.3f} s vs "
-            f"{r['loop_s_extrapolated']:.2f} s per-pose loop (x{r['ratio']:.0f})."
+            f"Quadrature: Gauss-Legendre with {n2} nodes per axis is within {worst:.1e} (relative) of "
+            f"{ns[-1]} nodes (`extra_index_convergence.md`)."
         )
     return None
 
 
-def _ga_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
+def _benchmark_paragraph(table: pd.DataFrame) -> str:
+    """The batched indices against a per-pose loop."""
+    r = table.iloc[0]
+    return (
+        f"Benchmark: all indices on {int(r['poses'])} poses batched in {r['batched_s']:.3f} s vs "
+        f"{r['loop_s_extrapolated']:.2f} s per-pose loop (x{r['ratio']:.0f})."
+    )
+
+
+def _ga_paragraph(ours: pd.DataFrame, ref: pd.DataFrame) -> str:
     """The GA over independent runs (Fig. 14, Table 3)."""
     pv, pf, rng = _printed_readers(ref)
-    runs = figdir / "extra_ga_runs.csv"
-    if runs.exists():
-        ours = pd.read_csv(runs)
-        gen = ours["convergence_generation"]
-        return (
-            f"**GA (Fig. 14, Table 3).** Over {len(ours)} independent runs f = {ours['f'].min():.4f} to "
-            f"{ours['f'].max():.4f} (paper f_min {pv('fig14', 'f_min')}), converged at generation "
-            f"{gen.min()}-{gen.max()} (median {gen.median():g}; paper {pv('fig14', 'ga.convergence_generation')}); "
-            f"delta = {ours['delta_m'].min():.4f}-{ours['delta_m'].max():.4f} m, L = "
-            f"{ours['L_m'].min():.4f}-{ours['L_m'].max():.4f} m, phi = {ours['phi_deg'].min():.2f}-"
-            f"{ours['phi_deg'].max():.2f} deg (paper after: r_a {pv('table3', 'after.r_a')} m, r_b "
-            f"{pv('table3', 'after.r_b')} m, L {pv('table3', 'after.l')} m, phi {pv('table3', 'after.phi')} deg); sigma1 = "
-            f"{ours['sigma1'].min():.4g}-{ours['sigma1'].max():.4g}, sigma2 = {ours['sigma2'].min():.4g}-"
-            f"{ours['sigma2'].max():.4g}, sigma3 = {ours['sigma3'].min():.4g}-{ours['sigma3'].max():.4g} "
-            "(`extra_ga_summary.md`)."
-        )
-    return None
+    gen = ours["convergence_generation"]
+    return (
+        f"**GA (Fig. 14, Table 3).** Over {len(ours)} independent runs f = {ours['f'].min():.4f} to "
+        f"{ours['f'].max():.4f} (paper f_min {pv('fig14', 'f_min')}), converged at generation "
+        f"{gen.min()}-{gen.max()} (median {gen.median():g}; paper {pv('fig14', 'ga.convergence_generation')}); "
+        f"delta = {ours['delta_m'].min():.4f}-{ours['delta_m'].max():.4f} m, L = "
+        f"{ours['L_m'].min():.4f}-{ours['L_m'].max():.4f} m, phi = {ours['phi_deg'].min():.2f}-"
+        f"{ours['phi_deg'].max():.2f} deg (paper after: r_a {pv('table3', 'after.r_a')} m, r_b "
+        f"{pv('table3', 'after.r_b')} m, L {pv('table3', 'after.l')} m, phi {pv('table3', 'after.phi')} deg); sigma1 = "
+        f"{ours['sigma1'].min():.4g}-{ours['sigma1'].max():.4g}, sigma2 = {ours['sigma2'].min():.4g}-"
+        f"{ours['sigma2'].max():.4g}, sigma3 = {ours['sigma3'].min():.4g}-{ours['sigma3'].max():.4g} "
+        "(`extra_ga_summary.md`)."
+    )
 
 
-def _pareto_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
+def _pareto_paragraph(p: pd.DataFrame) -> str:
     """The NSGA-II front's extent."""
-    pp = figdir / "extra_pareto.csv"
-    if pp.exists():
-        p = pd.read_csv(pp)
-        return (
-            f"NSGA-II front: {len(p)} non-dominated designs, sigma1 {p['sigma1'].min():.4g}-"
-            f"{p['sigma1'].max():.4g}, sigma2 {p['sigma2'].min():.4g}-{p['sigma2'].max():.4g}, sigma3 "
-            f"{p['sigma3'].min():.4g}-{p['sigma3'].max():.4g} (`extra_pareto.png`)."
-        )
-    return None
+    return (
+        f"NSGA-II front: {len(p)} non-dominated designs, sigma1 {p['sigma1'].min():.4g}-"
+        f"{p['sigma1'].max():.4g}, sigma2 {p['sigma2'].min():.4g}-{p['sigma2'].max():.4g}, sigma3 "
+        f"{p['sigma3'].min():.4g}-{p['sigma3'].max():.4g} (`extra_pareto.png`)."
+    )
 
 
-def _paper_box_paragraph(figdir: Path, ref: pd.DataFrame) -> str | None:
+def _paper_box_paragraph(b: pd.DataFrame) -> str:
     """Where the paper's optimum comes from: the GA inside the paper's box."""
-    box = figdir / "extra_ga_paper_box.csv"
-    if box.exists():
-        b = pd.read_csv(box)
-        hits = int(np.sum(b["dist_to_paper_after"] < 1e-3))
-        return (
-            f"**Where the paper's optimum comes from (ours).** Run inside the smallest box that holds both of the "
-            f"paper's designs (L, d fixed), the same GA lands on the paper's after design in {hits} of {len(b)} runs "
-            f"(largest distance {b['dist_to_paper_after'].max():.1e} of a box side): the published optimum is the "
-            "corner of such a box, so the 'optimisation' result reflects the unstated design bounds "
-            "(`extra_ga_paper_box.md`)."
-        )
-    return None
+    hits = int(np.sum(b["dist_to_paper_after"] < 1e-3))
+    return (
+        f"**Where the paper's optimum comes from (ours).** Run inside the smallest box that holds both of the "
+        f"paper's designs (L, d fixed), the same GA lands on the paper's after design in {hits} of {len(b)} runs "
+        f"(largest distance {b['dist_to_paper_after'].max():.1e} of a box side): the published optimum is the "
+        "corner of such a box, so the 'optimisation' result reflects the unstated design bounds "
+        "(`extra_ga_paper_box.md`)."
+    )
