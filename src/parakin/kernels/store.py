@@ -209,26 +209,31 @@ def _is_build(path: Path, name: str) -> bool:
     )
 
 
-def _prune(base: Path, name: str, keep: str) -> None:
-    """Remove the builds of ``name`` made from other sources (their hash is not ``keep``'s) that
-    no process uses. Called under :func:`_locked`, so no process starts using one meanwhile."""
+def _prune(base: Path, name: str, keep: str | None = None) -> None:
+    """Remove the builds of ``name`` made from other sources (not ``keep``: another hash) that no
+    process uses. Called under :func:`_locked`, so no process starts using one meanwhile."""
     for old in base.glob(f"{name}-*"):
-        if not _is_build(old, name) or old.name == keep:
-            continue
-        fd = _lock_fd(base / LOCKS / f"{old.name}.use")
-        if fd is None and fcntl is not None:
-            continue  # cannot tell whether it is in use: keep it
-        try:
-            if fd is not None:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            pass  # in use by another process
-        else:
+        if _is_build(old, name) and old.name != keep and not _in_use(base, old.name):
             _discard(old)
             (base / LOCKS / f"{old.name}.use").unlink(missing_ok=True)
-        finally:
-            if fd is not None:
-                os.close(fd)
+
+
+def _in_use(base: Path, build: str) -> bool:
+    """Whether a process holds its shared lock on ``build`` (:func:`_use`); a build whose lock
+    file cannot be opened counts as in use."""
+    lock = base / LOCKS / f"{build}.use"
+    if fcntl is None or not lock.exists():  # every user makes the file before using the build
+        return False
+    fd = _lock_fd(lock)
+    if fd is None:
+        return True
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    finally:
+        os.close(fd)
+    return False
 
 
 def _discard(path: Path, *, remake: bool = False) -> None:
