@@ -232,3 +232,85 @@ def test_cli_kernels_status_and_clear(warm, tmp_path):
     )
     assert clear.returncode == 0 and "removed" in clear.stdout, clear.stderr
     assert [p.name for p in cache.iterdir()] == ["unrelated"]
+
+
+#: a worker of the race below: ``rounds`` first calls of the toy kernel's compiled verification
+#: (its IK round trip) on random poses, each after the kernel's sources changed (as a re-clone or
+#: a checkout does: a new hash, a new build); one output line per round: the flags, the error of
+#: the joint error, and whether every build this process has used is still on disk
+RACE = textwrap.dedent(
+    """
+    import os, sys
+    import numpy as np
+    from parakin import kernels
+    from toy_mechanism import KernelTwoLeg as Toy
+    import toy_kernels
+
+    m = Toy()
+    lo, hi = m.pose_bounds()
+    rng = np.random.default_rng(int(sys.argv[1]))
+    source = toy_kernels.__file__
+    text, used = open(source).read(), []  # the builds this process has used
+    for r in range(int(sys.argv[2])):
+        with open(source + ".new", "w") as f:  # the same sources in every process at round r
+            f.write(text + f"\\n# round {r}\\n")
+        os.replace(source + ".new", source)
+        # forget the loaded build: the next call looks the kernel directory up and loads (or
+        # compiles) its entries again, as a new process would, without a new process's start-up
+        for fn in (kernels._build, kernels.compiled, kernels.entries_of):
+            fn.cache_clear()
+        x = rng.uniform(lo, hi, (6, 2))
+        shift = rng.uniform(-1e-3, 1e-3, 6)
+        q = m.ik(x)
+        q[:, 0] += shift  # the joint error of row i is |shift[i]|
+        ok, err, asm = kernels.verify_hooks(m, q, x, parallel=False)
+        used.append(kernels._build(toy_kernels)[0])
+        kept = all(any(path.rglob("entries.verify_serial-*.nbi")) for path in used)
+        error = float(np.abs(err - np.abs(shift)).max())
+        print(bool(ok.all() and asm.all()), error, kept, flush=True)
+    """
+)
+
+
+def _racer(seed: int, rounds: int, cache: Path, tmp_path: Path) -> subprocess.Popen:
+    """A :data:`RACE` worker on its own copy of the toy kernel's sources."""
+    clone = tmp_path / f"clone{seed}"
+    shutil.copytree(DATA, clone, ignore=shutil.ignore_patterns("__pycache__"))
+    env = _env(cache)
+    env["PYTHONPATH"] = env["PYTHONPATH"].replace(str(DATA), str(clone))
+    return subprocess.Popen(
+        [sys.executable, "-c", RACE, str(seed), str(rounds)],
+        env=env,
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+def _raced(proc: subprocess.Popen, rounds: int) -> None:
+    """Every round of a :data:`RACE` worker answered right, without a traceback or a notice."""
+    stdout, stderr = proc.communicate(timeout=900)
+    assert proc.returncode == 0 and "Traceback" not in stderr, stderr[-3000:]
+    assert not _notices(stderr), stderr
+    lines = stdout.split("\n")[:-1]
+    assert len(lines) == rounds, stdout
+    for line in lines:
+        flags, error, kept = line.split()
+        assert flags == "True" and float(error) < 1e-12 and kept == "True", stdout
+
+
+def test_processes_sharing_a_cache_never_pull_a_build_from_under_each_other(tmp_path):
+    """Re-clones and checkouts beside running processes (issue 30's CI flake): three processes,
+    each with its own copy of the kernel's sources, share a cache; each changes its sources before
+    each of several first calls (processes at the same round share a hash and a build, the others'
+    builds are of other hashes, older or newer). Every answer is right (the IK round trip gives the
+    planted joint error back) and no process sees a build removed while it loads or compiles it
+    (no traceback, no rebuild notice). A process started after them, when none is left to use the
+    older builds, removes them."""
+    cache, rounds = tmp_path / "cache", 4
+    for proc in [_racer(seed, rounds, cache, tmp_path) for seed in range(3)]:
+        _raced(proc, rounds)
+    _raced(_racer(3, 1, cache, tmp_path), 1)  # round 0's sources again, nobody else running
+    builds = [p.name for p in cache.iterdir() if p.name.startswith("toy_kernels-")]
+    assert len(builds) == 1, builds
