@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 
 from parakin import kernels, mechanisms
-from parakin.kernels import store
+from parakin.kernels import methods, store
 from parakin.mechanisms import P3P4S, UPS2, Stewart12, Stewart36
 from parakin.mechanisms.base import Mechanism
 from parakin.mechanisms.stewart12 import ActiveLegs, DriveMode
@@ -34,7 +34,8 @@ MECHS = {
 #: the mechanisms whose numeric FK from near starts is compared (the 6-6's 40 assemblies make
 #: Newton from a start 2 % of the way to home land elsewhere; its own test below)
 NEAR = [k for k in MECHS if k != "stewart66"]
-METHODS = ["newton", "lm", "broyden", "bfgs"]
+#: every method with a compiled loop (a method added to the option table is tested here by itself)
+METHODS = list(methods.COMPILED)
 
 
 def _poses(mech, n: int, seed: int, spread: float = 1.0) -> np.ndarray:
@@ -225,6 +226,7 @@ def test_options_and_verification_apply(monkeypatch):
         ("lm", {"gtol": 1e-3, "tau": 1e-3}),
         ("bfgs", {"maxls": 5, "c1": 1e-3}),
         ("broyden", {"maxiter": 3}),
+        ("dogleg", {"factor": 0.01, "eta": 0.2, "xtol": 1e-6}),
     ]
     x0 = truth + 0.01
     for method, opts in cases:
@@ -407,16 +409,17 @@ def test_the_cube_drive_modes_run_compiled_and_agree_with_numpy(monkeypatch):
         np.testing.assert_allclose(got.x[same], ref.x[same], rtol=0, atol=1e-9)
 
 
-def test_stewart66_newton_compiled_equals_numpy(monkeypatch):
+@pytest.mark.parametrize("method", ["newton", "dogleg"])
+def test_stewart66_newton_compiled_equals_numpy(method, monkeypatch):
     """The 6-6's kernel (the 3-6's leg equations over six platform points) drives the compiled
-    Newton: from near starts the numpy path's statuses and poses."""
+    Newton and dog leg: from near starts the numpy path's statuses and poses."""
     mech = MECHS["stewart66"]
     truth = _poses(mech, 100, seed=13, spread=0.05)
     joints = mech.ik(truth)
     x0 = truth + 0.01 * (mech.home() - truth)
-    got = solve_fk(mech, joints, x0, method="newton")
+    got = solve_fk(mech, joints, x0, method=method)
     _numpy_path(monkeypatch)
-    ref = solve_fk(mech, joints, x0, method="newton")
+    ref = solve_fk(mech, joints, x0, method=method)
     np.testing.assert_array_equal(got.status, ref.status)
     assert got.success.mean() > 0.9
     np.testing.assert_allclose(got.x[got.success], ref.x[got.success], rtol=0, atol=1e-9)

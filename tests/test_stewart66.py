@@ -321,7 +321,7 @@ def test_compiled_fk_all_same_solutions_as_numpy(mech, random_mechs, monkeypatch
         with monkeypatch.context() as mp:
             mp.setenv("PARAKIN_KERNELS", "0")
             ref = m.fk_all(q, return_info=True)
-        for k in ("n_found", "n_real", "complete"):
+        for k in ("n_found", "n_real", "n_undecided", "complete"):
             assert np.array_equal(getattr(got, k), getattr(ref, k)), k
         assert np.array_equal(np.isnan(got.poses), np.isnan(ref.poses))
         assert np.nanmax(np.abs(_wrap(got.poses - ref.poses))) < 1e-9

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from parakin.kernels import methods
 from parakin.mechanisms.base import REGISTRY, Array, Mechanism
 from parakin.solvers import solve_fk
 from parakin.timing import best_of, best_time
@@ -243,7 +244,7 @@ def _solver_goals(mech: Mechanism, n_single: int, n_batch: int, repeats: int) ->
     base, base_ok = latency(BASELINE)
     name = mech.name
     rows.append(_goal_row(name, "scipy.optimize.root single call", base * 1e6, "us", np.nan, success=base_ok))  # fmt: skip
-    for method in ("newton", "lm", "broyden", "bfgs"):
+    for method in methods.COMPILED:
         t, ok = latency(method)
         rows.append(_goal_row(name, f"{method} single call", t * 1e6, "us", np.nan, success=ok))
         goal = GOALS["single_vs_scipy"]

@@ -1,5 +1,5 @@
 """The compiled solver loops, written once for every mechanism: Newton, Levenberg-Marquardt,
-Broyden, BFGS, the verification of an answer and particle-swarm iterations, each for **one**
+Broyden, BFGS, Powell's dog leg, the verification of an answer and particle-swarm iterations, each for **one**
 pose, taking the mechanism's kernels (:mod:`parakin.kernels`) as their first arguments, in the
 manner of QuantEcon's ``optimize.root_finding`` (``newton(res, jac, p, q, x0, opts, x, info)``).
 
@@ -28,7 +28,7 @@ from numba import njit
 
 from parakin.kernels.methods import VECTOR
 
-__all__ = ["bfgs", "broyden", "lm", "newton", "pso_iterations", "verify"]
+__all__ = ["bfgs", "broyden", "dogleg", "lm", "newton", "pso_iterations", "verify"]
 
 _O = dict(error_model="numpy", nogil=True)
 #: the loops that take kernels: inlined into their callers (numba's IR inlining), so that a
@@ -42,6 +42,7 @@ RUNNING = 127
 #: positions in the options vector (parakin.kernels.methods.VECTOR, read at compile time)
 TOL, MAXIT, XTOL, GTOL = (VECTOR.index(k) for k in ("tol", "maxiter", "xtol", "gtol"))
 TAU, C1, SHRINK, MAXLS, REG = (VECTOR.index(k) for k in ("tau", "c1", "shrink", "maxls", "reg"))
+FACTOR, ETA = (VECTOR.index(k) for k in ("factor", "eta"))
 _TINY = 2.2250738585072014e-308  # smallest normal double: LM's damping never reaches 0
 
 
@@ -453,6 +454,143 @@ def bfgs(res, jac, p, q, x0, opts, x, info):
                 step = v
         new_res, ok = _checked(x, r)
         status = _code(opts, step, _infnorm(g), not found, new_res, ok)
+        if ok:
+            norm = new_res
+    info[0] = MAXITER if status == RUNNING else status
+    return norm
+
+
+# ---------------------------------------------------------------------------- dog leg
+_EPS = 2.220446049250313e-16
+
+
+@njit(**_O)
+def _scaled_norm(d, v):
+    """``|D v|_2`` for the diagonal scaling ``d``."""
+    s = 0.0
+    for i in range(v.shape[0]):
+        s += (d[i] * v[i]) * (d[i] * v[i])
+    return math.sqrt(s)
+
+
+@njit(**_O)
+def _dogleg_model(jm, r, d, g, pn, w, a, gg, first):
+    """At a new iterate: ``g = J^T r``, the Gauss-Newton step ``pn = -J^-1 r`` (:func:`_direction`)
+    and MINPACK's scaling ``d_i = max(d_i, |J e_i|)`` (``first``: ``|J e_i|``, 1 where 0)."""
+    m, n = jm.shape
+    _direction(jm, r, pn, w, a, gg)
+    for i in range(n):
+        pn[i] = -pn[i]
+        s, c = 0.0, 0.0
+        for k in range(m):
+            s += jm[k, i] * r[k]
+            c += jm[k, i] * jm[k, i]
+        g[i] = s
+        c = math.sqrt(c)
+        if first:
+            d[i] = c if c != 0.0 else 1.0
+        elif c > d[i]:
+            d[i] = c
+
+
+@njit(**_O)
+def _dogleg_step(jm, g, pn, d, delta, st):
+    """Powell's dog-leg step ``st`` in the scaled variables ``y = D st`` with ``|y| <= delta``
+    (Nocedal & Wright, sec. 4.1): the Gauss-Newton step where it fits, else the path from the
+    Cauchy point towards it, cut at the boundary. Returns True where ``st`` ends on the boundary."""
+    m, n = jm.shape
+    if _scaled_norm(d, pn) <= delta:
+        st[:] = pn
+        return False
+    gs2, jv2 = 0.0, 0.0
+    for i in range(n):
+        gs2 += (g[i] / d[i]) * (g[i] / d[i])
+    for k in range(m):
+        s = 0.0
+        for i in range(n):
+            s += jm[k, i] * (g[i] / (d[i] * d[i]))
+        jv2 += s * s
+    gnorm = math.sqrt(gs2)
+    t = gs2 / jv2 if jv2 > 0.0 else math.inf  # the Cauchy point is -t D^-1 g in y
+    if t * gnorm >= delta:  # steepest descent, cut at the boundary
+        for i in range(n):
+            st[i] = -delta * (g[i] / d[i]) / gnorm / d[i]
+        return True
+    a, b = 0.0, 0.0
+    c = (t * gnorm) * (t * gnorm) - delta * delta
+    for i in range(n):
+        yu = -t * g[i] / d[i]
+        dy = d[i] * pn[i] - yu
+        a += dy * dy
+        b += 2.0 * yu * dy
+    root = math.sqrt(b * b - 4.0 * a * c)
+    tau = -2.0 * c / (b + root) if b >= 0.0 else (root - b) / (2.0 * a)
+    for i in range(n):
+        yu = -t * g[i] / d[i]
+        st[i] = (yu + tau * (d[i] * pn[i] - yu)) / d[i]
+    return True
+
+
+@njit(**_O)
+def _gain_ratio(jm, r, rt, st):
+    """Actual over predicted reduction of ``|r|^2 / 2`` for the step ``st`` (-1 where either is
+    not a positive finite number: the step is rejected)."""
+    m, n = jm.shape
+    pred = 0.0
+    for k in range(m):
+        s = r[k]
+        for i in range(n):
+            s += jm[k, i] * st[i]
+        pred += r[k] * r[k] - s * s
+    rho = (_dot(r, r) - _dot(rt, rt)) / pred
+    return rho if pred > 0.0 and math.isfinite(rho) else -1.0
+
+
+@njit(**_O)
+def _new_radius(delta, rho, snorm, boundary):
+    """Nocedal & Wright's Alg. 4.1: shrink to a quarter of the step below rho = 1/4, double on the
+    boundary above 3/4."""
+    if rho < 0.25:
+        return 0.25 * (snorm if math.isfinite(snorm) else delta)
+    if rho > 0.75 and boundary:
+        return 2.0 * delta
+    return delta
+
+
+@njit(**_TAKES_KERNELS)
+def dogleg(res, jac, p, q, x0, opts, x, info):
+    """Powell's dog-leg trust region on one pose (see parakin.solvers.dogleg)."""
+    m, n = q.shape[0], x0.shape[0]
+    r, rt, xt = np.empty(m), np.empty(m), np.empty(n)
+    w, a, gg = np.empty((n, n + 1)), np.empty((n, n)), np.empty(n)
+    jm, g, pn, d, st = np.empty((m, n)), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    status, norm = _start(res, p, q, x0, x, r, opts, info)
+    delta = 0.0
+    if status == RUNNING:
+        jac(p, x, q, jm)
+        info[3] += 1
+        _dogleg_model(jm, r, d, g, pn, w, a, gg, True)
+        size = _scaled_norm(d, x)
+        delta = opts[FACTOR] * size if size > 0.0 else opts[FACTOR]
+    for _ in range(int(opts[MAXIT])):
+        if status != RUNNING:
+            break
+        boundary = _dogleg_step(jm, g, pn, d, delta, st)
+        for i in range(n):
+            xt[i] = x[i] + st[i]
+        info[2] += _eval(res, p, xt, q, rt)
+        info[1] += 1
+        rho = _gain_ratio(jm, r, rt, st)
+        delta = _new_radius(delta, rho, _scaled_norm(d, st), boundary)
+        if rho > opts[ETA]:
+            x[:] = xt
+            r[:] = rt
+            jac(p, x, q, jm)
+            info[3] += 1
+            _dogleg_model(jm, r, d, g, pn, w, a, gg, False)
+        stalled = not delta > _EPS * _scaled_norm(d, x)
+        new_res, ok = _checked(x, r)
+        status = _code(opts, _infnorm(st), math.nan, stalled, new_res, ok)
         if ok:
             norm = new_res
     info[0] = MAXITER if status == RUNNING else status

@@ -14,12 +14,15 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["BAD_INPUT", "COMPILED", "DEFAULTS", "VECTOR", "pack"]
+__all__ = ["BAD_INPUT", "BOUNDS", "COMPILED", "DEFAULTS", "VECTOR", "pack"]
 
 #: option -> default of the iterative solvers (:mod:`parakin.solvers`), numpy and compiled alike:
 #: ``xtol``/``gtol`` off at 0; Levenberg-Marquardt's initial damping factor ``tau``; BFGS's
 #: sufficient-decrease constant ``c1``, backtracking factor ``shrink``, at most ``maxls`` trials
-#: per line search and the relative regularisation ``reg`` of its initial Gauss-Newton Hessian
+#: per line search and the relative regularisation ``reg`` of its initial Gauss-Newton Hessian;
+#: the dog leg's initial trust radius ``factor * |D x0|`` (MINPACK's ``factor``, its default 100)
+#: and its acceptance threshold ``eta`` on the ratio of actual to predicted reduction (MINPACK's
+#: 1e-4; Nocedal & Wright's Alg. 4.1 asks for ``0 <= eta < 1/4``)
 DEFAULTS: dict[str, float] = {
     "xtol": 0.0,
     "gtol": 0.0,
@@ -28,6 +31,8 @@ DEFAULTS: dict[str, float] = {
     "shrink": 0.5,
     "maxls": 30,
     "reg": 1e-10,
+    "factor": 100.0,
+    "eta": 1e-4,
 }
 
 #: the options vector of a compiled call, in order: its position is what the drivers read
@@ -39,7 +44,12 @@ COMPILED: dict[str, tuple[str, ...]] = {
     "lm": ("xtol", "gtol", "tau"),
     "broyden": ("xtol",),
     "bfgs": ("xtol", "gtol", "c1", "shrink", "maxls", "reg"),
+    "dogleg": ("xtol", "factor", "eta"),
 }
+
+#: option -> ``(lo, hi)``: a solver takes ``lo <= value < hi``; a value outside leaves the call to
+#: the numpy solver, which names the value and the limit
+BOUNDS: dict[str, tuple[float, float]] = {"factor": (math.ulp(0.0), math.inf), "eta": (0.0, 0.25)}
 
 #: the status a compiled single call reports for joints or a start that are not finite (the caller
 #: then marks the row itself)
@@ -64,5 +74,7 @@ def pack(method: str, tol: float, maxiter: int, options: dict[str, Any]) -> np.n
     if not all(math.isfinite(vector[VECTOR.index(k)]) for k in _INTEGRAL) or not all(
         float(vector[VECTOR.index(k)]).is_integer() for k in _INTEGRAL
     ):
+        return None
+    if not all(lo <= vector[VECTOR.index(k)] < hi for k, (lo, hi) in BOUNDS.items()):
         return None
     return vector

@@ -172,6 +172,31 @@ def _cdot2(ar, ai, br, bi, ln):
     return re, im
 
 
+@njit(inline="always", **_O)
+def _qdot_term(Q, cr, ci, ur, ui, vr, vi, hr, hi, scale, m, i, ln):
+    """``h[m, ln] += scale u[i] (Q_m(c) v)[i]`` in lane ``ln``: one term of :func:`qdot`."""
+    sr = _row(Q, m, i, vr, ln)
+    si = _row(Q, m, i, vi, ln)
+    if m >= 1 and i < 4:
+        a, b = cr[m - 1, ln], ci[m - 1, ln]
+        sr += a * vr[i, ln] - b * vi[i, ln]
+        si += a * vi[i, ln] + b * vr[i, ln]
+    hr[m, ln] += scale * (ur[i, ln] * sr - ui[i, ln] * si)
+    hi[m, ln] += scale * (ur[i, ln] * si + ui[i, ln] * sr)
+
+
+@njit(inline="always", **_O)
+def _row_dot(yr, yi, ur, ui, outr, outi, scale, add, m, ln):
+    """``out[m, ln] (+)= scale u . y[m]`` in lane ``ln``: one entry of :func:`rows_dot`."""
+    re, im = _cdot(yr, yi, m, ur, ui, ln)
+    if add:
+        outr[m, ln] += scale * re
+        outi[m, ln] += scale * im
+    else:
+        outr[m, ln] = scale * re
+        outi[m, ln] = scale * im
+
+
 @njit(**_O)
 def qtimes(Q, cr, ci, vr, vi, yr, yi, scale, n):
     """``y[m, :, ln] = scale Q_m(c_ln) v_ln`` for lanes ``ln < n``: ``Q`` (7, 8, 8) the real
@@ -220,16 +245,8 @@ def qdot(Q, cr, ci, ur, ui, vr, vi, hr, hi, scale, add, n):
                 hr[m, ln] = 0.0
                 hi[m, ln] = 0.0
         for i in range(8):
-            leg = m >= 1 and i < 4
             for ln in range(n):
-                sr = _row(Q, m, i, vr, ln)
-                si = _row(Q, m, i, vi, ln)
-                if leg:
-                    a, b = cr[m - 1, ln], ci[m - 1, ln]
-                    sr += a * vr[i, ln] - b * vi[i, ln]
-                    si += a * vi[i, ln] + b * vr[i, ln]
-                hr[m, ln] += scale * (ur[i, ln] * sr - ui[i, ln] * si)
-                hi[m, ln] += scale * (ur[i, ln] * si + ui[i, ln] * sr)
+                _qdot_term(Q, cr, ci, ur, ui, vr, vi, hr, hi, scale, m, i, ln)
 
 
 @njit(**_O)
@@ -240,13 +257,7 @@ def rows_dot(yr, yi, ur, ui, outr, outi, scale, add, n):
         return
     for m in range(7):
         for ln in range(n):
-            re, im = _cdot(yr, yi, m, ur, ui, ln)
-            if add:
-                outr[m, ln] += scale * re
-                outi[m, ln] += scale * im
-            else:
-                outr[m, ln] = scale * re
-                outi[m, ln] = scale * im
+            _row_dot(yr, yi, ur, ui, outr, outi, scale, add, m, ln)
 
 
 @njit(**_O)
@@ -258,14 +269,7 @@ def _qdot_each(Q, cr, ci, ur, ui, vr, vi, hr, hi, scale, add, n):
                 hr[m, ln] = 0.0
                 hi[m, ln] = 0.0
             for i in range(8):
-                sr = _row(Q, m, i, vr, ln)
-                si = _row(Q, m, i, vi, ln)
-                if m >= 1 and i < 4:
-                    a, b = cr[m - 1, ln], ci[m - 1, ln]
-                    sr += a * vr[i, ln] - b * vi[i, ln]
-                    si += a * vi[i, ln] + b * vr[i, ln]
-                hr[m, ln] += scale * (ur[i, ln] * sr - ui[i, ln] * si)
-                hi[m, ln] += scale * (ur[i, ln] * si + ui[i, ln] * sr)
+                _qdot_term(Q, cr, ci, ur, ui, vr, vi, hr, hi, scale, m, i, ln)
 
 
 @njit(**_O)
@@ -273,13 +277,7 @@ def _rows_dot_each(yr, yi, ur, ui, outr, outi, scale, add, n):
     """:func:`rows_dot` one lane at a time (few lanes; the same arithmetic)."""
     for ln in range(n):
         for m in range(7):
-            re, im = _cdot(yr, yi, m, ur, ui, ln)
-            if add:
-                outr[m, ln] += scale * re
-                outi[m, ln] += scale * im
-            else:
-                outr[m, ln] = scale * re
-                outi[m, ln] = scale * im
+            _row_dot(yr, yi, ur, ui, outr, outi, scale, add, m, ln)
 
 
 @njit(**_O)
@@ -938,6 +936,37 @@ def qnorm(Q, c):
 
 
 @njit(**_O)
+def _newton_lanes(Q, C, A, X, F, W, nrm, jn, ok, iters, n):
+    """Newton's method on ``x^T Q_m(c) x = 0, a . x = 1`` in lanes ``ln < n`` (``X`` (2, 8, L) the
+    points, ``C`` (2, 6, L) the leg constants, ``A`` (2, 8, L) the charts): ``iters`` updates (none
+    in a lane whose Jacobian is singular), then at the last iterate ``nrm = |J^-1 F|`` (beta),
+    ``jn = |J^-1|_F`` and ``ok`` 1 where the Jacobian is nonsingular."""
+    for it in range(iters + 1):
+        jacobian(Q, C[0], C[1], X[0], X[1], A[0], A[1], F[0], F[1], n)
+        rows_dot(F[0], F[1], X[0], X[1], W[0], W[1], 0.5, False, n)
+        chart_residual(A[0], A[1], X[0], X[1], W[0], W[1], n)
+        lu(F, n)
+        _nonsingular(F[5], F[6], ok, n)
+        solve(F, W[0], W[1], W[2], W[3], n)
+        if it < iters:
+            for i in range(8):
+                for ln in range(n):
+                    if ok[ln] == 1.0:
+                        X[0, i, ln] -= W[2, i, ln]
+                        X[1, i, ln] -= W[3, i, ln]
+    norms(W[2], W[3], nrm, n)
+    _inverse_norm(F, W, jn, n)
+
+
+@njit(**_O)
+def _lane_scratch(P, lanes):
+    """Lanes ``L`` and the scratch of :func:`_newton_lanes` for ``P`` points."""
+    L = max(1, min(lanes, P))
+    X, C, A = np.zeros((2, 8, L)), np.zeros((2, 6, L)), np.zeros((2, 8, L))
+    return L, X, C, A, lu_scratch(L), np.zeros((4, 8, L)), np.zeros(L), np.zeros(L), np.zeros(L)
+
+
+@njit(**_O)
 def refine_block(Q, patch, c1, qn, item_k, x, iters, lanes, out_x, beta, alpha):
     """Newton's method on ``x^T Q_m(c1) x = 0, patch . x = 1`` for every endpoint ``x[p]``
     (input ``item_k[p]``): ``iters`` updates (none where the Jacobian is singular), then
@@ -945,11 +974,7 @@ def refine_block(Q, patch, c1, qn, item_k, x, iters, lanes, out_x, beta, alpha):
     the last iterate (inf where singular), as
     :func:`parakin.mechanisms.stewart66_homotopy.newton_refine` and ``certify``."""
     P = len(item_k)
-    L = max(1, min(lanes, P))
-    X, C, A = np.zeros((2, 8, L)), np.zeros((2, 6, L)), np.zeros((2, 8, L))
-    F = lu_scratch(L)
-    W = np.zeros((4, 8, L))
-    nrm, jn, ok = np.zeros(L), np.zeros(L), np.zeros(L)
+    L, X, C, A, F, W, nrm, jn, ok = _lane_scratch(P, lanes)
     for s0 in range(0, P, L):
         n = min(L, P - s0)
         for ln in range(n):
@@ -959,21 +984,7 @@ def refine_block(Q, patch, c1, qn, item_k, x, iters, lanes, out_x, beta, alpha):
                 A[0, i, ln], A[1, i, ln] = patch[i].real, patch[i].imag
             for i in range(6):
                 C[0, i, ln], C[1, i, ln] = c1[k, i], 0.0
-        for it in range(iters + 1):
-            jacobian(Q, C[0], C[1], X[0], X[1], A[0], A[1], F[0], F[1], n)
-            rows_dot(F[0], F[1], X[0], X[1], W[0], W[1], 0.5, False, n)
-            chart_residual(A[0], A[1], X[0], X[1], W[0], W[1], n)
-            lu(F, n)
-            _nonsingular(F[5], F[6], ok, n)
-            solve(F, W[0], W[1], W[2], W[3], n)
-            if it < iters:
-                for i in range(8):
-                    for ln in range(n):
-                        if ok[ln] == 1.0:
-                            X[0, i, ln] -= W[2, i, ln]
-                            X[1, i, ln] -= W[3, i, ln]
-        norms(W[2], W[3], nrm, n)
-        _inverse_norm(F, W, jn, n)
+        _newton_lanes(Q, C, A, X, F, W, nrm, jn, ok, iters, n)
         for ln in range(n):
             p = s0 + ln
             for i in range(8):
@@ -981,6 +992,57 @@ def refine_block(Q, patch, c1, qn, item_k, x, iters, lanes, out_x, beta, alpha):
             b = nrm[ln] if ok[ln] == 1.0 else math.inf
             beta[p] = b
             alpha[p] = b * (jn[ln] if ok[ln] == 1.0 else math.inf) * qn[item_k[p]]
+
+
+#: :data:`parakin.mechanisms.stewart66_homotopy.ALPHA_ROBUST` and ``EVAL_ULPS`` (the same rule)
+ALPHA_ROBUST = 0.03
+EVAL_ULPS = 16 * np.finfo(np.float64).eps
+
+
+@njit(**_O)
+def real_block(Q, c1, qn, item_k, x, iters, lanes, out_y, decision):
+    """Certified reality of the approximate zeros ``x[p]`` (input ``item_k[p]``), as
+    :func:`parakin.mechanisms.stewart66_homotopy.real_decision` (see there for the criterion, from
+    Hauenstein & Sottile 2012's alphaCertified): each point moved to the real chart ``y_k = 1`` of
+    its largest coordinate, ``iters`` Newton updates there, then ``decision[p]`` -1 (not real) where
+    ``|Im y| > 2 beta``, +1 (real) where ``alpha <= 0.03`` and ``|Im y| <= 1/(20 gamma)``, else 0
+    (undecided); ``out_y[p]`` the refined point."""
+    P = len(item_k)
+    L, X, C, A, F, W, nrm, jn, ok = _lane_scratch(P, lanes)
+    for s0 in range(0, P, L):
+        n = min(L, P - s0)
+        for ln in range(n):
+            xp = x[s0 + ln]
+            piv = 0
+            for i in range(8):
+                if abs(xp[i]) > abs(xp[piv]):
+                    piv = i
+            for i in range(8):
+                y = xp[i] / xp[piv]
+                X[0, i, ln], X[1, i, ln] = y.real, y.imag
+                A[0, i, ln], A[1, i, ln] = (1.0 if i == piv else 0.0), 0.0
+            for i in range(6):
+                C[0, i, ln], C[1, i, ln] = c1[item_k[s0 + ln], i], 0.0
+        _newton_lanes(Q, C, A, X, F, W, nrm, jn, ok, iters, n)
+        for ln in range(n):
+            p = s0 + ln
+            im = 0.0
+            yy = 0.0
+            for i in range(8):
+                out_y[p, i] = complex(X[0, i, ln], X[1, i, ln])
+                im += X[1, i, ln] ** 2
+                yy += X[0, i, ln] ** 2 + X[1, i, ln] ** 2
+            im = math.sqrt(im)
+            gamma = jn[ln] * qn[item_k[p]]
+            beta = nrm[ln] + EVAL_ULPS * gamma * yy
+            if not (ok[ln] == 1.0 and math.isfinite(beta) and math.isfinite(gamma)):
+                decision[p] = 0
+            elif im > 2 * beta:
+                decision[p] = -1
+            elif beta * gamma <= ALPHA_ROBUST and 20 * gamma * im <= 1:
+                decision[p] = 1
+            else:
+                decision[p] = 0
 
 
 @njit(**_O)
@@ -1121,25 +1183,13 @@ def _origin(rot, trn, bc, pc, s, out):
 
 
 @njit(**_O)
-def _real_pose(xs, geo, joints, pose):
-    """The pose of a solution real up to the projective scale (relative imaginary part below
-    1e-7 after its largest coordinate is turned real) and its IK error; ``inf`` if not real."""
+def _real_pose(y, geo, joints, pose):
+    """The pose of a solution certified real (:func:`real_block`; ``y`` its refined point in a
+    real chart, whose real part is used) and its IK error."""
     bc, pc, s, base, plat = geo
-    k = 0
-    for a in range(8):
-        if abs(xs[a]) > abs(xs[k]):
-            k = a
-    ph = abs(xs[k]) / xs[k]
     yr = np.empty(8)
-    im = 0.0
-    nn = 0.0
     for a in range(8):
-        y = xs[a] * ph
-        yr[a] = y.real
-        im += y.imag * y.imag
-        nn += abs(y) ** 2
-    if not math.sqrt(im) / math.sqrt(nn) < 1e-7:
-        return math.inf
+        yr[a] = y[a].real
     rot, trn = np.empty((3, 3)), np.empty(3)
     study_rt(yr, rot, trn)
     pose[0] = math.atan2(rot[1, 0], rot[0, 0])
@@ -1172,9 +1222,11 @@ def _ik_error(pose, base, plat, joints):
 
 
 @njit(**_O)
-def _package(i, x, alpha, keep, joints, geo, out):
+def _package(i, x, alpha, keep, y, decision, joints, geo, out):
     """Input ``i``'s certified solutions as Study parameters (``e . e = 1``), rotations, origins;
-    its real ones as poses (IK error at most ``1e-8 max(1, size)``), sorted by Z descending."""
+    its real ones (``decision`` +1, :func:`real_block`) as poses (IK error at most
+    ``1e-8 max(1, size)``), sorted by Z descending; undecided ones (``decision`` 0, or real with a
+    pose that misses the IK tolerance) counted apart."""
     poses, study, rot, trn, is_real, al, counts, ik_err = out
     bc, pc, s = geo[0], geo[1], geo[2]
     M = x.shape[1]
@@ -1182,6 +1234,7 @@ def _package(i, x, alpha, keep, joints, geo, out):
     cand = np.full((M, 6), np.nan)
     z = np.full(M, np.inf)
     worst = -math.inf
+    undecided = 0
     for j in range(M):
         if not keep[i, j]:
             continue
@@ -1193,11 +1246,16 @@ def _package(i, x, alpha, keep, joints, geo, out):
         al[i, j] = alpha[i, j]
         study_rt(xs, rot[i, j], trn[i, j])
         _origin(rot[i, j], trn[i, j].copy(), bc + 0j, pc + 0j, s, trn[i, j])
-        err = _real_pose(xs, geo, joints[i], cand[j])
-        if err <= tol:
-            is_real[i, j] = True
-            z[j] = -cand[j, 5]
-            worst = max(worst, err)
+        if decision[i, j] == 0:
+            undecided += 1
+        elif decision[i, j] == 1:
+            err = _real_pose(y[i, j], geo, joints[i], cand[j])
+            if err <= tol:
+                is_real[i, j] = True
+                z[j] = -cand[j, 5]
+                worst = max(worst, err)
+            else:
+                undecided += 1
     nr = 0
     for j in range(M):  # stable insertion by Z descending (few solutions)
         if z[j] < np.inf:
@@ -1209,14 +1267,15 @@ def _package(i, x, alpha, keep, joints, geo, out):
             nr += 1
     counts[i, 0] = keep[i].sum()
     counts[i, 1] = nr
+    counts[i, 2] = undecided
     ik_err[i] = worst if nr else np.nan
 
 
 @njit(**_O)
-def package_all(x, alpha, keep, joints, geo, out):
+def package_all(x, alpha, keep, y, decision, joints, geo, out):
     """:func:`_package` of every input."""
     for i in range(len(x)):
-        _package(i, x, alpha, keep, joints, geo, out)
+        _package(i, x, alpha, keep, y, decision, joints, geo, out)
 
 
 # ------------------------------------------------------------------------------ geometry
@@ -1230,6 +1289,17 @@ def _threads_pool(workers: int) -> ThreadPoolExecutor:
         pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="stewart66")
         _POOL[:] = [pool, os.getpid()]
     return pool
+
+
+def _side_by_side(P: int, threads: int, run) -> None:
+    """``run(lo, hi)`` over ``P`` items split into at most ``threads`` contiguous blocks of at
+    least :data:`MIN_BLOCK`, run side by side (the compiled code releases the GIL)."""
+    nb = max(1, min(threads, P // MIN_BLOCK))
+    bounds = (P * np.arange(nb + 1)) // nb
+    if nb == 1:
+        run(0, P)
+    else:
+        list(_threads_pool(nb).map(lambda b: run(bounds[b], bounds[b + 1]), range(nb)))
 
 
 def _run_pass(G, c1, qn, dc, bend, opts, iters: int, threads: int):
@@ -1248,18 +1318,12 @@ def _run_pass(G, c1, qn, dc, bend, opts, iters: int, threads: int):
         np.empty(P),
         np.empty(P),
     )
-    nb = max(1, min(threads, P // MIN_BLOCK))
-    bounds = (P * np.arange(nb + 1)) // nb
 
-    def run(b: int) -> None:
-        lo, hi = bounds[b], bounds[b + 1]
+    def run(lo: int, hi: int) -> None:
         part = tuple(o[lo:hi] for o in out)
         track_refine(G, c1, qn, dc, bend, item_k[lo:hi], item_j[lo:hi], opts, iters, part)
 
-    if nb == 1:
-        run(0)
-    else:
-        list(_threads_pool(nb).map(run, range(nb)))
+    _side_by_side(P, threads, run)
     steps = out[2].reshape(K, M).sum(-1)
     return out[3].reshape(K, M, 8), out[4].reshape(K, M), out[5].reshape(K, M), steps
 
@@ -1285,6 +1349,27 @@ def geometry(q0, c0, starts, patch, bc, pc, size, base, platform) -> tuple:
     return G, geo
 
 
+def _reality(G, c1, qn, x, keep, iters: int, threads: int):
+    """:func:`real_block` of every kept solution, in ``threads`` blocks side by side:
+    ``(y (n, M, 8), decision (n, M))`` (decision 0 where not kept)."""
+    n, M = keep.shape
+    flat = np.flatnonzero(keep.ravel())
+    P = len(flat)
+    xk = np.ascontiguousarray(x.reshape(-1, 8)[flat])
+    item_k = flat // M
+    yk = np.empty((P, 8), np.complex128)
+    dk = np.zeros(P, np.int64)
+
+    def run(lo: int, hi: int) -> None:
+        real_block(G[0], c1, qn, item_k[lo:hi], xk[lo:hi], iters, LANES, yk[lo:hi], dk[lo:hi])
+
+    _side_by_side(P, threads, run)
+    y = np.full((n * M, 8), complex(np.nan, np.nan))
+    decision = np.zeros(n * M, np.int64)
+    y[flat], decision[flat] = yk, dk
+    return y.reshape(n, M, 8), decision.reshape(n, M)
+
+
 def fk_all(
     prepared: tuple,
     c1,
@@ -1303,8 +1388,8 @@ def fk_all(
     ``threads``: blocks run side by side (default ``numba.get_num_threads()``).
 
     Returns the arrays of :class:`parakin.mechanisms.stewart66.FKAll` (40 slots per input):
-    ``poses, study, rotation, translation, is_real, alpha, n_found, n_real, ik_error, steps,
-    retries``."""
+    ``poses, study, rotation, translation, is_real, alpha, n_found, n_real, n_undecided, ik_error,
+    steps, retries``."""
     G, geo = prepared
     _loaded()
     c1 = np.ascontiguousarray(c1, dtype=np.float64)
@@ -1330,6 +1415,7 @@ def fk_all(
         merge_all(x, beta, alpha, keep, bad, x2, b2, a2, alpha0)
         steps[bad] += s2
         retried[bad] += 1
+    y, decision = _reality(G, c1, qn, x, keep, iters, threads)
     cnan = complex(np.nan, np.nan)
     out = (
         np.full((n, 40, 6), np.nan),
@@ -1338,14 +1424,19 @@ def fk_all(
         np.full((n, 40, 3), cnan),
         np.zeros((n, 40), np.bool_),
         np.full((n, 40), np.nan),
-        np.zeros((n, 2), np.int64),
+        np.zeros((n, 3), np.int64),
         np.full(n, np.nan),
     )
-    package_all(x, alpha, keep, joints, geo, out)
+    package_all(x, alpha, keep, y, decision, joints, geo, out)
     names = ("poses", "study", "rotation", "translation", "is_real", "alpha")
     res = dict(zip(names, out[:6]))
     res.update(
-        n_found=out[6][:, 0], n_real=out[6][:, 1], ik_error=out[7], steps=steps, retries=retried
+        n_found=out[6][:, 0],
+        n_real=out[6][:, 1],
+        n_undecided=out[6][:, 2],
+        ik_error=out[7],
+        steps=steps,
+        retries=retried,
     )
     return res
 

@@ -156,7 +156,10 @@ class FKAll:
     solutions as (complex) rotation and origin ``O`` of the moving frame; ``is_real`` (S, 40);
     ``alpha`` (S, 40): Smale's alpha of each solution (certified where ``< ALPHA0``);
     ``n_found`` (S,): certified distinct solutions; ``n_expected``: the root count of this geometry
-    (40 unless it is special); ``complete`` (S,): ``n_found == n_expected``; ``n_real`` (S,);
+    (40 unless it is special); ``complete`` (S,): ``n_found == n_expected``; ``n_real`` (S,): solutions
+    certified real (:func:`parakin.mechanisms.stewart66_homotopy.real_decision`) whose pose reproduces the legs;
+    ``n_undecided`` (S,): certified solutions whose reality the certificate left undecided (or real
+    ones whose pose misses the IK tolerance), counted neither real nor complex;
     ``ik_error`` (S,): max ``|IK(pose) - L|`` over the real solutions; ``steps`` (S,): predictor-
     corrector steps over all paths; ``retries`` (S,): extra passes the input needed."""
 
@@ -170,6 +173,7 @@ class FKAll:
     n_expected: int
     complete: np.ndarray
     n_real: np.ndarray
+    n_undecided: np.ndarray
     ik_error: Array
     steps: np.ndarray
     retries: np.ndarray
@@ -561,18 +565,19 @@ class Stewart66(Mechanism):
         xs = np.where(keep[..., None], x, np.nan)
         with np.errstate(all="ignore"):
             xs = xs / np.sqrt(np.sum(xs[..., :4] ** 2, -1))[..., None]  # e . e = 1
-            k = np.argmax(np.nan_to_num(np.abs(xs)), axis=-1)
-            piv = np.take_along_axis(xs, k[..., None], -1)
-            y = xs * (np.abs(piv) / piv)  # real representative where real
-            imag = np.linalg.norm(y.imag, axis=-1) / np.linalg.norm(y, axis=-1)
-        real = keep & (imag < 1e-7)
+        # real or not: decided by the certificate (hc.real_decision), not by a threshold
+        q = self._quadrics_for(self._target_c(qf))
+        y = np.full((n, m, 8), np.nan + 0j)
+        decision = np.zeros((n, m), dtype=int)
+        y[keep], decision[keep] = hc.real_decision(q[np.nonzero(keep)[0]], x[keep])
+        real = keep & (decision == 1)
         with np.errstate(all="ignore"):
             rot, trn = hc.study_to_rt(np.nan_to_num(xs))
             # moving-frame origin O = t + Bc - T Pc, in metres
             origin = trn * s + bc - np.einsum("...ij,j->...i", rot, pc)
         rot = np.where(keep[..., None, None], rot, np.nan)
         origin = np.where(keep[..., None], origin, np.nan)
-        yr = np.nan_to_num(y.real)
+        yr = np.where(real[..., None], y.real, 1.0)
         with np.errstate(all="ignore"):
             rr, tr = hc.study_to_rt(yr)
             angles = euler_zyx_from_matrix(rr)
@@ -582,6 +587,8 @@ class Stewart66(Mechanism):
         with np.errstate(invalid="ignore"):
             err = np.abs(self.ik(np.nan_to_num(poses)) - qf[:, None, :]).max(-1)
         good = real & (err <= 1e-8 * max(1.0, s))
+        # undecided: the certificate decides neither way, or a real solution's pose misses the IK
+        undecided = keep & ((decision == 0) | (real & ~good))
         poses = np.where(good[..., None], poses, np.nan)
         key = np.where(good, -np.nan_to_num(poses[..., 5]), np.inf)
         order = np.argsort(key, axis=-1, kind="stable")
@@ -607,6 +614,7 @@ class Stewart66(Mechanism):
             n_expected=self.expected_count,
             complete=nf == self.expected_count,
             n_real=good.sum(-1),
+            n_undecided=undecided.sum(-1),
             ik_error=ik_err,
             steps=steps,
             retries=retried,

@@ -18,7 +18,7 @@ what a success is: the method's stopping rule *and* a valid answer (:mod:`paraki
 in the mechanism's domain, on its assembly, ``ik(x)`` within ``joint_tol`` of the joints).
 
 Where the mechanism has compiled kernels (``mech.kernel()``), ``"newton"``, ``"lm"``,
-``"broyden"`` and ``"bfgs"`` run as compiled loops (:mod:`parakin.kernels`: the same iterations,
+``"broyden"``, ``"bfgs"`` and ``"dogleg"`` run as compiled loops (:mod:`parakin.kernels`: the same iterations,
 counters and status codes, results equal to the numpy solvers' to rounding), in parallel over the
 cores for large batches; a callback, or an option the compiled loop does not take, selects the
 numpy solver.
@@ -39,6 +39,7 @@ from parakin.mechanisms.base import Array, Mechanism
 from parakin.solvers import compiled
 from parakin.solvers.baseline import scipy_root
 from parakin.solvers.closed import all_solutions, closed_form
+from parakin.solvers.dogleg import dogleg
 from parakin.solvers.gauss_newton import broyden_ls, gauss_newton
 from parakin.solvers.hybrid import hybrid
 from parakin.solvers.lm import levenberg_marquardt
@@ -67,6 +68,7 @@ register("newton")(newton)
 register("broyden")(broyden)
 register("bfgs")(bfgs)
 register("lm")(levenberg_marquardt)
+register("dogleg")(dogleg)
 register("hybrid")(hybrid)
 register("scipy-root")(scipy_root)
 register("gauss-newton")(gauss_newton)  # least-squares Newton, m >= n (redundant drive modes)
@@ -76,7 +78,13 @@ register("closed-form")(closed_form)
 register("all-solutions")(all_solutions)
 
 #: methods with a compiled loop (:mod:`parakin.kernels`), used for mechanisms that have kernels
-_COMPILED = {"newton": newton, "lm": levenberg_marquardt, "broyden": broyden, "bfgs": bfgs}
+_COMPILED = {
+    "newton": newton,
+    "lm": levenberg_marquardt,
+    "broyden": broyden,
+    "bfgs": bfgs,
+    "dogleg": dogleg,
+}
 
 
 def _rows(values: ArrayLike, size: int, what: str) -> Array:

@@ -75,19 +75,24 @@ def _platform(seed: int, index: int, section: dict[str, Any]) -> tuple[Stewart66
 
 
 def platform_row(seed: int, index: int, section: dict[str, Any]) -> dict[str, Any]:
-    """One platform's census: its root count, how many inputs were solved completely, and how many
-    complete inputs have k real solutions (``real_k``), plus incomplete inputs by real count found."""
+    """One platform's census: its root count, how many inputs were solved completely, how many
+    complete inputs have a solution whose reality the certificate left undecided (``undecided``,
+    kept out of the histogram), how many of the other complete inputs have k real solutions
+    (``real_k``), plus incomplete inputs by real count found."""
     t0 = time.perf_counter()
     mech, legs = _platform(seed, index, section)
     r = mech.fk_all(legs, return_info=True)
     real = np.asarray(r.n_real)
+    undecided = np.asarray(r.n_undecided) > 0
     done = np.asarray(r.complete)
-    counts = np.bincount(real[done], minlength=ROOTS + 1)
+    # an input enters the histogram when complete and every solution's reality is decided
+    counts = np.bincount(real[done & ~undecided], minlength=ROOTS + 1)
     return {
         "platform": index,
         "root_count": int(mech.root_count),
         "inputs": len(legs),
         "complete": int(done.sum()),
+        "undecided": int((done & undecided).sum()),
         "incomplete_real_found": int(real[~done].sum()),
         "max_real": int(real.max()),
         **dict(zip(COUNT_COLUMNS, counts.tolist())),
@@ -151,7 +156,8 @@ def _gather(config: dict) -> pd.DataFrame:
 
 def census_data(config: dict) -> pd.DataFrame:
     """Real forward solutions of the general 6-6 platform over random platforms and leg lengths:
-    complete inputs per real count (0..40), their parity, and platforms by their largest count."""
+    complete inputs per real count (0..40), their parity, and platforms by their largest count;
+    complete inputs with an undecided solution (``undecided_inputs``) are counted apart."""
     rows = _gather(config)
     complete = rows[COUNT_COLUMNS].sum().to_numpy()
     peak = np.bincount(rows["max_real"], minlength=ROOTS + 1)
@@ -166,6 +172,7 @@ def census_data(config: dict) -> pd.DataFrame:
             "incomplete_inputs": np.where(
                 k == 0, int((rows["inputs"] - rows["complete"]).sum()), 0
             ),
+            "undecided_inputs": np.where(k == 0, int(rows["undecided"].sum()), 0),
             "platforms": np.where(k == 0, len(rows), 0),
             "inputs_per_s": np.where(k == 0, rows["inputs"].sum() / rows["wall_s"].sum(), np.nan),
         }
@@ -184,6 +191,7 @@ def census_draw(frame: pd.DataFrame, path: str | Path) -> Path:
     k = frame["real_solutions"].to_numpy()
     n = frame["complete_inputs"].to_numpy()
     total, incomplete = int(n.sum()), int(frame["incomplete_inputs"].sum())
+    undecided = int(frame["undecided_inputs"].sum()) if "undecided_inputs" in frame else 0
     odd = k % 2 == 1
     with use_style():
         fig = Figure(figsize=(7.0, 5.2), dpi=DPI, layout="constrained")
@@ -196,7 +204,7 @@ def census_draw(frame: pd.DataFrame, path: str | Path) -> Path:
         ax.set_ylabel("complete inputs")
         ax.set_title(
             f"(a) {total:,} complete inputs of {int(frame['platforms'].sum()):,} platforms "
-            f"({incomplete:,} incomplete, left out)",
+            f"({incomplete:,} incomplete, {undecided:,} undecided, left out)",
             fontsize=9,
             loc="left",
         )
@@ -230,6 +238,7 @@ def _declare():
             "complete_inputs": (0.0, 0.0),
             "platforms_with_max": (0.0, 0.0),
             "incomplete_inputs": (0.0, 0.0),
+            "undecided_inputs": (0.0, 0.0),
             "platforms": (0.0, 0.0),
         },
     )
