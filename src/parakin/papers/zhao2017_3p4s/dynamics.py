@@ -18,7 +18,7 @@ Each figure is drawn by ``draw_<name>(frame, path)`` from the CSV its artefact w
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import lru_cache, partial
 from pathlib import Path
 
 import numpy as np
@@ -80,6 +80,10 @@ CORRECTED_FORMS = {
     "rod inertia without factor 2": "both rods of each 4S parallelogram, x2 (as eq 20)",
     "all three (as printed)": "all three corrections",
 }
+
+
+#: ``@_figure(name, stem, draw)``: a figure of this section drawn from its table, exact to rounding
+_figure = partial(table_and_figure, config=[f"{KEY}.dynamics"], tolerance=ROUNDING)
 
 
 # ---------------------------------------------------------------------------------------- set-up
@@ -228,6 +232,13 @@ def _floor_band(ax, floor: float, label: str) -> None:
     ax.set_ylim(floor * 0.3, None)
 
 
+def _legend(ax, ncols: int = 1, loc: str = "upper right", **kw) -> None:
+    """The figures' legend: small type on an opaque, borderless box."""
+    ax.legend(
+        loc=loc, ncols=ncols, fontsize="small", framealpha=0.9, frameon=True, edgecolor="none", **kw
+    )
+
+
 def _two_panels(size=(7.0, 5.2)):
     from parakin.plot import new_figure
 
@@ -252,14 +263,7 @@ def _series_figure(t, values, ylabel, title, path: Path, extra=None) -> Path:
         ax.set_ylabel(ylabel)
         ax.set_xlim(t[0], t[-1])
         ax.set_title(title)
-        ax.legend(
-            loc="upper right",
-            ncols=4,
-            fontsize="small",
-            framealpha=0.9,
-            frameon=True,
-            edgecolor="none",
-        )
+        _legend(ax, 4)
     return save_figure(fig, path)
 
 
@@ -314,15 +318,7 @@ def _check_figure(
         _headroom(top, analytic)
         top.set_ylabel(ylabel)
         top.set_title(title)
-        top.legend(
-            handles=handles,
-            loc="upper right",
-            ncols=3,
-            fontsize="small",
-            framealpha=0.9,
-            frameon=True,
-            edgecolor="none",
-        )
+        _legend(top, 3, handles=handles)
         peak = float(np.max(np.abs(analytic)))
         for (label, values, colour), ls in zip(checks, ("-", "-", "-.", "--")):
             rel = np.maximum(_rel(values - analytic, peak), FLOOR)
@@ -341,14 +337,7 @@ def _check_figure(
         bottom.set_xlim(t[0], t[-1])
         bottom.set_xlabel("time $t$ (s)")
         bottom.set_ylabel("max$_i$ |difference| / peak")
-        bottom.legend(
-            loc="upper right",
-            ncols=3,
-            fontsize="small",
-            framealpha=0.9,
-            frameon=True,
-            edgecolor="none",
-        )
+        _legend(bottom, 3)
     return save_figure(fig, path)
 
 
@@ -386,6 +375,20 @@ def _variant_columns(frame: pd.DataFrame, pattern: str) -> dict[str, np.ndarray]
         label: _drives(frame, pattern.replace("{slug}", _slug(label)))
         for label, _, _, _ in VARIANTS
     }
+
+
+def _check_table(t, sources: dict, values: str, diffs: str) -> pd.DataFrame:
+    """A check figure's table: ``t_s``; drive by drive, every source's values (``values`` with
+    ``{i}``, ``{source}``); drive by drive, every other source minus the first (``diffs``)."""
+    (_, reference), *others = sources.items()
+    data = pd.DataFrame({"t_s": t})
+    for i in range(3):
+        for source, v in sources.items():
+            data[values.format(i=i + 1, source=source)] = v[:, i]
+    for i in range(3):
+        for source, v in others:
+            data[diffs.format(i=i + 1, source=source)] = v[:, i] - reference[:, i]
+    return data
 
 
 # ---------------------------------------------------------------------------------------- Figs 5-8
@@ -429,13 +432,7 @@ def draw_fig05(frame: pd.DataFrame, path: Path) -> Path:
     )
 
 
-@table_and_figure(
-    "fig05",
-    "fig05_drive_velocities",
-    draw_fig05,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("fig05", "fig05_drive_velocities", draw_fig05)
 def fig05(config: dict) -> pd.DataFrame:
     """Fig. 5: drive velocities ``qdot_i(t)`` by eq (8)."""
     return _drive_series_table(config, "qdot", "qdot{i}_m_s")
@@ -452,13 +449,7 @@ def draw_fig06(frame: pd.DataFrame, path: Path) -> Path:
     )
 
 
-@table_and_figure(
-    "fig06",
-    "fig06_drive_accelerations",
-    draw_fig06,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("fig06", "fig06_drive_accelerations", draw_fig06)
 def fig06(config: dict) -> pd.DataFrame:
     """Fig. 6: drive accelerations ``qddot_i(t)`` by eq (13) with the corrected H."""
     return _drive_series_table(config, "qddot", "qddot{i}_m_s2")
@@ -484,27 +475,15 @@ def draw_fig07(frame: pd.DataFrame, path: Path) -> Path:
     )  # fmt: skip
 
 
-@table_and_figure(
-    "fig07",
-    "fig07_velocity_check",
-    draw_fig07,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("fig07", "fig07_velocity_check", draw_fig07)
 def fig07(config: dict) -> pd.DataFrame:
     """Fig. 7 (the paper: ADAMS): eq (8) against IK finite differences and MuJoCo."""
     key = _key(config)
     tr = _trajectory(key)
     t, kin = tr["t"], tr["kin"]
     mj = _mujoco(key, "equivalent")
-    data = pd.DataFrame({"t_s": t})
-    for i in range(3):
-        data[f"qdot{i + 1}_eq8_m_s"] = kin.qdot[:, i]
-        data[f"qdot{i + 1}_fd_m_s"] = tr["qdot_fd"][:, i]
-        data[f"qdot{i + 1}_mujoco_m_s"] = mj.qdot[:, i]
-    for i in range(3):
-        data[f"diff{i + 1}_fd_m_s"] = tr["qdot_fd"][:, i] - kin.qdot[:, i]
-        data[f"diff{i + 1}_mujoco_m_s"] = mj.qdot[:, i] - kin.qdot[:, i]
+    sources = {"eq8": kin.qdot, "fd": tr["qdot_fd"], "mujoco": mj.qdot}
+    data = _check_table(t, sources, "qdot{i}_{source}_m_s", "diff{i}_{source}_m_s")
     return data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
 
 
@@ -542,13 +521,7 @@ FD_ACCELERATION = ROUNDING.but(
 )
 
 
-@table_and_figure(
-    "fig08",
-    "fig08_acceleration_check",
-    draw_fig08,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=FD_ACCELERATION,
-)
+@_figure("fig08", "fig08_acceleration_check", draw_fig08, tolerance=FD_ACCELERATION)
 def fig08(config: dict) -> pd.DataFrame:
     """Fig. 8 (the paper: ADAMS): eq (13) against IK finite differences and MuJoCo; the printed
     H (no 1/l) is shown against the same finite differences."""
@@ -556,16 +529,13 @@ def fig08(config: dict) -> pd.DataFrame:
     tr = _trajectory(key)
     t, kin = tr["t"], tr["kin"]
     mj = _mujoco(key, "equivalent")
-    data = pd.DataFrame({"t_s": t})
-    for i in range(3):
-        data[f"qddot{i + 1}_eq13_m_s2"] = kin.qddot[:, i]
-        data[f"qddot{i + 1}_fd_m_s2"] = tr["qddot_fd"][:, i]
-        data[f"qddot{i + 1}_mujoco_m_s2"] = mj.qddot[:, i]
-        data[f"qddot{i + 1}_printed_h_m_s2"] = tr["qddot_paper"][:, i]
-    for i in range(3):
-        data[f"diff{i + 1}_fd_m_s2"] = tr["qddot_fd"][:, i] - kin.qddot[:, i]
-        data[f"diff{i + 1}_mujoco_m_s2"] = mj.qddot[:, i] - kin.qddot[:, i]
-        data[f"diff{i + 1}_printed_h_m_s2"] = tr["qddot_paper"][:, i] - kin.qddot[:, i]
+    sources = {
+        "eq13": kin.qddot,
+        "fd": tr["qddot_fd"],
+        "mujoco": mj.qddot,
+        "printed_h": tr["qddot_paper"],
+    }
+    data = _check_table(t, sources, "qddot{i}_{source}_m_s2", "diff{i}_{source}_m_s2")
     return data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
 
 
@@ -592,13 +562,7 @@ def draw_fig09(frame: pd.DataFrame, path: Path) -> Path:
     return _series_figure(t, f, r"motor force $f_i$ (N)", title, path, extra)
 
 
-@table_and_figure(
-    "fig09",
-    "fig09_driving_forces",
-    draw_fig09,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("fig09", "fig09_driving_forces", draw_fig09)
 def fig09(config: dict) -> pd.DataFrame:
     """Fig. 9: motor forces along +m_i by the corrected Newton-Euler / virtual-power model."""
     key = _key(config)
@@ -638,13 +602,7 @@ def draw_fig10(frame: pd.DataFrame, path: Path) -> Path:
     )  # fmt: skip
 
 
-@table_and_figure(
-    "fig10",
-    "fig10_mujoco_forces",
-    draw_fig10,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("fig10", "fig10_mujoco_forces", draw_fig10)
 def fig10(config: dict) -> pd.DataFrame:
     """Fig. 10 (the paper: ADAMS): our forces against MuJoCo (equivalent-rod and 6-rod models)."""
     key = _key(config)
@@ -653,16 +611,13 @@ def fig10(config: dict) -> pd.DataFrame:
     f = tr["forces"]["corrected (ours)"]
     printed = tr["forces"]["all three (as printed)"]
     eq, par = _mujoco(key, "equivalent"), _mujoco(key, "parallelogram")
-    data = pd.DataFrame({"t_s": t})
-    for i in range(3):
-        data[f"f{i + 1}_ours_N"] = f[:, i]
-        data[f"f{i + 1}_mujoco_equivalent_N"] = eq.force[:, i]
-        data[f"f{i + 1}_mujoco_parallelogram_N"] = par.force[:, i]
-        data[f"f{i + 1}_printed_N"] = printed[:, i]
-    for i in range(3):
-        data[f"diff{i + 1}_mujoco_equivalent_N"] = eq.force[:, i] - f[:, i]
-        data[f"diff{i + 1}_mujoco_parallelogram_N"] = par.force[:, i] - f[:, i]
-        data[f"diff{i + 1}_printed_N"] = printed[:, i] - f[:, i]
+    sources = {
+        "ours": f,
+        "mujoco_equivalent": eq.force,
+        "mujoco_parallelogram": par.force,
+        "printed": printed,
+    }
+    data = _check_table(t, sources, "f{i}_{source}_N", "diff{i}_{source}_N")
     data["mujoco_loop_error_m"] = np.maximum(eq.loop_error, par.loop_error)
     data["mujoco_lstsq_residual"] = np.maximum(eq.lstsq_residual, par.lstsq_residual)
     return data.assign(**_motion_columns(tr["motion"]))
@@ -687,9 +642,7 @@ def draw_power_balance(frame: pd.DataFrame, path: Path) -> Path:
             "Power balance: motor power = rate of kinetic + potential energy of all 10 bodies\n"
             + _motion_label(_frame_motion(frame))
         )
-        top.legend(
-            loc="upper right", fontsize="small", framealpha=0.9, frameon=True, edgecolor="none"
-        )
+        _legend(top)
         colours = ("#0072B2", "#56B4E9", "#CC79A7", "#E69F00", "0.3")
         for (label, _, _, _), colour, ls in zip(VARIANTS, colours, ("-", "--", "-.", ":", "-")):
             ours = label.startswith("corrected")
@@ -712,24 +665,11 @@ def draw_power_balance(frame: pd.DataFrame, path: Path) -> Path:
         bottom.set_xlim(t[0], t[-1])
         bottom.set_xlabel("time $t$ (s)")
         bottom.set_ylabel(r"|$\sum f\dot q - dE/dt$| / max|$dE/dt$|")
-        bottom.legend(
-            loc="upper right",
-            ncols=3,
-            fontsize="small",
-            framealpha=0.9,
-            frameon=True,
-            edgecolor="none",
-        )
+        _legend(bottom, 3)
     return save_figure(fig, path)
 
 
-@table_and_figure(
-    "power_balance",
-    "extra_power_balance",
-    draw_power_balance,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("power_balance", "extra_power_balance", draw_power_balance)
 def power_balance(config: dict) -> pd.DataFrame:
     """extra_power_balance: ``sum f_i qdot_i`` vs ``dE/dt`` (E from positions and velocities of
     every body, independent of the Newton-Euler code), for ours and each printed variant."""
@@ -870,14 +810,7 @@ def draw_dynamics_printed(frame: pd.DataFrame, path: Path) -> Path:
             "Fig. 9 with the printed eqs (13, 21, 23) vs corrected\n"
             + _motion_label(_frame_motion(frame))
         )
-        top.legend(
-            loc="upper right",
-            ncols=3,
-            fontsize="small",
-            framealpha=0.9,
-            frameon=True,
-            edgecolor="none",
-        )
+        _legend(top, 3)
         colours = {
             "H without 1/l": "#56B4E9",
             "spurious gravity moment": "#CC79A7",
@@ -895,24 +828,11 @@ def draw_dynamics_printed(frame: pd.DataFrame, path: Path) -> Path:
         bottom.set_xlim(t[0], t[-1])
         bottom.set_xlabel("time $t$ (s)")
         bottom.set_ylabel(r"$f_{\rm printed\ slip} - f$ (N)")
-        bottom.legend(
-            loc="upper right",
-            ncols=2,
-            fontsize="small",
-            framealpha=0.9,
-            frameon=True,
-            edgecolor="none",
-        )
+        _legend(bottom, 2)
     return save_figure(fig, path)
 
 
-@table_and_figure(
-    "dynamics_printed",
-    "extra_dynamics_printed",
-    draw_dynamics_printed,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("dynamics_printed", "extra_dynamics_printed", draw_dynamics_printed)
 def dynamics_printed(config: dict) -> pd.DataFrame:
     """extra_dynamics_printed: Fig. 9 as the printed equations give it, and each slip's share."""
     tr = _trajectory(_key(config))
@@ -981,24 +901,11 @@ def draw_mujoco_tracking(frame: pd.DataFrame, path: Path) -> Path:
             + _motion_label(motion)
             + f"; RK4, $\\Delta t$ = {TRACK_DT:g} s, stiff loop constraints"
         )
-        ax.legend(
-            loc="upper left",
-            ncols=2,
-            fontsize="small",
-            framealpha=0.9,
-            frameon=True,
-            edgecolor="none",
-        )
+        _legend(ax, 2, loc="upper left")
     return save_figure(fig, path)
 
 
-@table_and_figure(
-    "mujoco_tracking",
-    "extra_mujoco_tracking",
-    draw_mujoco_tracking,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("mujoco_tracking", "extra_mujoco_tracking", draw_mujoco_tracking)
 def mujoco_tracking(config: dict) -> pd.DataFrame:
     """extra_mujoco_tracking: MuJoCo's forward dynamics driven open loop by each variant's forces;
     how far the platform strays from the motion law (ours: both MuJoCo models)."""
