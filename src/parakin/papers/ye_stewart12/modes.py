@@ -49,20 +49,10 @@ from parakin.solvers import solve_fk
 SCAN = ITERATIVE.but(
     "deviation scans: step counts within one, d_max within one grid step (the grid is "
     "config ye_stewart12.d_grid_pct)",
-    columns={
-        "steps": (0.0, 1.0),
-        "d_max_pct": (0.0, 5.0),
-        "nr_width_pct": (0.0, 5.0),
-        "broyden_width_pct": (0.0, 5.0),
-        "broyden_direct_width_pct": (0.0, 5.0),
-        "median_iterations": (0.0, 1.0),
-        "p_converge": (0.0, 0.05),
-        "lm_pose_iterations_max": (0.0, 1.0),
-        "nr_d_max_pct": (0.0, 5.0),
-        "broyden_d_max_pct": (0.0, 5.0),
-        "broyden_direct_d_max_pct": (0.0, 5.0),
-        "lm_pose_d_max_pct": (0.0, 5.0),
-    },
+    columns={c: (0.0, 1.0) for c in ("steps", "median_iterations", "lm_pose_iterations_max")}
+    | {f"{m}width_pct": (0.0, 5.0) for m in ("nr_", "broyden_", "broyden_direct_")}
+    | {f"{m}d_max_pct": (0.0, 5.0) for m in ("", "nr_", "broyden_", "broyden_direct_", "lm_pose_")}
+    | {"p_converge": (0.0, 0.05)},
     skip=(
         "nr_P",
         "nr_P_alt",

@@ -40,14 +40,11 @@ from parakin.registry import ITERATIVE
 STEPS = ITERATIVE.but(
     "iteration counts within one step; errors at round-off level within 1e-9 mm; the "
     "accuracy factor is a ratio of round-off residuals (not compared)",
-    columns={
-        "steps": (0.0, 1.0),
-        "nr_steps": (0.0, 1.0),
-        "broyden_steps": (0.0, 1.0),
-        "broyden_direct_steps": (0.0, 1.0),
-        "nr_steps_inf_rule": (0.0, 1.0),
-        "broyden_steps_inf_rule": (0.0, 1.0),
-        "broyden_direct_steps_inf_rule": (0.0, 1.0),
+    columns={"steps": (0.0, 1.0)}
+    | {
+        f"{m}_steps{rule}": (0.0, 1.0)
+        for m in ("nr", "broyden", "broyden_direct")
+        for rule in ("", "_inf_rule")
     },
     skip=("accuracy_factor",),
 )

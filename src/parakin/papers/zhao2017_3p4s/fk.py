@@ -34,15 +34,8 @@ from parakin.workspace import sample_reachable
 TRAINING = Tolerance.statistical(
     "network training: the per-epoch log is one chaotic trajectory (not compared); the "
     "test error of the trained network is compared within a factor of two",
-    columns={
-        "test_rms_m": (1.0, 0.0),
-        "test_max_m": (1.0, 0.0),
-        "test_p95_m": (1.0, 0.0),
-        "test_e3_m": (1.0, 0.0),
-        "samples": (0.0, 0.0),
-        "hidden": (0.0, 0.0),
-        "weights": (0.0, 0.0),
-    },
+    columns={c: (1.0, 0.0) for c in ("test_rms_m", "test_max_m", "test_p95_m", "test_e3_m")}
+    | {c: (0.0, 0.0) for c in ("samples", "hidden", "weights")},
     files=("extra_bp_training.csv", "extra_bp_training.png"),
 )
 #: the hybrid's quasi-Newton refinement converges to the same root from any nearby network guess
