@@ -239,6 +239,13 @@ def _legend(ax, ncols: int = 1, loc: str = "upper right", **kw) -> None:
     )
 
 
+def _time_axis(ax, t: np.ndarray, ylabel: str) -> None:
+    """Time on the x axis over the whole run, ``ylabel`` on the y axis."""
+    ax.set_xlim(t[0], t[-1])
+    ax.set_xlabel("time $t$ (s)")
+    ax.set_ylabel(ylabel)
+
+
 def _two_panels(size=(7.0, 5.2)):
     from parakin.plot import new_figure
 
@@ -259,9 +266,7 @@ def _series_figure(t, values, ylabel, title, path: Path, extra=None) -> Path:
         if extra is not None:
             extra(ax)
         _headroom(ax, values, 0.22)
-        ax.set_xlabel("time $t$ (s)")
-        ax.set_ylabel(ylabel)
-        ax.set_xlim(t[0], t[-1])
+        _time_axis(ax, t, ylabel)
         ax.set_title(title)
         _legend(ax, 4)
     return save_figure(fig, path)
@@ -334,9 +339,7 @@ def _check_figure(
             bottom.axhline(tol, color=colour, lw=1.0, ls=":", label=label)
         _floor_band(bottom, FLOOR, f"below {FLOOR:g}: rounding, drawn at {FLOOR:g}")
         bottom.set_ylim(FLOOR * 0.3, ymax)
-        bottom.set_xlim(t[0], t[-1])
-        bottom.set_xlabel("time $t$ (s)")
-        bottom.set_ylabel("max$_i$ |difference| / peak")
+        _time_axis(bottom, t, "max$_i$ |difference| / peak")
         _legend(bottom, 3)
     return save_figure(fig, path)
 
@@ -423,13 +426,8 @@ def _drive_series_table(config: dict, quantity: str, pattern: str) -> pd.DataFra
 
 def draw_fig05(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 5 from its CSV: drive velocities of eq (8)."""
-    return _draw_drive_series(
-        frame,
-        path,
-        "Fig. 5: drive velocities, eq. (8)",
-        "qdot{i}_m_s",
-        r"drive velocity $\dot q_i$ (m/s)",
-    )
+    title, ylabel = "Fig. 5: drive velocities, eq. (8)", r"drive velocity $\dot q_i$ (m/s)"
+    return _draw_drive_series(frame, path, title, "qdot{i}_m_s", ylabel)
 
 
 @_figure("fig05", "fig05_drive_velocities", draw_fig05)
@@ -440,13 +438,9 @@ def fig05(config: dict) -> pd.DataFrame:
 
 def draw_fig06(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 6 from its CSV: drive accelerations of eq (13) with the corrected H."""
-    return _draw_drive_series(
-        frame,
-        path,
-        "Fig. 6: drive accelerations, eq. (13) with $H_i = P_i^TP_i/(l\\,n_i^Tm_i)$",
-        "qddot{i}_m_s2",
-        r"drive acceleration $\ddot q_i$ (m/s$^2$)",
-    )
+    title = "Fig. 6: drive accelerations, eq. (13) with $H_i = P_i^TP_i/(l\\,n_i^Tm_i)$"
+    ylabel = r"drive acceleration $\ddot q_i$ (m/s$^2$)"
+    return _draw_drive_series(frame, path, title, "qddot{i}_m_s2", ylabel)
 
 
 @_figure("fig06", "fig06_drive_accelerations", draw_fig06)
@@ -455,57 +449,64 @@ def fig06(config: dict) -> pd.DataFrame:
     return _drive_series_table(config, "qddot", "qddot{i}_m_s2")
 
 
+#: the independent checks of Figs 7-8: (label, source in the column names, colour)
+_KIN_CHECKS = (("IK finite differences", "fd", "#CC79A7"), ("MuJoCo", "mujoco", "#E69F00"))
+
+
+def _draw_kinematic_check(frame, path, title, pattern: str, analytic: str, ylabel, *extra) -> Path:
+    """Figs 7-8 from their CSV: the ``analytic`` source's drive columns (``pattern`` with ``{i}``,
+    ``{source}``) with :data:`_KIN_CHECKS` and ``extra`` as markers, and their differences with
+    the tested tolerances, under ``title``, the motion law and the FD step."""
+
+    def drives(source: str) -> np.ndarray:
+        return _drives(frame, pattern.replace("{source}", source))
+
+    motion, t = _frame_motion(frame), frame["t_s"].to_numpy()
+    title += "\n" + _motion_label(motion) + f"; FD step {frame['fd_step_s'].iloc[0]:g} s"
+    checks = [(label, drives(source), colour) for label, source, colour in (*_KIN_CHECKS, *extra)]
+    return _check_figure(
+        t, drives(analytic), checks, _KIN_TOLERANCES, ylabel, title, path, _marker_every(t, motion)
+    )
+
+
+def _kinematic_check_table(config: dict, quantity: str, analytic: str, unit: str, **extra):
+    """Figs 7-8: the drive ``quantity`` (``qdot``, ``qddot``) of the ``analytic`` equation, of IK
+    finite differences, of MuJoCo and of the ``extra`` sources, their differences, the motion law
+    and the FD step."""
+    key = _key(config)
+    tr = _trajectory(key)
+    sources = {
+        analytic: getattr(tr["kin"], quantity),
+        "fd": tr[f"{quantity}_fd"],
+        "mujoco": getattr(_mujoco(key, "equivalent"), quantity),
+        **extra,
+    }
+    values, diffs = f"{quantity}{{i}}_{{source}}_{unit}", f"diff{{i}}_{{source}}_{unit}"
+    data = _check_table(tr["t"], sources, values, diffs)
+    return data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
+
+
 def draw_fig07(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 7 from its CSV: eq (8) with IK finite differences and MuJoCo as markers, and their
     differences with the tested tolerances."""
-    motion, t = _frame_motion(frame), frame["t_s"].to_numpy()
-    title = (
-        "Fig. 7: drive velocities, eq. (8) vs independent checks (the paper: ADAMS)\n"
-        + _motion_label(motion)
-        + f"; FD step {frame['fd_step_s'].iloc[0]:g} s"
-    )
-    checks = [
-        ("IK finite differences", _drives(frame, "qdot{i}_fd_m_s"), "#CC79A7"),
-        ("MuJoCo", _drives(frame, "qdot{i}_mujoco_m_s"), "#E69F00"),
-    ]
-    analytic = _drives(frame, "qdot{i}_eq8_m_s")
-    return _check_figure(
-        t, analytic, checks, _KIN_TOLERANCES, r"$\dot q_i$ (m/s)", title, path,
-        _marker_every(t, motion),
-    )  # fmt: skip
+    title = "Fig. 7: drive velocities, eq. (8) vs independent checks (the paper: ADAMS)"
+    pattern, ylabel = "qdot{i}_{source}_m_s", r"$\dot q_i$ (m/s)"
+    return _draw_kinematic_check(frame, path, title, pattern, "eq8", ylabel)
 
 
 @_figure("fig07", "fig07_velocity_check", draw_fig07)
 def fig07(config: dict) -> pd.DataFrame:
     """Fig. 7 (the paper: ADAMS): eq (8) against IK finite differences and MuJoCo."""
-    key = _key(config)
-    tr = _trajectory(key)
-    t, kin = tr["t"], tr["kin"]
-    mj = _mujoco(key, "equivalent")
-    sources = {"eq8": kin.qdot, "fd": tr["qdot_fd"], "mujoco": mj.qdot}
-    data = _check_table(t, sources, "qdot{i}_{source}_m_s", "diff{i}_{source}_m_s")
-    return data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
+    return _kinematic_check_table(config, "qdot", "eq8", "m_s")
 
 
 def draw_fig08(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 8 from its CSV: eq (13) with IK finite differences, MuJoCo and the printed H (no
     1/l), and their differences with the tested tolerances."""
-    motion, t = _frame_motion(frame), frame["t_s"].to_numpy()
-    title = (
-        "Fig. 8: drive accelerations, eq. (13) vs independent checks (the paper: ADAMS)\n"
-        + _motion_label(motion)
-        + f"; FD step {frame['fd_step_s'].iloc[0]:g} s"
-    )
-    checks = [
-        ("IK finite differences", _drives(frame, "qddot{i}_fd_m_s2"), "#CC79A7"),
-        ("MuJoCo", _drives(frame, "qddot{i}_mujoco_m_s2"), "#E69F00"),
-        ("eq. (13) as printed (no 1/l)", _drives(frame, "qddot{i}_printed_h_m_s2"), "#56B4E9"),
-    ]
-    analytic = _drives(frame, "qddot{i}_eq13_m_s2")
-    return _check_figure(
-        t, analytic, checks, _KIN_TOLERANCES, r"$\ddot q_i$ (m/s$^2$)", title, path,
-        _marker_every(t, motion),
-    )  # fmt: skip
+    title = "Fig. 8: drive accelerations, eq. (13) vs independent checks (the paper: ADAMS)"
+    printed = ("eq. (13) as printed (no 1/l)", "printed_h", "#56B4E9")
+    pattern, ylabel = "qddot{i}_{source}_m_s2", r"$\ddot q_i$ (m/s$^2$)"
+    return _draw_kinematic_check(frame, path, title, pattern, "eq13", ylabel, printed)
 
 
 #: the 6th-order second difference of IK strokes (|q| < 0.6 m, step h = 1e-3 s) carries the
@@ -525,18 +526,8 @@ FD_ACCELERATION = ROUNDING.but(
 def fig08(config: dict) -> pd.DataFrame:
     """Fig. 8 (the paper: ADAMS): eq (13) against IK finite differences and MuJoCo; the printed
     H (no 1/l) is shown against the same finite differences."""
-    key = _key(config)
-    tr = _trajectory(key)
-    t, kin = tr["t"], tr["kin"]
-    mj = _mujoco(key, "equivalent")
-    sources = {
-        "eq13": kin.qddot,
-        "fd": tr["qddot_fd"],
-        "mujoco": mj.qddot,
-        "printed_h": tr["qddot_paper"],
-    }
-    data = _check_table(t, sources, "qddot{i}_{source}_m_s2", "diff{i}_{source}_m_s2")
-    return data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
+    printed_h = _trajectory(_key(config))["qddot_paper"]
+    return _kinematic_check_table(config, "qddot", "eq13", "m_s2", printed_h=printed_h)
 
 
 # ---------------------------------------------------------------------------------------- Figs 9-10
@@ -662,9 +653,7 @@ def draw_power_balance(frame: pd.DataFrame, path: Path) -> Path:
             bottom, floor, f"below {floor:g}: difference-quotient noise, drawn at {floor:g}"
         )
         bottom.set_ylim(floor * 0.3, 1e4)
-        bottom.set_xlim(t[0], t[-1])
-        bottom.set_xlabel("time $t$ (s)")
-        bottom.set_ylabel(r"|$\sum f\dot q - dE/dt$| / max|$dE/dt$|")
+        _time_axis(bottom, t, r"|$\sum f\dot q - dE/dt$| / max|$dE/dt$|")
         _legend(bottom, 3)
     return save_figure(fig, path)
 
@@ -825,9 +814,7 @@ def draw_dynamics_printed(frame: pd.DataFrame, path: Path) -> Path:
                 bottom.plot(t, diff[:, i], ls=ls, color=colour, label=tag if i == 0 else None)
         _headroom(bottom, np.concatenate(diffs), 0.5)
         bottom.plot([], [], color="0.3", ls="-", label="drive 1 solid, 2 dashed, 3 dotted")
-        bottom.set_xlim(t[0], t[-1])
-        bottom.set_xlabel("time $t$ (s)")
-        bottom.set_ylabel(r"$f_{\rm printed\ slip} - f$ (N)")
+        _time_axis(bottom, t, r"$f_{\rm printed\ slip} - f$ (N)")
         _legend(bottom, 2)
     return save_figure(fig, path)
 
@@ -893,9 +880,7 @@ def draw_mujoco_tracking(frame: pd.DataFrame, path: Path) -> Path:
             label=f"tolerance {TOL_TRACKING:g} × amplitude",
         )
         ax.set_ylim(floor, 1.0)
-        ax.set_xlim(t[0], t[-1])
-        ax.set_xlabel("time $t$ (s)")
-        ax.set_ylabel("platform deviation max$_{x,y,z}$ |p − p$_{target}$| (m)")
+        _time_axis(ax, t, "platform deviation max$_{x,y,z}$ |p − p$_{target}$| (m)")
         ax.set_title(
             "MuJoCo forward dynamics driven open loop by the motor forces of each model\n"
             + _motion_label(motion)
