@@ -39,6 +39,7 @@ from parakin.papers.ye_stewart12.common import (
     setup,
     state_at,
     steps,
+    table_and_figure,
 )
 from parakin.plot import new_figure, save_figure, use_style
 from parakin.registry import DESCRIPTIVE, ITERATIVE
@@ -176,36 +177,23 @@ def draw_fig11(frame: pd.DataFrame, path: Path) -> Path:
     return _draw_steps(frame, path, FIG11_TOL)
 
 
-def _fig_steps(config: dict, tol: float, outdir: Path, stem: str, draw) -> list[Path]:
+def _steps_table(config: dict, tol: float) -> pd.DataFrame:
     df = _scan_nominal(config)
     sub = df[df["tol"] == tol]
     out = sub[sub["deviation_pct"] <= sub["d_max_pct"]].drop(columns=["tol"])
-    out = out.assign(passive_caption=passive_caption(config))
-    return draw_from_csv(write_csv(out, outdir / f"{stem}.csv"), draw)
+    return out.assign(passive_caption=passive_caption(config))
 
 
-@artefact(
-    "fig10",
-    outputs=["fig10_steps_tol1e-6.png", "fig10_steps_tol1e-6.csv"],
-    config=[KEY],
-    tolerance=SCAN,
-    draws=[("fig10_steps_tol1e-6.png", "fig10_steps_tol1e-6.csv", draw_fig10)],
-)
-def fig10(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig10", "fig10_steps_tol1e-6", draw_fig10, config=[KEY], tolerance=SCAN)
+def fig10(config: dict) -> pd.DataFrame:
     """Fig. 10: steps vs d up to d_max, 6 modes x 2 methods, tol 1e-6 mm (nominal structure)."""
-    return _fig_steps(config, FIG10_TOL, outdir, "fig10_steps_tol1e-6", draw_fig10)
+    return _steps_table(config, FIG10_TOL)
 
 
-@artefact(
-    "fig11",
-    outputs=["fig11_steps_tol1e-9.png", "fig11_steps_tol1e-9.csv"],
-    config=[KEY],
-    tolerance=SCAN,
-    draws=[("fig11_steps_tol1e-9.png", "fig11_steps_tol1e-9.csv", draw_fig11)],
-)
-def fig11(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig11", "fig11_steps_tol1e-9", draw_fig11, config=[KEY], tolerance=SCAN)
+def fig11(config: dict) -> pd.DataFrame:
     """Fig. 11: the same at tol 1e-9 mm."""
-    return _fig_steps(config, FIG11_TOL, outdir, "fig11_steps_tol1e-9", draw_fig11)
+    return _steps_table(config, FIG11_TOL)
 
 
 def _scan_structure(config: dict, n: float, L: float) -> list[dict]:
@@ -477,14 +465,8 @@ def draw_basin(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
-    "basin",
-    outputs=["extra_basin.png", "extra_basin.csv"],
-    config=[KEY],
-    tolerance=SCAN,
-    draws=[("extra_basin.png", "extra_basin.csv", draw_basin)],
-)
-def basin(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("basin", "extra_basin", draw_basin, config=[KEY], tolerance=SCAN)
+def basin(config: dict) -> pd.DataFrame:
     """Extra: convergence probability vs the size of RANDOM per-leg deviations (instead of the paper's
     common scale factor): X0_k = (1 + d u_k) X*_k, u uniform on the unit sphere of R^(6-R) times
     sqrt(6-R) (so |d u|_rms = d), per mode and method, at the test pose."""
@@ -530,8 +512,7 @@ def basin(config: dict, outdir: Path) -> list[Path]:
                         "median_iterations": float(np.nanmedian(it)) if o.any() else np.nan,
                     }
                 )
-    df = pd.DataFrame(rows).assign(trials=trials, passive_caption=passive_caption(config))
-    return draw_from_csv(write_csv(df, outdir / "extra_basin.csv"), draw_basin)
+    return pd.DataFrame(rows).assign(trials=trials, passive_caption=passive_caption(config))
 
 
 def draw_fig09(frame: pd.DataFrame, path: Path) -> Path:
@@ -594,14 +575,8 @@ def draw_fig09(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
-    "fig09",
-    outputs=["fig09_drive_modes.png", "fig09_drive_modes.csv"],
-    config=[KEY],
-    tolerance=DESCRIPTIVE,
-    draws=[("fig09_drive_modes.png", "fig09_drive_modes.csv", draw_fig09)],
-)
-def fig09(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig09", "fig09_drive_modes", draw_fig09, config=[KEY], tolerance=DESCRIPTIVE)
+def fig09(config: dict) -> pd.DataFrame:
     """Fig. 9 (lost): the drive modes -- which legs are active and which passive for R = 0..5, from
     config ``passive_sets`` (default the nested sets of docs/ye_stewart12.md#s5.5, ASSUMED), with each leg's joint and its
     direction at home."""
@@ -628,8 +603,7 @@ def fig09(config: dict, outdir: Path) -> list[Path]:
                     "active": int(k + 1 not in sets[r]),
                 }
             )
-    df = pd.DataFrame(rows)
-    return draw_from_csv(write_csv(df, outdir / "fig09_drive_modes.csv"), draw_fig09)
+    return pd.DataFrame(rows)
 
 
 def _step_stats(figdir: Path) -> tuple[pd.DataFrame, float] | None:
