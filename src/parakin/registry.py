@@ -347,6 +347,12 @@ def table_and_figure(
     return register
 
 
+def table(study: str, name: str, stem: str, *more: str, **declared: Any) -> Callable:
+    """Declare a table artefact: ``<stem>.csv`` and ``<stem>.md`` (:func:`parakin.io.write_table`)
+    then the files ``more``, in that order; ``declared``: :func:`artefact`'s other fields."""
+    return artefact(study, name, outputs=[f"{stem}.csv", f"{stem}.md", *more], **declared)
+
+
 def figure(
     study: str, name: str, stem: str, data: Callable, draw: Callable, **declaration
 ) -> Callable:

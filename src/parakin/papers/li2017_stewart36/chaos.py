@@ -27,6 +27,7 @@ from parakin.papers.li2017_stewart36.common import (
     cfg,
     fk_input,
     mech,
+    table,
     table_and_figure,
 )
 from parakin.papers.sections import table_text
@@ -91,12 +92,7 @@ def histogram(z: np.ndarray, bins: int) -> np.ndarray:
     return np.histogram(np.clip(z, 0, 1), bins=bins, range=(0.0, 1.0))[0]
 
 
-@artefact(
-    "table1",
-    outputs=["table1.csv", "table1.md", "table1_stats.csv", "table1_stats.md"],
-    config=[KEY],
-    tolerance=CHAOS,
-)
+@table("table1", "table1", "table1_stats.csv", "table1_stats.md", config=[KEY], tolerance=CHAOS)
 def table1(config: dict, outdir: Path) -> list[Path]:
     """Table 1 (body LOST): distribution of the chaotic weights over ten bins, mu = 4 and the printed
     mu = 0.4 (collapse), beside the arcsine law."""

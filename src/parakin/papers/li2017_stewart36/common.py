@@ -21,6 +21,8 @@ KEY = "li2017_stewart36"
 #: ``@artefact(name, outputs=..., ...)`` declares one of this paper's tables or figures
 #: (:func:`parakin.registry.artefact` with the paper key filled in)
 artefact = partial(registry.artefact, KEY)
+#: ``@table(name, stem, *more_outputs, ...)`` declares a table written as ``stem.csv`` and ``stem.md``
+table = partial(registry.table, KEY)
 #: ``@table_and_figure(name, stem, draw, ...)`` declares a figure drawn from its table
 table_and_figure = partial(registry.table_and_figure, KEY)
 TITLE = "Li, Quan & Wu 2017 — 3-6 Stewart platform, chaotic-inertia-weight PSO (Comp. Appl. Softw. 34(12))"

@@ -16,6 +16,8 @@ KEY = "li2020_2ups"
 #: ``@artefact(name, outputs=..., ...)`` declares one of this paper's tables or figures
 #: (:func:`parakin.registry.artefact` with the paper key filled in)
 artefact = partial(registry.artefact, KEY)
+#: ``@table(name, stem, *more_outputs, ...)`` declares a table written as ``stem.csv`` and ``stem.md``
+table = partial(registry.table, KEY)
 #: ``@table_and_figure(name, stem, draw, ...)`` declares a figure drawn from its table
 table_and_figure = partial(registry.table_and_figure, KEY)
 TITLE = "Li et al. 2020 — 2-UPS/(S+SPR)R parallel mechanism (Packaging Engineering 41(7))"

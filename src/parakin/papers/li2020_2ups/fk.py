@@ -23,6 +23,7 @@ from parakin.papers.li2020_2ups.common import (
     KEY,
     artefact,
     mech,
+    table,
     table2_inputs,
     table2_outputs,
     table_and_figure,
@@ -142,15 +143,12 @@ def table1(config: dict, outdir: Path) -> list[Path]:
     return write_table(df, outdir / "table1", title="Table 1 — PSO parameters as used")
 
 
-@artefact(
+@table(
     "table2",
-    outputs=[
-        "table2.csv",
-        "table2.md",
-        "table2_runs.csv",
-        "table2_consistency.csv",
-        "table2_consistency.md",
-    ],
+    "table2",
+    "table2_runs.csv",
+    "table2_consistency.csv",
+    "table2_consistency.md",
     config=[KEY],
     tolerance=PSO_TABLE,
     threads=1,
@@ -359,12 +357,7 @@ def fig02(config: dict) -> pd.DataFrame:
     return df
 
 
-@artefact(
-    "solvers",
-    outputs=["extra_solvers.csv", "extra_solvers.md"],
-    config=[KEY],
-    tolerance=SOLVER_COUNTS,
-)
+@table("solvers", "extra_solvers", config=[KEY], tolerance=SOLVER_COUNTS)
 def solver_comparison(config: dict, outdir: Path) -> list[Path]:
     """Extra: every FK method on random poses of the Table 1 box (strokes by IK): success, iterations,
     evaluations and time, batched; PSO (improved_clamped) on a subset."""
@@ -596,9 +589,9 @@ FAILURES = Tolerance.statistical(
 )
 
 
-@artefact(
+@table(
     "solver_failures",
-    outputs=["extra_solver_failures.csv", "extra_solver_failures.md"],
+    "extra_solver_failures",
     config=[KEY],
     tolerance=FAILURES,
     caption="Newton and LM from the home pose on Table 1's box and on boxes around it",

@@ -13,7 +13,7 @@ from matplotlib.ticker import MaxNLocator
 from parakin.claims import Claim, printed_value
 from parakin.config import rng
 from parakin.io import write_table
-from parakin.papers.li2020_2ups.common import KEY, artefact, mech, table_and_figure
+from parakin.papers.li2020_2ups.common import KEY, mech, table, table_and_figure
 from parakin.papers.li2020_2ups.symbolic import derivation, loop_closure_model
 from parakin.papers.sections import table_text
 from parakin.plot import (
@@ -50,12 +50,7 @@ def fig01(config: dict) -> pd.DataFrame:
     return skeleton_table(m.skeleton(pose), frame_length=FIG1_FRAME_LENGTH)
 
 
-@artefact(
-    "concomitant",
-    outputs=["extra_concomitant.csv", "extra_concomitant.md"],
-    config=[KEY],
-    tolerance=ROUNDING,
-)
+@table("concomitant", "extra_concomitant", config=[KEY], tolerance=ROUNDING)
 def concomitant(config: dict, outdir: Path) -> list[Path]:
     """Symbolic derivation (sympy) that alpha = 0 and eq. (14) follow from (6), (12); the vector IK
     against the scalar closed forms; a numeric check with an independent loop-closure model."""

@@ -18,6 +18,7 @@ from parakin.papers.ye_stewart12.common import (
     artefact,
     mech,
     passive_sets,
+    table,
     table_and_figure,
     test_pose,
 )
@@ -32,12 +33,7 @@ def _states(config: dict) -> dict[str, np.ndarray]:
     return {"initial": m.home(), "arbitrary (§3.3 test pose)": test_pose(config)}
 
 
-@artefact(
-    "table1",
-    outputs=["table1.csv", "table1.md", "table1_random.csv"],
-    config=[KEY],
-    tolerance=EXACT,
-)
+@table("table1", "table1", "table1_random.csv", config=[KEY], tolerance=EXACT)
 def table1(config: dict, outdir: Path) -> list[Path]:
     """Table 1 (lost): FK check — pose and joint centres from the 12 IK lengths vs the exact ones,
     at the initial state and at the §3.3 test pose (the paper's arbitrary state is unknown)."""

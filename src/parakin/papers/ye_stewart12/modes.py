@@ -39,6 +39,7 @@ from parakin.papers.ye_stewart12.common import (
     setup,
     state_at,
     steps,
+    table,
     table_and_figure,
 )
 from parakin.plot import new_figure, save_figure, use_style
@@ -363,12 +364,7 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
     return paths
 
 
-@artefact(
-    "conditioning",
-    outputs=["extra_conditioning.csv", "extra_conditioning.md"],
-    config=[KEY],
-    tolerance=SCAN,
-)
+@table("conditioning", "extra_conditioning", config=[KEY], tolerance=SCAN)
 def conditioning(config: dict, outdir: Path) -> list[Path]:
     """Extra: cond(dF/dX) and the smallest singular value per mode at the test pose, beside d_max,
     plus the pose-space LM (active legs, linear-FK start) as a third method."""

@@ -29,6 +29,7 @@ from parakin.papers.ye_stewart12.common import (
     setup,
     state_at,
     steps,
+    table,
     time_solve,
 )
 from parakin.plot import new_figure, save_figure
@@ -53,12 +54,7 @@ STEPS = ITERATIVE.but(
 METHODS = {key: METHODS_USED[key] for key in PAPER_METHODS}
 
 
-@artefact(
-    "table4",
-    outputs=["table4.csv", "table4.md", "table4_summary.csv"],
-    config=[KEY],
-    tolerance=STEPS,
-)
+@table("table4", "table4", "table4_summary.csv", config=[KEY], tolerance=STEPS)
 def table4(config: dict, outdir: Path) -> list[Path]:
     """Table 4 (lost): passive lengths from N-R and Broyden vs exact at the test pose, tol 1e-6 mm."""
     s = setup(config)

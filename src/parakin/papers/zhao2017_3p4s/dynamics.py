@@ -30,7 +30,7 @@ from parakin.io import write_table
 from parakin.mechanisms import P3P4S
 from parakin.mechanisms import p3p4s_dynamics as dyn
 from parakin.papers.sections import table_text
-from parakin.papers.zhao2017_3p4s.common import KEY, artefact, table_and_figure
+from parakin.papers.zhao2017_3p4s.common import KEY, table, table_and_figure
 from parakin.registry import ROUNDING
 
 #: tolerances stated in the figures and tested (relative to the peak of the analytic curve)
@@ -683,11 +683,8 @@ def _slug(label: str) -> str:
     }[label]
 
 
-@artefact(
-    "dynamics_slips",
-    outputs=["extra_dynamics_slips.csv", "extra_dynamics_slips.md"],
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
+@table(
+    "dynamics_slips", "extra_dynamics_slips", config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING
 )
 def dynamics_slips(config: dict, outdir: Path) -> list[Path]:
     """extra_dynamics_slips: each slip of the printed dynamics against four checks.

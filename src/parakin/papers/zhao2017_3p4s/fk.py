@@ -23,7 +23,7 @@ from parakin.mechanisms import P3P4S
 from parakin.nn.bp import plateau_epoch
 from parakin.papers.runs import map_runs
 from parakin.papers.sections import table_text
-from parakin.papers.zhao2017_3p4s.common import KEY, artefact
+from parakin.papers.zhao2017_3p4s.common import KEY, artefact, table
 from parakin.papers.zhao2017_3p4s.kinematics import table1_inputs
 from parakin.registry import EXACT, ITERATIVE, Tolerance
 from parakin.solvers import solve_fk
@@ -128,14 +128,11 @@ def draw_training(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@table(
     "train",
-    outputs=[
-        "extra_bp_accuracy.csv",
-        "extra_bp_accuracy.md",
-        "extra_bp_training.csv",
-        "extra_bp_training.png",
-    ],
+    "extra_bp_accuracy",
+    "extra_bp_training.csv",
+    "extra_bp_training.png",
     generated=["bp_network.npz", "bp_training_log.csv", "bp_training_summary.json"],
     needs=["zhao2017_3p4s:samples"],
     config=["zhao2017_3p4s.fk"],
@@ -426,14 +423,11 @@ def _convergence_notes(cfg: dict, fk_cfg: dict, printed: str) -> str:
     )
 
 
-@artefact(
+@table(
     "network_convergence",
-    outputs=[
-        "extra_bp_convergence.csv",
-        "extra_bp_convergence.md",
-        "extra_bp_convergence_curves.csv",
-        "extra_bp_convergence.png",
-    ],
+    "extra_bp_convergence",
+    "extra_bp_convergence_curves.csv",
+    "extra_bp_convergence.png",
     config=["zhao2017_3p4s.fk", "zhao2017_3p4s.network_convergence"],
     tolerance=CONVERGENCE,
     threads=2,
@@ -491,9 +485,11 @@ def _median_time_ms(fn, repeats: int) -> float:
     return float(np.median(times) * 1e3)
 
 
-@artefact(
+@table(
     "table2",
-    outputs=["table2.csv", "table2.md", "table2_iterates.csv", "table2_iterates.md"],
+    "table2",
+    "table2_iterates.csv",
+    "table2_iterates.md",
     needs=["zhao2017_3p4s:train"],
     config=["zhao2017_3p4s.fk"],
     tolerance=HYBRID,
@@ -638,9 +634,9 @@ def _ref() -> pd.DataFrame:
 
 
 # ---------------------------------------------------------------------------------- benchmark
-@artefact(
+@table(
     "fk_benchmark",
-    outputs=["fk_benchmark.csv", "fk_benchmark.md"],
+    "fk_benchmark",
     needs=["zhao2017_3p4s:train"],
     config=["zhao2017_3p4s.fk", "zhao2017_3p4s.bench"],
     tolerance=SOLVER_STATS,
@@ -782,9 +778,9 @@ def failure_settings(config: dict) -> dict:
     }
 
 
-@artefact(
+@table(
     "qn_failures",
-    outputs=["extra_qn_failures.csv", "extra_qn_failures.md"],
+    "extra_qn_failures",
     needs=["zhao2017_3p4s:train"],
     config=["zhao2017_3p4s.fk", "zhao2017_3p4s.bench", "zhao2017_3p4s.failures"],
     tolerance=FAILURES,
@@ -879,9 +875,9 @@ def _interleaved_us(calls: dict, inputs: np.ndarray, rounds: int) -> dict[str, f
     return {k: float(np.median(v)) * 1e6 for k, v in times.items()}
 
 
-@artefact(
+@table(
     "hybrid_speed",
-    outputs=["extra_hybrid_speed.csv", "extra_hybrid_speed.md"],
+    "extra_hybrid_speed",
     needs=["zhao2017_3p4s:train"],
     config=["zhao2017_3p4s.fk", "zhao2017_3p4s.bench"],
     tolerance=SPEED,

@@ -35,7 +35,7 @@ from parakin.mechanisms import p3p4s_indices as ix
 from parakin.optimize import GAOptions, ga, normalised_sum, nsga2
 from parakin.papers.runs import map_runs
 from parakin.papers.sections import table_text
-from parakin.papers.zhao2017_3p4s.common import KEY, artefact
+from parakin.papers.zhao2017_3p4s.common import KEY, artefact, table
 from parakin.progress import Progress, counting
 from parakin.registry import EXACT, ROUNDING, TIMING, Tolerance
 
@@ -584,14 +584,11 @@ def gains_table(g: pd.DataFrame, ref: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-@artefact(
+@table(
     "global_indices",
-    outputs=[
-        "extra_global_indices.csv",
-        "extra_global_indices.md",
-        "extra_gains.csv",
-        "extra_gains.md",
-    ],
+    "extra_global_indices",
+    "extra_gains.csv",
+    "extra_gains.md",
     config=INDEX_CONFIG,
     tolerance=ROUNDING,
 )
@@ -677,13 +674,10 @@ def draw_index_convergence(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@table(
     "index_convergence",
-    outputs=[
-        "extra_index_convergence.csv",
-        "extra_index_convergence.md",
-        "extra_index_convergence.png",
-    ],
+    "extra_index_convergence",
+    "extra_index_convergence.png",
     config=INDEX_CONFIG,
     tolerance=ROUNDING,
     draws=[("extra_index_convergence.png", "extra_index_convergence.csv", draw_index_convergence)],
@@ -733,12 +727,7 @@ W_VARIANTS = [
 ]
 
 
-@artefact(
-    "index_sensitivity",
-    outputs=["extra_index_sensitivity.csv", "extra_index_sensitivity.md"],
-    config=INDEX_CONFIG,
-    tolerance=ROUNDING,
-)
+@table("index_sensitivity", "extra_index_sensitivity", config=INDEX_CONFIG, tolerance=ROUNDING)
 def index_sensitivity(config: dict, outdir: Path) -> list[Path]:
     """extra_index_sensitivity: how the global values and verdicts move under other readings of W
     and of the stiffness index (k, lambda vs sqrt)."""
@@ -783,12 +772,7 @@ def index_sensitivity(config: dict, outdir: Path) -> list[Path]:
     )
 
 
-@artefact(
-    "index_benchmark",
-    outputs=["extra_index_benchmark.csv", "extra_index_benchmark.md"],
-    config=INDEX_CONFIG,
-    tolerance=TIMING,
-)
+@table("index_benchmark", "extra_index_benchmark", config=INDEX_CONFIG, tolerance=TIMING)
 def index_benchmark(config: dict, outdir: Path) -> list[Path]:
     """extra_index_benchmark: all three indices batched over a grid vs a per-pose Python loop."""
     c = index_settings(config)
@@ -1120,9 +1104,9 @@ def fig14(config: dict, outdir: Path) -> list[Path]:
     return [csv, draw_fig14(pd.read_csv(csv), outdir / "fig14_ga_convergence.png")]
 
 
-@artefact(
+@table(
     "ga_paper_box",
-    outputs=["extra_ga_paper_box.csv", "extra_ga_paper_box.md"],
+    "extra_ga_paper_box",
     config=INDEX_CONFIG,
     tolerance=GA_CORNER,
     threads=2,
@@ -1173,13 +1157,7 @@ def ga_paper_box(config: dict, outdir: Path) -> list[Path]:
     )
 
 
-@artefact(
-    "table3",
-    outputs=["table3.csv", "table3.md"],
-    needs=[f"{KEY}:ga_runs"],
-    config=INDEX_CONFIG,
-    tolerance=GA,
-)
+@table("table3", "table3", needs=[f"{KEY}:ga_runs"], config=INDEX_CONFIG, tolerance=GA)
 def table3(config: dict, outdir: Path) -> list[Path]:
     """Table 3: design before/after (the paper's), ours from the GA (the best of the runs and the
     run of median f; every run in extra_ga_runs.csv) and the single-objective optima, with Delta,
