@@ -25,6 +25,7 @@ from parakin.papers.li2017_stewart36.common import (
     KEY,
     artefact,
     cfg,
+    drawn_figure,
     fk_input,
     mech,
     table,
@@ -275,19 +276,16 @@ def draw_fig03(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@drawn_figure(
     "fig03",
-    outputs=[
-        "fig03_convergence.png",
-        "fig03_convergence.csv",
-        "fitness_stats.csv",
-        "fitness_stats.md",
-    ],
+    "fig03_convergence",
+    draw_fig03,
+    "fitness_stats.csv",
+    "fitness_stats.md",
     config=[KEY],
     tolerance=CHAOS,
     threads=1,
     resources={"runtime": 30, "mem_mb": 2000},
-    draws=[("fig03_convergence.png", "fig03_convergence.csv", draw_fig03)],
 )
 def fig03(config: dict, outdir: Path) -> list[Path]:
     """Fig. 3: best fitness F (eq. 4) per iteration, median and 10-90 % band over the runs, chaotic vs

@@ -30,8 +30,8 @@ from parakin.papers.ye_stewart12.common import (
     METHODS_USED,
     MODE_NAMES,
     PAPER_METHODS,
-    artefact,
     caption_of,
+    drawn_figure,
     mech,
     passive_caption,
     passive_sets,
@@ -266,19 +266,16 @@ def draw_fig12(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@drawn_figure(
     "fig12",
-    outputs=[
-        "fig12_dmax_structures.png",
-        "fig12_dmax_structures.csv",
-        "table6.csv",
-        "table6.md",
-        "extra_scan_speed.csv",
-        "extra_scan_speed.md",
-    ],
+    "fig12_dmax_structures",
+    draw_fig12,
+    "table6.csv",
+    "table6.md",
+    "extra_scan_speed.csv",
+    "extra_scan_speed.md",
     config=[KEY],
     tolerance=SCAN,
-    draws=[("fig12_dmax_structures.png", "fig12_dmax_structures.csv", draw_fig12)],
 )
 def fig12(config: dict, outdir: Path) -> list[Path]:
     """Fig. 12: d_max over the (n, L) grid per mode and method; Table 6 from the same scan; timing

@@ -25,6 +25,7 @@ from parakin.papers.ye_stewart12.common import (
     METHODS_USED,
     PAPER_METHODS,
     artefact,
+    drawn_figure,
     run_mode,
     setup,
     state_at,
@@ -168,17 +169,14 @@ def draw_fig08(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@drawn_figure(
     "fig08",
-    outputs=[
-        "fig08_convergence.png",
-        "fig08_convergence.csv",
-        "fig08_match_steps.csv",
-        "fig08_match_steps.md",
-    ],
+    "fig08_convergence",
+    draw_fig08,
+    "fig08_match_steps.csv",
+    "fig08_match_steps.md",
     config=[KEY],
     tolerance=STEPS,
-    draws=[("fig08_convergence.png", "fig08_convergence.csv", draw_fig08)],
 )
 def fig08(config: dict, outdir: Path) -> list[Path]:
     """Fig. 8: composite rod length (mean of the passive lengths) vs iteration at 30 % deviation."""

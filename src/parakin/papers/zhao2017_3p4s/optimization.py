@@ -35,7 +35,7 @@ from parakin.mechanisms import p3p4s_indices as ix
 from parakin.optimize import GAOptions, ga, normalised_sum, nsga2
 from parakin.papers.runs import map_runs
 from parakin.papers.sections import table_text
-from parakin.papers.zhao2017_3p4s.common import KEY, artefact, table
+from parakin.papers.zhao2017_3p4s.common import KEY, artefact, drawn_figure, table
 from parakin.progress import Progress, counting
 from parakin.registry import EXACT, ROUNDING, TIMING, Tolerance
 
@@ -266,13 +266,7 @@ def draw_fig11(frame: pd.DataFrame, path: Path) -> Path:
     )
 
 
-@artefact(
-    "fig11",
-    outputs=["fig11_velocity_sphere.png", "fig11_velocity_sphere.csv"],
-    config=INDEX_CONFIG,
-    tolerance=EXACT,
-    draws=[("fig11_velocity_sphere.png", "fig11_velocity_sphere.csv", draw_fig11)],
-)
+@drawn_figure("fig11", "fig11_velocity_sphere", draw_fig11, config=INDEX_CONFIG, tolerance=EXACT)
 def fig11(config: dict, outdir: Path) -> list[Path]:
     """Fig. 11: the unit sphere of drive velocities ``qdot^T qdot = 1`` (eq 35) at the home pose."""
     m = P3P4S.zhao2017()
@@ -307,16 +301,13 @@ def draw_fig12(frame: pd.DataFrame, path: Path) -> Path:
     )
 
 
-@artefact(
+@drawn_figure(
     "fig12",
-    outputs=[
-        "fig12_velocity_ellipsoid.png",
-        "fig12_velocity_ellipsoid.csv",
-        "fig12_velocity_ellipsoid_axes.csv",
-    ],
+    "fig12_velocity_ellipsoid",
+    draw_fig12,
+    "fig12_velocity_ellipsoid_axes.csv",
     config=INDEX_CONFIG,
     tolerance=EXACT,
-    draws=[("fig12_velocity_ellipsoid.png", "fig12_velocity_ellipsoid.csv", draw_fig12)],
 )
 def fig12(config: dict, outdir: Path) -> list[Path]:
     """Fig. 12: the output velocity ellipsoid ``v = J^-1 qdot`` of the unit sphere (eq 35); its
@@ -1078,13 +1069,13 @@ def draw_fig14(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@drawn_figure(
     "fig14",
-    outputs=["fig14_ga_convergence.png", "fig14_ga_convergence.csv"],
+    "fig14_ga_convergence",
+    draw_fig14,
     needs=[f"{KEY}:ga_runs"],
     config=INDEX_CONFIG,
     tolerance=GA,
-    draws=[("fig14_ga_convergence.png", "fig14_ga_convergence.csv", draw_fig14)],
 )
 def fig14(config: dict, outdir: Path) -> list[Path]:
     """Fig. 14: best combined objective f (eq 40) per generation, one curve per GA run."""
@@ -1280,15 +1271,16 @@ def draw_pareto(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@drawn_figure(
     "pareto",
-    outputs=["extra_pareto.png", "extra_pareto.csv", "extra_pareto_marks.csv"],
+    "extra_pareto",
+    draw_pareto,
+    "extra_pareto_marks.csv",
     needs=[f"{KEY}:ga_runs"],
     config=INDEX_CONFIG,
     tolerance=GA,
     threads=1,
     resources={"runtime": 90, "mem_mb": 2000},
-    draws=[("extra_pareto.png", "extra_pareto.csv", draw_pareto)],
 )
 def pareto(config: dict, outdir: Path) -> list[Path]:
     """extra_pareto: NSGA-II front of (sigma1, -sigma2, sigma3) over (r_a, r_b, L, d, phi) with the
