@@ -945,27 +945,25 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
             )
         )
 
-    if (figdir / "fig07_velocity_check.csv").exists():
-        df = pd.read_csv(figdir / "fig07_velocity_check.csv")
-        for src, label in (("mujoco", "MuJoCo"), ("fd", "IK finite differences")):
-            claim(
-                "fig07",
-                "max |qdot(eq 8) - simulation|",
-                _max_rel(df, "diff{i}_" + src + "_m_s", "qdot{i}_eq8_m_s"),
-                label,
-                why + label,
-            )
+    kinematic = (  # (figure, quantity, analytic column, unit, variant note, basis)
+        ("fig07_velocity_check", "max |qdot(eq 8) - simulation|", "qdot{i}_eq8", "m_s", "", ""),
+        (
+            "fig08_acceleration_check",
+            "max |qddot(eq 13) - simulation|",
+            "qddot{i}_eq13",
+            "m_s2",
+            ", H with 1/l",
+            CORRECTED_H,
+        ),
+    )
+    for stem, quantity, analytic, unit, note, basis in kinematic:
+        if (figdir / f"{stem}.csv").exists():
+            df = pd.read_csv(figdir / f"{stem}.csv")
+            for src, label in (("mujoco", "MuJoCo"), ("fd", "IK finite differences")):
+                value = _max_rel(df, f"diff{{i}}_{src}_{unit}", f"{analytic}_{unit}")
+                claim(stem[:5], quantity, value, label + note, why + label, basis=basis)
     if (figdir / "fig08_acceleration_check.csv").exists():
         df = pd.read_csv(figdir / "fig08_acceleration_check.csv")
-        for src, label in (("mujoco", "MuJoCo"), ("fd", "IK finite differences")):
-            claim(
-                "fig08",
-                "max |qddot(eq 13) - simulation|",
-                _max_rel(df, "diff{i}_" + src + "_m_s2", "qddot{i}_eq13_m_s2"),
-                f"{label}, H with 1/l",
-                why + label,
-                basis=CORRECTED_H,
-            )
         claim(
             "fig08",
             "max |qddot(eq 13) - simulation|",
