@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import sys
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -634,13 +635,11 @@ def _ref() -> pd.DataFrame:
 
 
 # ---------------------------------------------------------------------------------- benchmark
-@table(
-    "fk_benchmark",
-    "fk_benchmark",
-    needs=["zhao2017_3p4s:train"],
-    config=["zhao2017_3p4s.fk", "zhao2017_3p4s.bench"],
-    tolerance=SOLVER_STATS,
-)
+#: ``@_bench_table(name, stem, ...)``: a benchmark table of the trained network's solvers
+_bench_table = partial(table, needs=[f"{KEY}:train"], config=[f"{KEY}.fk", f"{KEY}.bench"])
+
+
+@_bench_table("fk_benchmark", "fk_benchmark", tolerance=SOLVER_STATS)
 def fk_benchmark(config: dict, outdir: Path) -> list[Path]:
     """Every FK solver on the same random reachable strokes (our addition to §1.1)."""
     from parakin.bench import SolverSpec, bench_fk
@@ -875,11 +874,9 @@ def _interleaved_us(calls: dict, inputs: np.ndarray, rounds: int) -> dict[str, f
     return {k: float(np.median(v)) * 1e6 for k, v in times.items()}
 
 
-@table(
+@_bench_table(
     "hybrid_speed",
     "extra_hybrid_speed",
-    needs=["zhao2017_3p4s:train"],
-    config=["zhao2017_3p4s.fk", "zhao2017_3p4s.bench"],
     tolerance=SPEED,
     caption="the hybrid against quasi-Newton from home, per solve: iterations and time in one run",
 )
