@@ -24,7 +24,7 @@ import re
 import sys
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from functools import cache, wraps
+from functools import cache, partial, wraps
 from pathlib import Path
 from typing import Any
 
@@ -333,18 +333,45 @@ def table_and_figure(
     (:func:`parakin.io.write_and_draw`, which hands ``draw`` the final path, so the figure is
     tagged by its name); ``declared``: :func:`artefact`'s other fields. The artefact's
     ``make(config, outdir)`` keeps the table's name and docstring."""
-    png, csv = f"{stem}.png", f"{stem}.csv"
 
     def register(table: Callable[[dict], Any]) -> Callable:
         @wraps(table)
         def make(config: dict, outdir: Path) -> list[Path]:
             from parakin.io import write_and_draw
 
-            return write_and_draw(table(config), Path(outdir) / csv, draw)
+            return write_and_draw(table(config), Path(outdir) / f"{stem}.csv", draw)
 
-        return artefact(study, name, outputs=[png, csv], draws=[(png, csv, draw)], **declared)(make)
+        return drawn_figure(study, name, stem, draw, **declared)(make)
 
     return register
+
+
+def drawn_figure(
+    study: str, name: str, stem: str, draw: Callable[[Any, Path], Path], *more: str, **declared: Any
+) -> Callable:
+    """Declare an artefact whose figure ``<stem>.png`` is drawn by ``draw`` from its table
+    ``<stem>.csv`` (the decorated ``make(config, outdir)`` writes both, e.g. with
+    :func:`parakin.io.draw_from_csv`), then the files ``more``; ``declared``: :func:`artefact`'s
+    other fields."""
+    png, csv = f"{stem}.png", f"{stem}.csv"
+    return artefact(study, name, outputs=[png, csv, *more], draws=[(png, csv, draw)], **declared)
+
+
+def table(study: str, name: str, stem: str, *more: str, **declared: Any) -> Callable:
+    """Declare a table artefact: ``<stem>.csv`` and ``<stem>.md`` (:func:`parakin.io.write_table`)
+    then the files ``more``, in that order; ``declared``: :func:`artefact`'s other fields."""
+    return artefact(study, name, outputs=[f"{stem}.csv", f"{stem}.md", *more], **declared)
+
+
+def declarations(study: str) -> tuple[Callable, Callable, Callable, Callable]:
+    """:func:`artefact`, :func:`table`, :func:`table_and_figure` and :func:`drawn_figure` with
+    ``study`` filled in: what a study's modules declare their artefacts with."""
+    return (
+        partial(artefact, study),
+        partial(table, study),
+        partial(table_and_figure, study),
+        partial(drawn_figure, study),
+    )
 
 
 def figure(

@@ -25,8 +25,10 @@ from parakin.papers.li2017_stewart36.common import (
     KEY,
     artefact,
     cfg,
+    drawn_figure,
     fk_input,
     mech,
+    table,
     table_and_figure,
 )
 from parakin.papers.sections import table_text
@@ -91,12 +93,7 @@ def histogram(z: np.ndarray, bins: int) -> np.ndarray:
     return np.histogram(np.clip(z, 0, 1), bins=bins, range=(0.0, 1.0))[0]
 
 
-@artefact(
-    "table1",
-    outputs=["table1.csv", "table1.md", "table1_stats.csv", "table1_stats.md"],
-    config=[KEY],
-    tolerance=CHAOS,
-)
+@table("table1", "table1", "table1_stats.csv", "table1_stats.md", config=[KEY], tolerance=CHAOS)
 def table1(config: dict, outdir: Path) -> list[Path]:
     """Table 1 (body LOST): distribution of the chaotic weights over ten bins, mu = 4 and the printed
     mu = 0.4 (collapse), beside the arcsine law."""
@@ -279,19 +276,16 @@ def draw_fig03(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@drawn_figure(
     "fig03",
-    outputs=[
-        "fig03_convergence.png",
-        "fig03_convergence.csv",
-        "fitness_stats.csv",
-        "fitness_stats.md",
-    ],
+    "fig03_convergence",
+    draw_fig03,
+    "fitness_stats.csv",
+    "fitness_stats.md",
     config=[KEY],
     tolerance=CHAOS,
     threads=1,
     resources={"runtime": 30, "mem_mb": 2000},
-    draws=[("fig03_convergence.png", "fig03_convergence.csv", draw_fig03)],
 )
 def fig03(config: dict, outdir: Path) -> list[Path]:
     """Fig. 3: best fitness F (eq. 4) per iteration, median and 10-90 % band over the runs, chaotic vs

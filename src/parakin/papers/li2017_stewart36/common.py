@@ -7,8 +7,6 @@ ASSUMED), so Table 3 row 1 is an exact solution by construction.
 
 from __future__ import annotations
 
-from functools import partial
-
 import numpy as np
 import pandas as pd
 
@@ -18,11 +16,10 @@ from parakin.mechanisms.stewart36 import Stewart36, pose_from_paper
 
 KEY = "li2017_stewart36"
 
-#: ``@artefact(name, outputs=..., ...)`` declares one of this paper's tables or figures
-#: (:func:`parakin.registry.artefact` with the paper key filled in)
-artefact = partial(registry.artefact, KEY)
-#: ``@table_and_figure(name, stem, draw, ...)`` declares a figure drawn from its table
-table_and_figure = partial(registry.table_and_figure, KEY)
+#: the registry's declarations with this paper's key filled in (:func:`registry.declarations`):
+#: ``@artefact(name, outputs=...)``, ``@table(name, stem)``, ``@table_and_figure(name, stem, draw)``,
+#: ``@drawn_figure(name, stem, draw)``
+artefact, table, table_and_figure, drawn_figure = registry.declarations(KEY)
 TITLE = "Li, Quan & Wu 2017 — 3-6 Stewart platform, chaotic-inertia-weight PSO (Comp. Appl. Softw. 34(12))"
 POSE_COLS = ("alpha", "beta", "gamma", "X", "Y", "Z")
 #: note printed beside every use of the reconstructed input

@@ -24,6 +24,7 @@ from parakin.papers.li2017_stewart36.common import (
     cfg,
     fk_input,
     mech,
+    table,
     table3,
 )
 from parakin.papers.sections import table_text
@@ -231,14 +232,11 @@ def table3_consistency(config: dict, outdir: Path) -> list[Path]:
     )
 
 
-@artefact(
+@table(
     "extra_solutions",
-    outputs=[
-        "extra_solutions.csv",
-        "extra_solutions.md",
-        "extra_solution_counts_b.csv",
-        "extra_solution_counts_b.md",
-    ],
+    "extra_solutions",
+    "extra_solution_counts_b.csv",
+    "extra_solution_counts_b.md",
     config=[KEY],
     tolerance=ROOTS,
 )
@@ -332,14 +330,11 @@ def draw_solution_counts(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@table(
     "extra_solution_counts",
-    outputs=[
-        "extra_solution_counts.csv",
-        "extra_solution_counts.md",
-        "extra_solution_counts.png",
-        "extra_solution_counts_richest.csv",
-    ],
+    "extra_solution_counts",
+    "extra_solution_counts.png",
+    "extra_solution_counts_richest.csv",
     config=[KEY],
     tolerance=ROOTS,
     draws=[("extra_solution_counts.png", "extra_solution_counts.csv", draw_solution_counts)],

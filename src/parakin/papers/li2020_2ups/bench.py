@@ -23,7 +23,7 @@ from parakin.config import rng
 from parakin.io import write_table
 from parakin.mechanisms.base import Array
 from parakin.mechanisms.ups2 import UPS2
-from parakin.papers.li2020_2ups.common import KEY, artefact, mech, table2_inputs
+from parakin.papers.li2020_2ups.common import KEY, mech, table, table2_inputs
 from parakin.papers.li2020_2ups.fk import pso_options, seeds
 from parakin.papers.sections import table_text
 from parakin.registry import TIMING
@@ -259,12 +259,7 @@ def fk_rows(config: dict) -> pd.DataFrame:
     return pd.concat([df, extra], ignore_index=True)
 
 
-@artefact(
-    "benchmark",
-    outputs=["extra_benchmark.csv", "extra_benchmark.md"],
-    config=[KEY],
-    tolerance=TIMING,
-)
+@table("benchmark", "extra_benchmark", config=[KEY], tolerance=TIMING)
 def benchmark(config: dict, outdir: Path) -> list[Path]:
     """extra_benchmark.{csv,md}: PSO (vectorised vs loop) and the FK solvers, one table."""
     p = pd.DataFrame(pso_rows(config))

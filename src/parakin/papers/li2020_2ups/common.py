@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from functools import partial
-
 import numpy as np
 import pandas as pd
 
@@ -13,11 +11,10 @@ from parakin.mechanisms.ups2 import UPS2
 
 KEY = "li2020_2ups"
 
-#: ``@artefact(name, outputs=..., ...)`` declares one of this paper's tables or figures
-#: (:func:`parakin.registry.artefact` with the paper key filled in)
-artefact = partial(registry.artefact, KEY)
-#: ``@table_and_figure(name, stem, draw, ...)`` declares a figure drawn from its table
-table_and_figure = partial(registry.table_and_figure, KEY)
+#: the registry's declarations with this paper's key filled in (:func:`registry.declarations`):
+#: ``@artefact(name, outputs=...)``, ``@table(name, stem)``, ``@table_and_figure(name, stem, draw)``,
+#: ``@drawn_figure(name, stem, draw)``
+artefact, table, table_and_figure, drawn_figure = registry.declarations(KEY)
 TITLE = "Li et al. 2020 — 2-UPS/(S+SPR)R parallel mechanism (Packaging Engineering 41(7))"
 CASES = (1, 2, 3, 4, 5)
 

@@ -23,6 +23,7 @@ from parakin.papers.li2020_2ups.common import (
     KEY,
     artefact,
     mech,
+    table,
     table2_inputs,
     table2_outputs,
     table_and_figure,
@@ -67,12 +68,8 @@ PSO_TRAJECTORY = Tolerance.statistical(
 SOLVER_COUNTS = Tolerance.statistical(
     "solver counts: local solvers and the closed form exactly (deterministic from the "
     "seeded inputs), the PSO row within 2 of 20 runs; iteration medians within one",
-    columns={
-        "poses": (0.0, 0.0),
-        "success": (0.0, 2.0),
-        "correct": (0.0, 2.0),
-        "nit_median": (0.0, 1.0),
-    },
+    columns={"poses": (0.0, 0.0), "nit_median": (0.0, 1.0)}
+    | {c: (0.0, 2.0) for c in ("success", "correct")},
 )
 
 VARIANTS = {
@@ -146,15 +143,12 @@ def table1(config: dict, outdir: Path) -> list[Path]:
     return write_table(df, outdir / "table1", title="Table 1 — PSO parameters as used")
 
 
-@artefact(
+@table(
     "table2",
-    outputs=[
-        "table2.csv",
-        "table2.md",
-        "table2_runs.csv",
-        "table2_consistency.csv",
-        "table2_consistency.md",
-    ],
+    "table2",
+    "table2_runs.csv",
+    "table2_consistency.csv",
+    "table2_consistency.md",
     config=[KEY],
     tolerance=PSO_TABLE,
     threads=1,
@@ -363,12 +357,7 @@ def fig02(config: dict) -> pd.DataFrame:
     return df
 
 
-@artefact(
-    "solvers",
-    outputs=["extra_solvers.csv", "extra_solvers.md"],
-    config=[KEY],
-    tolerance=SOLVER_COUNTS,
-)
+@table("solvers", "extra_solvers", config=[KEY], tolerance=SOLVER_COUNTS)
 def solver_comparison(config: dict, outdir: Path) -> list[Path]:
     """Extra: every FK method on random poses of the Table 1 box (strokes by IK): success, iterations,
     evaluations and time, batched; PSO (improved_clamped) on a subset."""
@@ -600,9 +589,9 @@ FAILURES = Tolerance.statistical(
 )
 
 
-@artefact(
+@table(
     "solver_failures",
-    outputs=["extra_solver_failures.csv", "extra_solver_failures.md"],
+    "extra_solver_failures",
     config=[KEY],
     tolerance=FAILURES,
     caption="Newton and LM from the home pose on Table 1's box and on boxes around it",

@@ -13,7 +13,7 @@ from matplotlib.ticker import MaxNLocator
 from parakin.claims import Claim, printed_value
 from parakin.config import rng
 from parakin.io import write_table
-from parakin.papers.li2020_2ups.common import KEY, artefact, mech, table_and_figure
+from parakin.papers.li2020_2ups.common import KEY, mech, table, table_and_figure
 from parakin.papers.li2020_2ups.symbolic import derivation, loop_closure_model
 from parakin.papers.sections import table_text
 from parakin.plot import (
@@ -50,12 +50,7 @@ def fig01(config: dict) -> pd.DataFrame:
     return skeleton_table(m.skeleton(pose), frame_length=FIG1_FRAME_LENGTH)
 
 
-@artefact(
-    "concomitant",
-    outputs=["extra_concomitant.csv", "extra_concomitant.md"],
-    config=[KEY],
-    tolerance=ROUNDING,
-)
+@table("concomitant", "extra_concomitant", config=[KEY], tolerance=ROUNDING)
 def concomitant(config: dict, outdir: Path) -> list[Path]:
     """Symbolic derivation (sympy) that alpha = 0 and eq. (14) follow from (6), (12); the vector IK
     against the scalar closed forms; a numeric check with an independent loop-closure model."""
@@ -220,6 +215,23 @@ def draw_fk_solutions(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
+def _pose_grid(config: dict) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """The (beta, gamma) grid of Table 1's box at three Y (low, middle, high): the poses
+    ``(n, n, 3, 3)`` and their columns ``beta_deg``, ``gamma_deg``, ``Y_mm``."""
+    n = config[KEY]["grid"]
+    lo, hi = mech(config).pose_bounds()
+    ys = np.array([lo[2], 0.5 * (lo[2] + hi[2]), hi[2]])
+    bb, gg, yy = np.meshgrid(
+        np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n), ys, indexing="ij"
+    )
+    columns = {
+        "beta_deg": np.rad2deg(bb).ravel(),
+        "gamma_deg": np.rad2deg(gg).ravel(),
+        "Y_mm": (yy * 1e3).ravel(),
+    }
+    return np.stack([bb, gg, yy], axis=-1), columns
+
+
 @table_and_figure(
     "fk_solutions", "extra_fk_solutions", draw_fk_solutions, config=[KEY], tolerance=EXACT
 )
@@ -227,28 +239,13 @@ def solution_count(config: dict) -> pd.DataFrame:
     """Extra: number of real FK solutions (rho > 0 branch, all of beta, gamma) of the strokes of each
     pose of a (beta, gamma) grid, at three Y across Table 1's range; and how many lie in the box."""
     m = mech(config)
-    n = config[KEY]["grid"]
     lo, hi = m.pose_bounds()
-    ys = np.array([lo[2], 0.5 * (lo[2] + hi[2]), hi[2]])
-    beta = np.linspace(lo[0], hi[0], n)
-    gamma = np.linspace(lo[1], hi[1], n)
-    bb, gg, yy = np.meshgrid(beta, gamma, ys, indexing="ij")
-    poses = np.stack([bb, gg, yy], axis=-1)
+    poses, grid = _pose_grid(config)
     sols = m.fk_all(m.ik(poses))
     real = np.all(np.isfinite(sols), axis=-1)
     with np.errstate(invalid="ignore"):
         inbox = real & np.all((sols >= lo - 1e-9) & (sols <= hi + 1e-9), axis=-1)
-    count, nbox = real.sum(-1), inbox.sum(-1)
-    df = pd.DataFrame(
-        {
-            "beta_deg": np.rad2deg(bb).ravel(),
-            "gamma_deg": np.rad2deg(gg).ravel(),
-            "Y_mm": (yy * 1e3).ravel(),
-            "n_real": count.ravel(),
-            "n_in_box": nbox.ravel(),
-        }
-    )
-    return df
+    return pd.DataFrame({**grid, "n_real": real.sum(-1).ravel(), "n_in_box": inbox.sum(-1).ravel()})
 
 
 def draw_singularity_workspace(frame: pd.DataFrame, path: Path) -> Path:
@@ -311,28 +308,16 @@ def singularity_workspace(config: dict) -> pd.DataFrame:
     Table 1's box, with the region where eq (19)'s stroke limits hold; cond(J) beside it.
     det J = 0 is a singularity (the pose cannot be held by the actuators)."""
     m = mech(config)
-    n = config[KEY]["grid"]
-    lo, hi = m.pose_bounds()
-    ys = np.array([lo[2], 0.5 * (lo[2] + hi[2]), hi[2]])
-    bb, gg, yy = np.meshgrid(
-        np.linspace(lo[0], hi[0], n), np.linspace(lo[1], hi[1], n), ys, indexing="ij"
-    )
-    poses = np.stack([bb, gg, yy], axis=-1)
+    poses, grid = _pose_grid(config)
     jac = m.velocity_jacobian(poses)
-    det = np.linalg.det(jac)
-    cond = np.linalg.cond(jac)
-    inside = m.within_limits(m.ik(poses))
-    df = pd.DataFrame(
+    return pd.DataFrame(
         {
-            "beta_deg": np.rad2deg(bb).ravel(),
-            "gamma_deg": np.rad2deg(gg).ravel(),
-            "Y_mm": (yy * 1e3).ravel(),
-            "det_J_m2": det.ravel(),
-            "cond_J": cond.ravel(),
-            "within_eq19": inside.ravel(),
+            **grid,
+            "det_J_m2": np.linalg.det(jac).ravel(),
+            "cond_J": np.linalg.cond(jac).ravel(),
+            "within_eq19": m.within_limits(m.ik(poses)).ravel(),
         }
     )
-    return df
 
 
 def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from functools import partial
 
 import numpy as np
 
@@ -34,9 +33,10 @@ METHOD_LABELS = {
 
 KEY = "ye_stewart12"
 
-#: ``@artefact(name, outputs=..., ...)`` declares one of this paper's tables or figures
-#: (:func:`parakin.registry.artefact` with the paper key filled in)
-artefact = partial(registry.artefact, KEY)
+#: the registry's declarations with this paper's key filled in (:func:`registry.declarations`):
+#: ``@artefact(name, outputs=...)``, ``@table(name, stem)``, ``@table_and_figure(name, stem, draw)``,
+#: ``@drawn_figure(name, stem, draw)``
+artefact, table, table_and_figure, drawn_figure = registry.declarations(KEY)
 TITLE = (
     "Ye, You, Shen, Wu, Ru — Stewart-derived 12-leg cube mechanism: closed-form FK, "
     "compatibility equations, N-R vs Broyden, drive modes"

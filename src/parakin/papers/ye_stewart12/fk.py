@@ -11,13 +11,15 @@ import pandas as pd
 
 from parakin.claims import Claim
 from parakin.config import rng
-from parakin.io import draw_from_csv, write_csv, write_table
+from parakin.io import write_csv, write_table
 from parakin.papers.sections import table_text
 from parakin.papers.ye_stewart12.common import (
     KEY,
     artefact,
     mech,
     passive_sets,
+    table,
+    table_and_figure,
     test_pose,
 )
 from parakin.plot import draw_mechanism, save_figure, skeleton_from_table, skeleton_table
@@ -31,12 +33,7 @@ def _states(config: dict) -> dict[str, np.ndarray]:
     return {"initial": m.home(), "arbitrary (§3.3 test pose)": test_pose(config)}
 
 
-@artefact(
-    "table1",
-    outputs=["table1.csv", "table1.md", "table1_random.csv"],
-    config=[KEY],
-    tolerance=EXACT,
-)
+@table("table1", "table1", "table1_random.csv", config=[KEY], tolerance=EXACT)
 def table1(config: dict, outdir: Path) -> list[Path]:
     """Table 1 (lost): FK check — pose and joint centres from the 12 IK lengths vs the exact ones,
     at the initial state and at the §3.3 test pose (the paper's arbitrary state is unknown)."""
@@ -126,14 +123,12 @@ FIG06_TITLE = "Virtual prototype, R = 3 (passive legs thin black)"
 FIG06_POSE = np.array([2e-3, -1.5e-3, 1e-3, 0.12, -0.08, 0.15])
 
 
-def _skeleton_csv(
-    config: dict, outdir: Path, stem: str, pose: np.ndarray, passive: tuple[int, ...], **extra
-) -> Path:
+def _skeleton_frame(
+    config: dict, pose: np.ndarray, passive: tuple[int, ...], **extra
+) -> pd.DataFrame:
     """The drawing's points and segments (:func:`skeleton_table`), plus constant columns ``extra``."""
     sk = mech(config).skeleton(pose, passive=passive)
-    return write_csv(
-        skeleton_table(sk, frame_length=FRAME_LENGTH).assign(**extra), outdir / f"{stem}.csv"
-    )
+    return skeleton_table(sk, frame_length=FRAME_LENGTH).assign(**extra)
 
 
 def _draw_skeleton(frame: pd.DataFrame, path: Path, title: str, labels: bool) -> Path:
@@ -158,54 +153,25 @@ def draw_fig06(frame: pd.DataFrame, path: Path) -> Path:
     return _draw_skeleton(frame, path, FIG06_TITLE, labels=False)
 
 
-@artefact(
-    "fig01",
-    outputs=["fig01_mechanism.png", "fig01_mechanism.csv"],
-    config=[KEY],
-    tolerance=DESCRIPTIVE,
-    draws=[("fig01_mechanism.png", "fig01_mechanism.csv", draw_fig01)],
-)
-def fig01(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig01", "fig01_mechanism", draw_fig01, config=[KEY], tolerance=DESCRIPTIVE)
+def fig01(config: dict) -> pd.DataFrame:
     """Fig. 1: the mechanism at the §3.3 test pose, mode R=0 (passive legs dashed)."""
-    csv = _skeleton_csv(
-        config, outdir, "fig01_mechanism", test_pose(config), passive_sets(config)[0]
-    )
-    return draw_from_csv(csv, draw_fig01)
+    return _skeleton_frame(config, test_pose(config), passive_sets(config)[0])
 
 
-@artefact(
-    "fig02",
-    outputs=["fig02_topology.png", "fig02_topology.csv"],
-    config=[KEY],
-    tolerance=DESCRIPTIVE,
-    draws=[("fig02_topology.png", "fig02_topology.csv", draw_fig02)],
-)
-def fig02(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig02", "fig02_topology", draw_fig02, config=[KEY], tolerance=DESCRIPTIVE)
+def fig02(config: dict) -> pd.DataFrame:
     """Fig. 2: topology at home — static cube 2(n+L), moving cube 2n, b_k and B_i labelled."""
     c = config[KEY]
-    csv = _skeleton_csv(
-        config,
-        outdir,
-        "fig02_topology",
-        mech(config).home(),
-        (),
-        n_mm=float(c["n_mm"]),
-        L_mm=float(c["L_mm"]),
+    return _skeleton_frame(
+        config, mech(config).home(), (), n_mm=float(c["n_mm"]), L_mm=float(c["L_mm"])
     )
-    return draw_from_csv(csv, draw_fig02)
 
 
-@artefact(
-    "fig06",
-    outputs=["fig06_prototype.png", "fig06_prototype.csv"],
-    config=[KEY],
-    tolerance=DESCRIPTIVE,
-    draws=[("fig06_prototype.png", "fig06_prototype.csv", draw_fig06)],
-)
-def fig06(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig06", "fig06_prototype", draw_fig06, config=[KEY], tolerance=DESCRIPTIVE)
+def fig06(config: dict) -> pd.DataFrame:
     """Fig. 6 (the paper's Mathematica prototype): our model at a larger tilt for visibility."""
-    csv = _skeleton_csv(config, outdir, "fig06_prototype", FIG06_POSE, passive_sets(config)[3])
-    return draw_from_csv(csv, draw_fig06)
+    return _skeleton_frame(config, FIG06_POSE, passive_sets(config)[3])
 
 
 @artefact(

@@ -30,8 +30,8 @@ from parakin.papers.ye_stewart12.common import (
     METHODS_USED,
     MODE_NAMES,
     PAPER_METHODS,
-    artefact,
     caption_of,
+    drawn_figure,
     mech,
     passive_caption,
     passive_sets,
@@ -39,6 +39,8 @@ from parakin.papers.ye_stewart12.common import (
     setup,
     state_at,
     steps,
+    table,
+    table_and_figure,
 )
 from parakin.plot import new_figure, save_figure, use_style
 from parakin.registry import DESCRIPTIVE, ITERATIVE
@@ -49,20 +51,10 @@ from parakin.solvers import solve_fk
 SCAN = ITERATIVE.but(
     "deviation scans: step counts within one, d_max within one grid step (the grid is "
     "config ye_stewart12.d_grid_pct)",
-    columns={
-        "steps": (0.0, 1.0),
-        "d_max_pct": (0.0, 5.0),
-        "nr_width_pct": (0.0, 5.0),
-        "broyden_width_pct": (0.0, 5.0),
-        "broyden_direct_width_pct": (0.0, 5.0),
-        "median_iterations": (0.0, 1.0),
-        "p_converge": (0.0, 0.05),
-        "lm_pose_iterations_max": (0.0, 1.0),
-        "nr_d_max_pct": (0.0, 5.0),
-        "broyden_d_max_pct": (0.0, 5.0),
-        "broyden_direct_d_max_pct": (0.0, 5.0),
-        "lm_pose_d_max_pct": (0.0, 5.0),
-    },
+    columns={c: (0.0, 1.0) for c in ("steps", "median_iterations", "lm_pose_iterations_max")}
+    | {f"{m}width_pct": (0.0, 5.0) for m in ("nr_", "broyden_", "broyden_direct_")}
+    | {f"{m}d_max_pct": (0.0, 5.0) for m in ("", "nr_", "broyden_", "broyden_direct_", "lm_pose_")}
+    | {"p_converge": (0.0, 0.05)},
     skip=(
         "nr_P",
         "nr_P_alt",
@@ -186,36 +178,23 @@ def draw_fig11(frame: pd.DataFrame, path: Path) -> Path:
     return _draw_steps(frame, path, FIG11_TOL)
 
 
-def _fig_steps(config: dict, tol: float, outdir: Path, stem: str, draw) -> list[Path]:
+def _steps_table(config: dict, tol: float) -> pd.DataFrame:
     df = _scan_nominal(config)
     sub = df[df["tol"] == tol]
     out = sub[sub["deviation_pct"] <= sub["d_max_pct"]].drop(columns=["tol"])
-    out = out.assign(passive_caption=passive_caption(config))
-    return draw_from_csv(write_csv(out, outdir / f"{stem}.csv"), draw)
+    return out.assign(passive_caption=passive_caption(config))
 
 
-@artefact(
-    "fig10",
-    outputs=["fig10_steps_tol1e-6.png", "fig10_steps_tol1e-6.csv"],
-    config=[KEY],
-    tolerance=SCAN,
-    draws=[("fig10_steps_tol1e-6.png", "fig10_steps_tol1e-6.csv", draw_fig10)],
-)
-def fig10(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig10", "fig10_steps_tol1e-6", draw_fig10, config=[KEY], tolerance=SCAN)
+def fig10(config: dict) -> pd.DataFrame:
     """Fig. 10: steps vs d up to d_max, 6 modes x 2 methods, tol 1e-6 mm (nominal structure)."""
-    return _fig_steps(config, FIG10_TOL, outdir, "fig10_steps_tol1e-6", draw_fig10)
+    return _steps_table(config, FIG10_TOL)
 
 
-@artefact(
-    "fig11",
-    outputs=["fig11_steps_tol1e-9.png", "fig11_steps_tol1e-9.csv"],
-    config=[KEY],
-    tolerance=SCAN,
-    draws=[("fig11_steps_tol1e-9.png", "fig11_steps_tol1e-9.csv", draw_fig11)],
-)
-def fig11(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig11", "fig11_steps_tol1e-9", draw_fig11, config=[KEY], tolerance=SCAN)
+def fig11(config: dict) -> pd.DataFrame:
     """Fig. 11: the same at tol 1e-9 mm."""
-    return _fig_steps(config, FIG11_TOL, outdir, "fig11_steps_tol1e-9", draw_fig11)
+    return _steps_table(config, FIG11_TOL)
 
 
 def _scan_structure(config: dict, n: float, L: float) -> list[dict]:
@@ -287,19 +266,16 @@ def draw_fig12(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@drawn_figure(
     "fig12",
-    outputs=[
-        "fig12_dmax_structures.png",
-        "fig12_dmax_structures.csv",
-        "table6.csv",
-        "table6.md",
-        "extra_scan_speed.csv",
-        "extra_scan_speed.md",
-    ],
+    "fig12_dmax_structures",
+    draw_fig12,
+    "table6.csv",
+    "table6.md",
+    "extra_scan_speed.csv",
+    "extra_scan_speed.md",
     config=[KEY],
     tolerance=SCAN,
-    draws=[("fig12_dmax_structures.png", "fig12_dmax_structures.csv", draw_fig12)],
 )
 def fig12(config: dict, outdir: Path) -> list[Path]:
     """Fig. 12: d_max over the (n, L) grid per mode and method; Table 6 from the same scan; timing
@@ -385,12 +361,7 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
     return paths
 
 
-@artefact(
-    "conditioning",
-    outputs=["extra_conditioning.csv", "extra_conditioning.md"],
-    config=[KEY],
-    tolerance=SCAN,
-)
+@table("conditioning", "extra_conditioning", config=[KEY], tolerance=SCAN)
 def conditioning(config: dict, outdir: Path) -> list[Path]:
     """Extra: cond(dF/dX) and the smallest singular value per mode at the test pose, beside d_max,
     plus the pose-space LM (active legs, linear-FK start) as a third method."""
@@ -487,14 +458,8 @@ def draw_basin(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
-    "basin",
-    outputs=["extra_basin.png", "extra_basin.csv"],
-    config=[KEY],
-    tolerance=SCAN,
-    draws=[("extra_basin.png", "extra_basin.csv", draw_basin)],
-)
-def basin(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("basin", "extra_basin", draw_basin, config=[KEY], tolerance=SCAN)
+def basin(config: dict) -> pd.DataFrame:
     """Extra: convergence probability vs the size of RANDOM per-leg deviations (instead of the paper's
     common scale factor): X0_k = (1 + d u_k) X*_k, u uniform on the unit sphere of R^(6-R) times
     sqrt(6-R) (so |d u|_rms = d), per mode and method, at the test pose."""
@@ -540,8 +505,7 @@ def basin(config: dict, outdir: Path) -> list[Path]:
                         "median_iterations": float(np.nanmedian(it)) if o.any() else np.nan,
                     }
                 )
-    df = pd.DataFrame(rows).assign(trials=trials, passive_caption=passive_caption(config))
-    return draw_from_csv(write_csv(df, outdir / "extra_basin.csv"), draw_basin)
+    return pd.DataFrame(rows).assign(trials=trials, passive_caption=passive_caption(config))
 
 
 def draw_fig09(frame: pd.DataFrame, path: Path) -> Path:
@@ -604,14 +568,8 @@ def draw_fig09(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
-    "fig09",
-    outputs=["fig09_drive_modes.png", "fig09_drive_modes.csv"],
-    config=[KEY],
-    tolerance=DESCRIPTIVE,
-    draws=[("fig09_drive_modes.png", "fig09_drive_modes.csv", draw_fig09)],
-)
-def fig09(config: dict, outdir: Path) -> list[Path]:
+@table_and_figure("fig09", "fig09_drive_modes", draw_fig09, config=[KEY], tolerance=DESCRIPTIVE)
+def fig09(config: dict) -> pd.DataFrame:
     """Fig. 9 (lost): the drive modes -- which legs are active and which passive for R = 0..5, from
     config ``passive_sets`` (default the nested sets of docs/ye_stewart12.md#s5.5, ASSUMED), with each leg's joint and its
     direction at home."""
@@ -638,8 +596,7 @@ def fig09(config: dict, outdir: Path) -> list[Path]:
                     "active": int(k + 1 not in sets[r]),
                 }
             )
-    df = pd.DataFrame(rows)
-    return draw_from_csv(write_csv(df, outdir / "fig09_drive_modes.csv"), draw_fig09)
+    return pd.DataFrame(rows)
 
 
 def _step_stats(figdir: Path) -> tuple[pd.DataFrame, float] | None:

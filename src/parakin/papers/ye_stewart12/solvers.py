@@ -25,10 +25,12 @@ from parakin.papers.ye_stewart12.common import (
     METHODS_USED,
     PAPER_METHODS,
     artefact,
+    drawn_figure,
     run_mode,
     setup,
     state_at,
     steps,
+    table,
     time_solve,
 )
 from parakin.plot import new_figure, save_figure
@@ -40,14 +42,11 @@ from parakin.registry import ITERATIVE
 STEPS = ITERATIVE.but(
     "iteration counts within one step; errors at round-off level within 1e-9 mm; the "
     "accuracy factor is a ratio of round-off residuals (not compared)",
-    columns={
-        "steps": (0.0, 1.0),
-        "nr_steps": (0.0, 1.0),
-        "broyden_steps": (0.0, 1.0),
-        "broyden_direct_steps": (0.0, 1.0),
-        "nr_steps_inf_rule": (0.0, 1.0),
-        "broyden_steps_inf_rule": (0.0, 1.0),
-        "broyden_direct_steps_inf_rule": (0.0, 1.0),
+    columns={"steps": (0.0, 1.0)}
+    | {
+        f"{m}_steps{rule}": (0.0, 1.0)
+        for m in ("nr", "broyden", "broyden_direct")
+        for rule in ("", "_inf_rule")
     },
     skip=("accuracy_factor",),
 )
@@ -56,12 +55,7 @@ STEPS = ITERATIVE.but(
 METHODS = {key: METHODS_USED[key] for key in PAPER_METHODS}
 
 
-@artefact(
-    "table4",
-    outputs=["table4.csv", "table4.md", "table4_summary.csv"],
-    config=[KEY],
-    tolerance=STEPS,
-)
+@table("table4", "table4", "table4_summary.csv", config=[KEY], tolerance=STEPS)
 def table4(config: dict, outdir: Path) -> list[Path]:
     """Table 4 (lost): passive lengths from N-R and Broyden vs exact at the test pose, tol 1e-6 mm."""
     s = setup(config)
@@ -175,17 +169,14 @@ def draw_fig08(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@drawn_figure(
     "fig08",
-    outputs=[
-        "fig08_convergence.png",
-        "fig08_convergence.csv",
-        "fig08_match_steps.csv",
-        "fig08_match_steps.md",
-    ],
+    "fig08_convergence",
+    draw_fig08,
+    "fig08_match_steps.csv",
+    "fig08_match_steps.md",
     config=[KEY],
     tolerance=STEPS,
-    draws=[("fig08_convergence.png", "fig08_convergence.csv", draw_fig08)],
 )
 def fig08(config: dict, outdir: Path) -> list[Path]:
     """Fig. 8: composite rod length (mean of the passive lengths) vs iteration at 30 % deviation."""

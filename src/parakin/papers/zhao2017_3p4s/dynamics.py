@@ -18,7 +18,7 @@ Each figure is drawn by ``draw_<name>(frame, path)`` from the CSV its artefact w
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import lru_cache, partial
 from pathlib import Path
 
 import numpy as np
@@ -30,7 +30,7 @@ from parakin.io import write_table
 from parakin.mechanisms import P3P4S
 from parakin.mechanisms import p3p4s_dynamics as dyn
 from parakin.papers.sections import table_text
-from parakin.papers.zhao2017_3p4s.common import KEY, artefact, table_and_figure
+from parakin.papers.zhao2017_3p4s.common import KEY, table, table_and_figure
 from parakin.registry import ROUNDING
 
 #: tolerances stated in the figures and tested (relative to the peak of the analytic curve)
@@ -80,6 +80,10 @@ CORRECTED_FORMS = {
     "rod inertia without factor 2": "both rods of each 4S parallelogram, x2 (as eq 20)",
     "all three (as printed)": "all three corrections",
 }
+
+
+#: ``@_figure(name, stem, draw)``: a figure of this section drawn from its table, exact to rounding
+_figure = partial(table_and_figure, config=[f"{KEY}.dynamics"], tolerance=ROUNDING)
 
 
 # ---------------------------------------------------------------------------------------- set-up
@@ -228,6 +232,20 @@ def _floor_band(ax, floor: float, label: str) -> None:
     ax.set_ylim(floor * 0.3, None)
 
 
+def _legend(ax, ncols: int = 1, loc: str = "upper right", **kw) -> None:
+    """The figures' legend: small type on an opaque, borderless box."""
+    ax.legend(
+        loc=loc, ncols=ncols, fontsize="small", framealpha=0.9, frameon=True, edgecolor="none", **kw
+    )
+
+
+def _time_axis(ax, t: np.ndarray, ylabel: str) -> None:
+    """Time on the x axis over the whole run, ``ylabel`` on the y axis."""
+    ax.set_xlim(t[0], t[-1])
+    ax.set_xlabel("time $t$ (s)")
+    ax.set_ylabel(ylabel)
+
+
 def _two_panels(size=(7.0, 5.2)):
     from parakin.plot import new_figure
 
@@ -248,18 +266,9 @@ def _series_figure(t, values, ylabel, title, path: Path, extra=None) -> Path:
         if extra is not None:
             extra(ax)
         _headroom(ax, values, 0.22)
-        ax.set_xlabel("time $t$ (s)")
-        ax.set_ylabel(ylabel)
-        ax.set_xlim(t[0], t[-1])
+        _time_axis(ax, t, ylabel)
         ax.set_title(title)
-        ax.legend(
-            loc="upper right",
-            ncols=4,
-            fontsize="small",
-            framealpha=0.9,
-            frameon=True,
-            edgecolor="none",
-        )
+        _legend(ax, 4)
     return save_figure(fig, path)
 
 
@@ -314,15 +323,7 @@ def _check_figure(
         _headroom(top, analytic)
         top.set_ylabel(ylabel)
         top.set_title(title)
-        top.legend(
-            handles=handles,
-            loc="upper right",
-            ncols=3,
-            fontsize="small",
-            framealpha=0.9,
-            frameon=True,
-            edgecolor="none",
-        )
+        _legend(top, 3, handles=handles)
         peak = float(np.max(np.abs(analytic)))
         for (label, values, colour), ls in zip(checks, ("-", "-", "-.", "--")):
             rel = np.maximum(_rel(values - analytic, peak), FLOOR)
@@ -338,17 +339,8 @@ def _check_figure(
             bottom.axhline(tol, color=colour, lw=1.0, ls=":", label=label)
         _floor_band(bottom, FLOOR, f"below {FLOOR:g}: rounding, drawn at {FLOOR:g}")
         bottom.set_ylim(FLOOR * 0.3, ymax)
-        bottom.set_xlim(t[0], t[-1])
-        bottom.set_xlabel("time $t$ (s)")
-        bottom.set_ylabel("max$_i$ |difference| / peak")
-        bottom.legend(
-            loc="upper right",
-            ncols=3,
-            fontsize="small",
-            framealpha=0.9,
-            frameon=True,
-            edgecolor="none",
-        )
+        _time_axis(bottom, t, "max$_i$ |difference| / peak")
+        _legend(bottom, 3)
     return save_figure(fig, path)
 
 
@@ -388,6 +380,20 @@ def _variant_columns(frame: pd.DataFrame, pattern: str) -> dict[str, np.ndarray]
     }
 
 
+def _check_table(t, sources: dict, values: str, diffs: str) -> pd.DataFrame:
+    """A check figure's table: ``t_s``; drive by drive, every source's values (``values`` with
+    ``{i}``, ``{source}``); drive by drive, every other source minus the first (``diffs``)."""
+    (_, reference), *others = sources.items()
+    data = pd.DataFrame({"t_s": t})
+    for i in range(3):
+        for source, v in sources.items():
+            data[values.format(i=i + 1, source=source)] = v[:, i]
+    for i in range(3):
+        for source, v in others:
+            data[diffs.format(i=i + 1, source=source)] = v[:, i] - reference[:, i]
+    return data
+
+
 # ---------------------------------------------------------------------------------------- Figs 5-8
 _Z_ASSUMED = " (z assumed: §2.4's height)"
 
@@ -420,22 +426,11 @@ def _drive_series_table(config: dict, quantity: str, pattern: str) -> pd.DataFra
 
 def draw_fig05(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 5 from its CSV: drive velocities of eq (8)."""
-    return _draw_drive_series(
-        frame,
-        path,
-        "Fig. 5: drive velocities, eq. (8)",
-        "qdot{i}_m_s",
-        r"drive velocity $\dot q_i$ (m/s)",
-    )
+    title, ylabel = "Fig. 5: drive velocities, eq. (8)", r"drive velocity $\dot q_i$ (m/s)"
+    return _draw_drive_series(frame, path, title, "qdot{i}_m_s", ylabel)
 
 
-@table_and_figure(
-    "fig05",
-    "fig05_drive_velocities",
-    draw_fig05,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("fig05", "fig05_drive_velocities", draw_fig05)
 def fig05(config: dict) -> pd.DataFrame:
     """Fig. 5: drive velocities ``qdot_i(t)`` by eq (8)."""
     return _drive_series_table(config, "qdot", "qdot{i}_m_s")
@@ -443,90 +438,75 @@ def fig05(config: dict) -> pd.DataFrame:
 
 def draw_fig06(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 6 from its CSV: drive accelerations of eq (13) with the corrected H."""
-    return _draw_drive_series(
-        frame,
-        path,
-        "Fig. 6: drive accelerations, eq. (13) with $H_i = P_i^TP_i/(l\\,n_i^Tm_i)$",
-        "qddot{i}_m_s2",
-        r"drive acceleration $\ddot q_i$ (m/s$^2$)",
-    )
+    title = "Fig. 6: drive accelerations, eq. (13) with $H_i = P_i^TP_i/(l\\,n_i^Tm_i)$"
+    ylabel = r"drive acceleration $\ddot q_i$ (m/s$^2$)"
+    return _draw_drive_series(frame, path, title, "qddot{i}_m_s2", ylabel)
 
 
-@table_and_figure(
-    "fig06",
-    "fig06_drive_accelerations",
-    draw_fig06,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("fig06", "fig06_drive_accelerations", draw_fig06)
 def fig06(config: dict) -> pd.DataFrame:
     """Fig. 6: drive accelerations ``qddot_i(t)`` by eq (13) with the corrected H."""
     return _drive_series_table(config, "qddot", "qddot{i}_m_s2")
 
 
+#: the independent checks of Figs 7-8: (label, source in the column names, colour)
+_KIN_CHECKS = (("IK finite differences", "fd", "#CC79A7"), ("MuJoCo", "mujoco", "#E69F00"))
+
+
+def _draw_kinematic_check(frame, path, title, pattern: str, analytic: str, ylabel, *extra) -> Path:
+    """Figs 7-8 from their CSV: the ``analytic`` source's drive columns (``pattern`` with ``{i}``,
+    ``{source}``) with :data:`_KIN_CHECKS` and ``extra`` as markers, and their differences with
+    the tested tolerances, under ``title``, the motion law and the FD step."""
+
+    def drives(source: str) -> np.ndarray:
+        return _drives(frame, pattern.replace("{source}", source))
+
+    motion, t = _frame_motion(frame), frame["t_s"].to_numpy()
+    title += "\n" + _motion_label(motion) + f"; FD step {frame['fd_step_s'].iloc[0]:g} s"
+    checks = [(label, drives(source), colour) for label, source, colour in (*_KIN_CHECKS, *extra)]
+    return _check_figure(
+        t, drives(analytic), checks, _KIN_TOLERANCES, ylabel, title, path, _marker_every(t, motion)
+    )
+
+
+def _kinematic_check_table(config: dict, quantity: str, analytic: str, unit: str, **extra):
+    """Figs 7-8: the drive ``quantity`` (``qdot``, ``qddot``) of the ``analytic`` equation, of IK
+    finite differences, of MuJoCo and of the ``extra`` sources, their differences, the motion law
+    and the FD step."""
+    key = _key(config)
+    tr = _trajectory(key)
+    sources = {
+        analytic: getattr(tr["kin"], quantity),
+        "fd": tr[f"{quantity}_fd"],
+        "mujoco": getattr(_mujoco(key, "equivalent"), quantity),
+        **extra,
+    }
+    values, diffs = f"{quantity}{{i}}_{{source}}_{unit}", f"diff{{i}}_{{source}}_{unit}"
+    data = _check_table(tr["t"], sources, values, diffs)
+    return data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
+
+
 def draw_fig07(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 7 from its CSV: eq (8) with IK finite differences and MuJoCo as markers, and their
     differences with the tested tolerances."""
-    motion, t = _frame_motion(frame), frame["t_s"].to_numpy()
-    title = (
-        "Fig. 7: drive velocities, eq. (8) vs independent checks (the paper: ADAMS)\n"
-        + _motion_label(motion)
-        + f"; FD step {frame['fd_step_s'].iloc[0]:g} s"
-    )
-    checks = [
-        ("IK finite differences", _drives(frame, "qdot{i}_fd_m_s"), "#CC79A7"),
-        ("MuJoCo", _drives(frame, "qdot{i}_mujoco_m_s"), "#E69F00"),
-    ]
-    analytic = _drives(frame, "qdot{i}_eq8_m_s")
-    return _check_figure(
-        t, analytic, checks, _KIN_TOLERANCES, r"$\dot q_i$ (m/s)", title, path,
-        _marker_every(t, motion),
-    )  # fmt: skip
+    title = "Fig. 7: drive velocities, eq. (8) vs independent checks (the paper: ADAMS)"
+    pattern, ylabel = "qdot{i}_{source}_m_s", r"$\dot q_i$ (m/s)"
+    return _draw_kinematic_check(frame, path, title, pattern, "eq8", ylabel)
 
 
-@table_and_figure(
-    "fig07",
-    "fig07_velocity_check",
-    draw_fig07,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("fig07", "fig07_velocity_check", draw_fig07)
 def fig07(config: dict) -> pd.DataFrame:
     """Fig. 7 (the paper: ADAMS): eq (8) against IK finite differences and MuJoCo."""
-    key = _key(config)
-    tr = _trajectory(key)
-    t, kin = tr["t"], tr["kin"]
-    mj = _mujoco(key, "equivalent")
-    data = pd.DataFrame({"t_s": t})
-    for i in range(3):
-        data[f"qdot{i + 1}_eq8_m_s"] = kin.qdot[:, i]
-        data[f"qdot{i + 1}_fd_m_s"] = tr["qdot_fd"][:, i]
-        data[f"qdot{i + 1}_mujoco_m_s"] = mj.qdot[:, i]
-    for i in range(3):
-        data[f"diff{i + 1}_fd_m_s"] = tr["qdot_fd"][:, i] - kin.qdot[:, i]
-        data[f"diff{i + 1}_mujoco_m_s"] = mj.qdot[:, i] - kin.qdot[:, i]
-    return data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
+    return _kinematic_check_table(config, "qdot", "eq8", "m_s")
 
 
 def draw_fig08(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 8 from its CSV: eq (13) with IK finite differences, MuJoCo and the printed H (no
     1/l), and their differences with the tested tolerances."""
-    motion, t = _frame_motion(frame), frame["t_s"].to_numpy()
-    title = (
-        "Fig. 8: drive accelerations, eq. (13) vs independent checks (the paper: ADAMS)\n"
-        + _motion_label(motion)
-        + f"; FD step {frame['fd_step_s'].iloc[0]:g} s"
-    )
-    checks = [
-        ("IK finite differences", _drives(frame, "qddot{i}_fd_m_s2"), "#CC79A7"),
-        ("MuJoCo", _drives(frame, "qddot{i}_mujoco_m_s2"), "#E69F00"),
-        ("eq. (13) as printed (no 1/l)", _drives(frame, "qddot{i}_printed_h_m_s2"), "#56B4E9"),
-    ]
-    analytic = _drives(frame, "qddot{i}_eq13_m_s2")
-    return _check_figure(
-        t, analytic, checks, _KIN_TOLERANCES, r"$\ddot q_i$ (m/s$^2$)", title, path,
-        _marker_every(t, motion),
-    )  # fmt: skip
+    title = "Fig. 8: drive accelerations, eq. (13) vs independent checks (the paper: ADAMS)"
+    printed = ("eq. (13) as printed (no 1/l)", "printed_h", "#56B4E9")
+    pattern, ylabel = "qddot{i}_{source}_m_s2", r"$\ddot q_i$ (m/s$^2$)"
+    return _draw_kinematic_check(frame, path, title, pattern, "eq13", ylabel, printed)
 
 
 #: the 6th-order second difference of IK strokes (|q| < 0.6 m, step h = 1e-3 s) carries the
@@ -542,31 +522,12 @@ FD_ACCELERATION = ROUNDING.but(
 )
 
 
-@table_and_figure(
-    "fig08",
-    "fig08_acceleration_check",
-    draw_fig08,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=FD_ACCELERATION,
-)
+@_figure("fig08", "fig08_acceleration_check", draw_fig08, tolerance=FD_ACCELERATION)
 def fig08(config: dict) -> pd.DataFrame:
     """Fig. 8 (the paper: ADAMS): eq (13) against IK finite differences and MuJoCo; the printed
     H (no 1/l) is shown against the same finite differences."""
-    key = _key(config)
-    tr = _trajectory(key)
-    t, kin = tr["t"], tr["kin"]
-    mj = _mujoco(key, "equivalent")
-    data = pd.DataFrame({"t_s": t})
-    for i in range(3):
-        data[f"qddot{i + 1}_eq13_m_s2"] = kin.qddot[:, i]
-        data[f"qddot{i + 1}_fd_m_s2"] = tr["qddot_fd"][:, i]
-        data[f"qddot{i + 1}_mujoco_m_s2"] = mj.qddot[:, i]
-        data[f"qddot{i + 1}_printed_h_m_s2"] = tr["qddot_paper"][:, i]
-    for i in range(3):
-        data[f"diff{i + 1}_fd_m_s2"] = tr["qddot_fd"][:, i] - kin.qddot[:, i]
-        data[f"diff{i + 1}_mujoco_m_s2"] = mj.qddot[:, i] - kin.qddot[:, i]
-        data[f"diff{i + 1}_printed_h_m_s2"] = tr["qddot_paper"][:, i] - kin.qddot[:, i]
-    return data.assign(**_motion_columns(tr["motion"]), fd_step_s=key[3])
+    printed_h = _trajectory(_key(config))["qddot_paper"]
+    return _kinematic_check_table(config, "qddot", "eq13", "m_s2", printed_h=printed_h)
 
 
 # ---------------------------------------------------------------------------------------- Figs 9-10
@@ -592,13 +553,7 @@ def draw_fig09(frame: pd.DataFrame, path: Path) -> Path:
     return _series_figure(t, f, r"motor force $f_i$ (N)", title, path, extra)
 
 
-@table_and_figure(
-    "fig09",
-    "fig09_driving_forces",
-    draw_fig09,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("fig09", "fig09_driving_forces", draw_fig09)
 def fig09(config: dict) -> pd.DataFrame:
     """Fig. 9: motor forces along +m_i by the corrected Newton-Euler / virtual-power model."""
     key = _key(config)
@@ -638,13 +593,7 @@ def draw_fig10(frame: pd.DataFrame, path: Path) -> Path:
     )  # fmt: skip
 
 
-@table_and_figure(
-    "fig10",
-    "fig10_mujoco_forces",
-    draw_fig10,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("fig10", "fig10_mujoco_forces", draw_fig10)
 def fig10(config: dict) -> pd.DataFrame:
     """Fig. 10 (the paper: ADAMS): our forces against MuJoCo (equivalent-rod and 6-rod models)."""
     key = _key(config)
@@ -653,16 +602,13 @@ def fig10(config: dict) -> pd.DataFrame:
     f = tr["forces"]["corrected (ours)"]
     printed = tr["forces"]["all three (as printed)"]
     eq, par = _mujoco(key, "equivalent"), _mujoco(key, "parallelogram")
-    data = pd.DataFrame({"t_s": t})
-    for i in range(3):
-        data[f"f{i + 1}_ours_N"] = f[:, i]
-        data[f"f{i + 1}_mujoco_equivalent_N"] = eq.force[:, i]
-        data[f"f{i + 1}_mujoco_parallelogram_N"] = par.force[:, i]
-        data[f"f{i + 1}_printed_N"] = printed[:, i]
-    for i in range(3):
-        data[f"diff{i + 1}_mujoco_equivalent_N"] = eq.force[:, i] - f[:, i]
-        data[f"diff{i + 1}_mujoco_parallelogram_N"] = par.force[:, i] - f[:, i]
-        data[f"diff{i + 1}_printed_N"] = printed[:, i] - f[:, i]
+    sources = {
+        "ours": f,
+        "mujoco_equivalent": eq.force,
+        "mujoco_parallelogram": par.force,
+        "printed": printed,
+    }
+    data = _check_table(t, sources, "f{i}_{source}_N", "diff{i}_{source}_N")
     data["mujoco_loop_error_m"] = np.maximum(eq.loop_error, par.loop_error)
     data["mujoco_lstsq_residual"] = np.maximum(eq.lstsq_residual, par.lstsq_residual)
     return data.assign(**_motion_columns(tr["motion"]))
@@ -687,9 +633,7 @@ def draw_power_balance(frame: pd.DataFrame, path: Path) -> Path:
             "Power balance: motor power = rate of kinetic + potential energy of all 10 bodies\n"
             + _motion_label(_frame_motion(frame))
         )
-        top.legend(
-            loc="upper right", fontsize="small", framealpha=0.9, frameon=True, edgecolor="none"
-        )
+        _legend(top)
         colours = ("#0072B2", "#56B4E9", "#CC79A7", "#E69F00", "0.3")
         for (label, _, _, _), colour, ls in zip(VARIANTS, colours, ("-", "--", "-.", ":", "-")):
             ours = label.startswith("corrected")
@@ -709,27 +653,12 @@ def draw_power_balance(frame: pd.DataFrame, path: Path) -> Path:
             bottom, floor, f"below {floor:g}: difference-quotient noise, drawn at {floor:g}"
         )
         bottom.set_ylim(floor * 0.3, 1e4)
-        bottom.set_xlim(t[0], t[-1])
-        bottom.set_xlabel("time $t$ (s)")
-        bottom.set_ylabel(r"|$\sum f\dot q - dE/dt$| / max|$dE/dt$|")
-        bottom.legend(
-            loc="upper right",
-            ncols=3,
-            fontsize="small",
-            framealpha=0.9,
-            frameon=True,
-            edgecolor="none",
-        )
+        _time_axis(bottom, t, r"|$\sum f\dot q - dE/dt$| / max|$dE/dt$|")
+        _legend(bottom, 3)
     return save_figure(fig, path)
 
 
-@table_and_figure(
-    "power_balance",
-    "extra_power_balance",
-    draw_power_balance,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("power_balance", "extra_power_balance", draw_power_balance)
 def power_balance(config: dict) -> pd.DataFrame:
     """extra_power_balance: ``sum f_i qdot_i`` vs ``dE/dt`` (E from positions and velocities of
     every body, independent of the Newton-Euler code), for ours and each printed variant."""
@@ -754,11 +683,8 @@ def _slug(label: str) -> str:
     }[label]
 
 
-@artefact(
-    "dynamics_slips",
-    outputs=["extra_dynamics_slips.csv", "extra_dynamics_slips.md"],
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
+@table(
+    "dynamics_slips", "extra_dynamics_slips", config=["zhao2017_3p4s.dynamics"], tolerance=ROUNDING
 )
 def dynamics_slips(config: dict, outdir: Path) -> list[Path]:
     """extra_dynamics_slips: each slip of the printed dynamics against four checks.
@@ -870,14 +796,7 @@ def draw_dynamics_printed(frame: pd.DataFrame, path: Path) -> Path:
             "Fig. 9 with the printed eqs (13, 21, 23) vs corrected\n"
             + _motion_label(_frame_motion(frame))
         )
-        top.legend(
-            loc="upper right",
-            ncols=3,
-            fontsize="small",
-            framealpha=0.9,
-            frameon=True,
-            edgecolor="none",
-        )
+        _legend(top, 3)
         colours = {
             "H without 1/l": "#56B4E9",
             "spurious gravity moment": "#CC79A7",
@@ -892,27 +811,12 @@ def draw_dynamics_printed(frame: pd.DataFrame, path: Path) -> Path:
                 bottom.plot(t, diff[:, i], ls=ls, color=colour, label=tag if i == 0 else None)
         _headroom(bottom, np.concatenate(diffs), 0.5)
         bottom.plot([], [], color="0.3", ls="-", label="drive 1 solid, 2 dashed, 3 dotted")
-        bottom.set_xlim(t[0], t[-1])
-        bottom.set_xlabel("time $t$ (s)")
-        bottom.set_ylabel(r"$f_{\rm printed\ slip} - f$ (N)")
-        bottom.legend(
-            loc="upper right",
-            ncols=2,
-            fontsize="small",
-            framealpha=0.9,
-            frameon=True,
-            edgecolor="none",
-        )
+        _time_axis(bottom, t, r"$f_{\rm printed\ slip} - f$ (N)")
+        _legend(bottom, 2)
     return save_figure(fig, path)
 
 
-@table_and_figure(
-    "dynamics_printed",
-    "extra_dynamics_printed",
-    draw_dynamics_printed,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("dynamics_printed", "extra_dynamics_printed", draw_dynamics_printed)
 def dynamics_printed(config: dict) -> pd.DataFrame:
     """extra_dynamics_printed: Fig. 9 as the printed equations give it, and each slip's share."""
     tr = _trajectory(_key(config))
@@ -973,32 +877,17 @@ def draw_mujoco_tracking(frame: pd.DataFrame, path: Path) -> Path:
             label=f"tolerance {TOL_TRACKING:g} × amplitude",
         )
         ax.set_ylim(floor, 1.0)
-        ax.set_xlim(t[0], t[-1])
-        ax.set_xlabel("time $t$ (s)")
-        ax.set_ylabel("platform deviation max$_{x,y,z}$ |p − p$_{target}$| (m)")
+        _time_axis(ax, t, "platform deviation max$_{x,y,z}$ |p − p$_{target}$| (m)")
         ax.set_title(
             "MuJoCo forward dynamics driven open loop by the motor forces of each model\n"
             + _motion_label(motion)
             + f"; RK4, $\\Delta t$ = {TRACK_DT:g} s, stiff loop constraints"
         )
-        ax.legend(
-            loc="upper left",
-            ncols=2,
-            fontsize="small",
-            framealpha=0.9,
-            frameon=True,
-            edgecolor="none",
-        )
+        _legend(ax, 2, loc="upper left")
     return save_figure(fig, path)
 
 
-@table_and_figure(
-    "mujoco_tracking",
-    "extra_mujoco_tracking",
-    draw_mujoco_tracking,
-    config=["zhao2017_3p4s.dynamics"],
-    tolerance=ROUNDING,
-)
+@_figure("mujoco_tracking", "extra_mujoco_tracking", draw_mujoco_tracking)
 def mujoco_tracking(config: dict) -> pd.DataFrame:
     """extra_mujoco_tracking: MuJoCo's forward dynamics driven open loop by each variant's forces;
     how far the platform strays from the motion law (ours: both MuJoCo models)."""
@@ -1056,27 +945,25 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
             )
         )
 
-    if (figdir / "fig07_velocity_check.csv").exists():
-        df = pd.read_csv(figdir / "fig07_velocity_check.csv")
-        for src, label in (("mujoco", "MuJoCo"), ("fd", "IK finite differences")):
-            claim(
-                "fig07",
-                "max |qdot(eq 8) - simulation|",
-                _max_rel(df, "diff{i}_" + src + "_m_s", "qdot{i}_eq8_m_s"),
-                label,
-                why + label,
-            )
+    kinematic = (  # (figure, quantity, analytic column, unit, variant note, basis)
+        ("fig07_velocity_check", "max |qdot(eq 8) - simulation|", "qdot{i}_eq8", "m_s", "", ""),
+        (
+            "fig08_acceleration_check",
+            "max |qddot(eq 13) - simulation|",
+            "qddot{i}_eq13",
+            "m_s2",
+            ", H with 1/l",
+            CORRECTED_H,
+        ),
+    )
+    for stem, quantity, analytic, unit, note, basis in kinematic:
+        if (figdir / f"{stem}.csv").exists():
+            df = pd.read_csv(figdir / f"{stem}.csv")
+            for src, label in (("mujoco", "MuJoCo"), ("fd", "IK finite differences")):
+                value = _max_rel(df, f"diff{{i}}_{src}_{unit}", f"{analytic}_{unit}")
+                claim(stem[:5], quantity, value, label + note, why + label, basis=basis)
     if (figdir / "fig08_acceleration_check.csv").exists():
         df = pd.read_csv(figdir / "fig08_acceleration_check.csv")
-        for src, label in (("mujoco", "MuJoCo"), ("fd", "IK finite differences")):
-            claim(
-                "fig08",
-                "max |qddot(eq 13) - simulation|",
-                _max_rel(df, "diff{i}_" + src + "_m_s2", "qddot{i}_eq13_m_s2"),
-                f"{label}, H with 1/l",
-                why + label,
-                basis=CORRECTED_H,
-            )
         claim(
             "fig08",
             "max |qddot(eq 13) - simulation|",

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import sys
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -23,26 +24,21 @@ from parakin.mechanisms import P3P4S
 from parakin.nn.bp import plateau_epoch
 from parakin.papers.runs import map_runs
 from parakin.papers.sections import table_text
-from parakin.papers.zhao2017_3p4s.common import KEY, artefact
+from parakin.papers.zhao2017_3p4s.common import KEY, artefact, table
 from parakin.papers.zhao2017_3p4s.kinematics import table1_inputs
 from parakin.registry import EXACT, ITERATIVE, Tolerance
 from parakin.solvers import solve_fk
 from parakin.workspace import sample_reachable
 
+#: a trained network's set-up columns (compared exactly)
+SETUP = ("samples", "hidden", "weights")
 #: LM training follows another trajectory once a BLAS kernel rounds one product differently; the
 #: trained network's test error is stable to within a factor of two, its weights and log are not
 TRAINING = Tolerance.statistical(
     "network training: the per-epoch log is one chaotic trajectory (not compared); the "
     "test error of the trained network is compared within a factor of two",
-    columns={
-        "test_rms_m": (1.0, 0.0),
-        "test_max_m": (1.0, 0.0),
-        "test_p95_m": (1.0, 0.0),
-        "test_e3_m": (1.0, 0.0),
-        "samples": (0.0, 0.0),
-        "hidden": (0.0, 0.0),
-        "weights": (0.0, 0.0),
-    },
+    columns={c: (1.0, 0.0) for c in ("test_rms_m", "test_max_m", "test_p95_m", "test_e3_m")}
+    | {c: (0.0, 0.0) for c in SETUP},
     files=("extra_bp_training.csv", "extra_bp_training.png"),
 )
 #: the hybrid's quasi-Newton refinement converges to the same root from any nearby network guess
@@ -133,14 +129,11 @@ def draw_training(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@table(
     "train",
-    outputs=[
-        "extra_bp_accuracy.csv",
-        "extra_bp_accuracy.md",
-        "extra_bp_training.csv",
-        "extra_bp_training.png",
-    ],
+    "extra_bp_accuracy",
+    "extra_bp_training.csv",
+    "extra_bp_training.png",
     generated=["bp_network.npz", "bp_training_log.csv", "bp_training_summary.json"],
     needs=["zhao2017_3p4s:samples"],
     config=["zhao2017_3p4s.fk"],
@@ -260,17 +253,8 @@ CONVERGENCE = Tolerance.statistical(
     "network training to convergence: the per-epoch curves are chaotic trajectories (not "
     "compared); per region the set-up, the overlap of the 99 % confidence intervals of the "
     "median test error over the restarts and the median p95 and E_3 within a factor of two are",
-    columns={
-        "samples": (0.0, 0.0),
-        "hidden": (0.0, 0.0),
-        "weights": (0.0, 0.0),
-        "restarts": (0.0, 0.0),
-        "window": (0.0, 0.0),
-        "min_improvement": (0.0, 0.0),
-        "max_epochs": (0.0, 0.0),
-        "test_p95_median_m": (1.0, 0.0),
-        "test_e3_median_m": (1.0, 0.0),
-    },
+    columns={c: (0.0, 0.0) for c in (*SETUP, "restarts", "window", "min_improvement", "max_epochs")}
+    | {c: (1.0, 0.0) for c in ("test_p95_median_m", "test_e3_median_m")},
     intervals=(("test_rms_ci_low_m", "test_rms_ci_high_m"),),
     files=("extra_bp_convergence_curves.csv", "extra_bp_convergence.png"),
 )
@@ -440,14 +424,11 @@ def _convergence_notes(cfg: dict, fk_cfg: dict, printed: str) -> str:
     )
 
 
-@artefact(
+@table(
     "network_convergence",
-    outputs=[
-        "extra_bp_convergence.csv",
-        "extra_bp_convergence.md",
-        "extra_bp_convergence_curves.csv",
-        "extra_bp_convergence.png",
-    ],
+    "extra_bp_convergence",
+    "extra_bp_convergence_curves.csv",
+    "extra_bp_convergence.png",
     config=["zhao2017_3p4s.fk", "zhao2017_3p4s.network_convergence"],
     tolerance=CONVERGENCE,
     threads=2,
@@ -505,9 +486,11 @@ def _median_time_ms(fn, repeats: int) -> float:
     return float(np.median(times) * 1e3)
 
 
-@artefact(
+@table(
     "table2",
-    outputs=["table2.csv", "table2.md", "table2_iterates.csv", "table2_iterates.md"],
+    "table2",
+    "table2_iterates.csv",
+    "table2_iterates.md",
     needs=["zhao2017_3p4s:train"],
     config=["zhao2017_3p4s.fk"],
     tolerance=HYBRID,
@@ -525,11 +508,9 @@ def table2(config: dict, outdir: Path) -> list[Path]:
     mech = _mech()
     net = BPNetwork.load(network_path(config))
     poses, _ = table1_inputs()
-    rows = []
-    for k, pose in enumerate(poses):
-        q = mech.ik(pose)  # exact strokes: the printed ones are rounded to 0.01 m
-        guess = net.predict(q)
-        res = solve_fk(
+
+    def solve(q):
+        return solve_fk(
             mech,
             q,
             method="hybrid",
@@ -538,18 +519,13 @@ def table2(config: dict, outdir: Path) -> list[Path]:
             tol=0.0,
             maxiter=cfg["maxiter"],
         )
-        t_ms = _median_time_ms(
-            lambda q=q: solve_fk(
-                mech,
-                q,
-                method="hybrid",
-                network=net,
-                eps=cfg["epsilon"],
-                tol=0.0,
-                maxiter=cfg["maxiter"],
-            ),
-            cfg["timing_repeats"],
-        )
+
+    rows = []
+    for k, pose in enumerate(poses):
+        q = mech.ik(pose)  # exact strokes: the printed ones are rounded to 0.01 m
+        guess = net.predict(q)
+        res = solve(q)
+        t_ms = _median_time_ms(lambda q=q: solve(q), cfg["timing_repeats"])
         rows.append(
             {
                 "case": k + 1,
@@ -659,13 +635,11 @@ def _ref() -> pd.DataFrame:
 
 
 # ---------------------------------------------------------------------------------- benchmark
-@artefact(
-    "fk_benchmark",
-    outputs=["fk_benchmark.csv", "fk_benchmark.md"],
-    needs=["zhao2017_3p4s:train"],
-    config=["zhao2017_3p4s.fk", "zhao2017_3p4s.bench"],
-    tolerance=SOLVER_STATS,
-)
+#: ``@_bench_table(name, stem, ...)``: a benchmark table of the trained network's solvers
+_bench_table = partial(table, needs=[f"{KEY}:train"], config=[f"{KEY}.fk", f"{KEY}.bench"])
+
+
+@_bench_table("fk_benchmark", "fk_benchmark", tolerance=SOLVER_STATS)
 def fk_benchmark(config: dict, outdir: Path) -> list[Path]:
     """Every FK solver on the same random reachable strokes (our addition to §1.1)."""
     from parakin.bench import SolverSpec, bench_fk
@@ -803,9 +777,9 @@ def failure_settings(config: dict) -> dict:
     }
 
 
-@artefact(
+@table(
     "qn_failures",
-    outputs=["extra_qn_failures.csv", "extra_qn_failures.md"],
+    "extra_qn_failures",
     needs=["zhao2017_3p4s:train"],
     config=["zhao2017_3p4s.fk", "zhao2017_3p4s.bench", "zhao2017_3p4s.failures"],
     tolerance=FAILURES,
@@ -900,11 +874,9 @@ def _interleaved_us(calls: dict, inputs: np.ndarray, rounds: int) -> dict[str, f
     return {k: float(np.median(v)) * 1e6 for k, v in times.items()}
 
 
-@artefact(
+@_bench_table(
     "hybrid_speed",
-    outputs=["extra_hybrid_speed.csv", "extra_hybrid_speed.md"],
-    needs=["zhao2017_3p4s:train"],
-    config=["zhao2017_3p4s.fk", "zhao2017_3p4s.bench"],
+    "extra_hybrid_speed",
     tolerance=SPEED,
     caption="the hybrid against quasi-Newton from home, per solve: iterations and time in one run",
 )

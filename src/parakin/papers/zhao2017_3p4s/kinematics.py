@@ -14,7 +14,7 @@ from parakin.claims import Claim, load_reference, printed_value
 from parakin.io import write_and_draw, write_table
 from parakin.mechanisms import P3P4S
 from parakin.papers.sections import table_text
-from parakin.papers.zhao2017_3p4s.common import KEY, artefact, table_and_figure
+from parakin.papers.zhao2017_3p4s.common import KEY, drawn_figure, table, table_and_figure
 from parakin.registry import DESCRIPTIVE, ROUNDING
 
 HALF_DIGIT = 0.005  # Table 1 prints strokes to 0.01 m: half a unit of the last digit
@@ -142,9 +142,11 @@ def minimax_geometry(poses: np.ndarray, printed: np.ndarray, start: P3P4S) -> P3
     return P3P4S.from_delta(float(res.x[0]), start.L, float(res.x[1]))
 
 
-@artefact(
+@table(
     "table1",
-    outputs=["table1.csv", "table1.md", "extra_table1_fit.csv", "extra_table1_fit.md"],
+    "table1",
+    "extra_table1_fit.csv",
+    "extra_table1_fit.md",
     config=["zhao2017_3p4s.table1"],
     tolerance=ROUNDING,
 )
@@ -280,16 +282,16 @@ def draw_table1_region(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@drawn_figure(
     "table1_region",
-    outputs=["extra_table1_region.png", "extra_table1_region.csv"],
+    "extra_table1_region",
+    draw_table1_region,
     needs=["zhao2017_3p4s:table1"],
     config=["zhao2017_3p4s.table1"],
     tolerance=ROUNDING.but(
         "grid: closed-form IK errors; the four geometry rows are the iterative fits of "
         "extra_table1_fit (converged far below this)"
     ),
-    draws=[("extra_table1_region.png", "extra_table1_region.csv", draw_table1_region)],
 )
 def table1_region(config: dict, outdir: Path) -> list[Path]:
     """extra_table1_region: max stroke error over (delta, phi) at L fixed, with the 5 mm contour.

@@ -35,7 +35,7 @@ from parakin.mechanisms import p3p4s_indices as ix
 from parakin.optimize import GAOptions, ga, normalised_sum, nsga2
 from parakin.papers.runs import map_runs
 from parakin.papers.sections import table_text
-from parakin.papers.zhao2017_3p4s.common import KEY, artefact
+from parakin.papers.zhao2017_3p4s.common import KEY, artefact, drawn_figure, table
 from parakin.progress import Progress, counting
 from parakin.registry import EXACT, ROUNDING, TIMING, Tolerance
 
@@ -48,32 +48,17 @@ GA = Tolerance.statistical(
     "genetic algorithm: the bound-hitting design variables within 2 % of the box and the "
     "indices within 5 % (three seeds spread 3.6 %); flat directions (L, d, f) and the "
     "per-generation trajectories not compared",
-    columns={
-        "r_a_m": (0.0, 0.003),
-        "r_b_m": (0.0, 0.005),
-        "phi_deg": (0.0, 0.5),
-        "sigma1": (0.05, 0.0),
-        "sigma2": (0.05, 0.0),
-        "sigma3": (0.05, 0.0),
-    },
+    columns={"r_a_m": (0.0, 0.003), "r_b_m": (0.0, 0.005), "phi_deg": (0.0, 0.5)}
+    | {f"sigma{k}": (0.05, 0.0) for k in (1, 2, 3)},
     files=("fig14_ga_convergence.csv", "fig14_ga_convergence.png", "extra_pareto.csv"),
 )
 #: inside the paper's box the optimum is a corner, which every seed reaches to ~1e-5
 GA_CORNER = GA.but(
     "genetic algorithm in the paper's box: the optimum is a corner of the box; every seed "
     "reaches it to ~1e-5 (design within 1e-4, indices within 0.1 %)",
-    columns={
-        "r_a_m": (0.0, 1e-4),
-        "r_b_m": (0.0, 1e-4),
-        "L_m": (0.0, 1e-4),
-        "d_m": (0.0, 1e-4),
-        "phi_deg": (0.0, 1e-2),
-        "delta_m": (0.0, 1e-4),
-        "sigma1": (1e-3, 0.0),
-        "sigma2": (1e-3, 0.0),
-        "sigma3": (1e-3, 0.0),
-        "dist_to_paper_after": (0.0, 1e-3),
-    },
+    columns={c: (0.0, 1e-4) for c in ("r_a_m", "r_b_m", "L_m", "d_m", "delta_m")}
+    | {"phi_deg": (0.0, 1e-2), "dist_to_paper_after": (0.0, 1e-3)}
+    | {f"sigma{k}": (1e-3, 0.0) for k in (1, 2, 3)},
 )
 #: the config sections every index and optimisation artefact reads (their caches key on both)
 INDEX_CONFIG = [f"{KEY}.indices", f"{KEY}.optimization"]
@@ -281,13 +266,7 @@ def draw_fig11(frame: pd.DataFrame, path: Path) -> Path:
     )
 
 
-@artefact(
-    "fig11",
-    outputs=["fig11_velocity_sphere.png", "fig11_velocity_sphere.csv"],
-    config=INDEX_CONFIG,
-    tolerance=EXACT,
-    draws=[("fig11_velocity_sphere.png", "fig11_velocity_sphere.csv", draw_fig11)],
-)
+@drawn_figure("fig11", "fig11_velocity_sphere", draw_fig11, config=INDEX_CONFIG, tolerance=EXACT)
 def fig11(config: dict, outdir: Path) -> list[Path]:
     """Fig. 11: the unit sphere of drive velocities ``qdot^T qdot = 1`` (eq 35) at the home pose."""
     m = P3P4S.zhao2017()
@@ -322,16 +301,13 @@ def draw_fig12(frame: pd.DataFrame, path: Path) -> Path:
     )
 
 
-@artefact(
+@drawn_figure(
     "fig12",
-    outputs=[
-        "fig12_velocity_ellipsoid.png",
-        "fig12_velocity_ellipsoid.csv",
-        "fig12_velocity_ellipsoid_axes.csv",
-    ],
+    "fig12_velocity_ellipsoid",
+    draw_fig12,
+    "fig12_velocity_ellipsoid_axes.csv",
     config=INDEX_CONFIG,
     tolerance=EXACT,
-    draws=[("fig12_velocity_ellipsoid.png", "fig12_velocity_ellipsoid.csv", draw_fig12)],
 )
 def fig12(config: dict, outdir: Path) -> list[Path]:
     """Fig. 12: the output velocity ellipsoid ``v = J^-1 qdot`` of the unit sphere (eq 35); its
@@ -599,14 +575,11 @@ def gains_table(g: pd.DataFrame, ref: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-@artefact(
+@table(
     "global_indices",
-    outputs=[
-        "extra_global_indices.csv",
-        "extra_global_indices.md",
-        "extra_gains.csv",
-        "extra_gains.md",
-    ],
+    "extra_global_indices",
+    "extra_gains.csv",
+    "extra_gains.md",
     config=INDEX_CONFIG,
     tolerance=ROUNDING,
 )
@@ -692,13 +665,10 @@ def draw_index_convergence(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@table(
     "index_convergence",
-    outputs=[
-        "extra_index_convergence.csv",
-        "extra_index_convergence.md",
-        "extra_index_convergence.png",
-    ],
+    "extra_index_convergence",
+    "extra_index_convergence.png",
     config=INDEX_CONFIG,
     tolerance=ROUNDING,
     draws=[("extra_index_convergence.png", "extra_index_convergence.csv", draw_index_convergence)],
@@ -748,12 +718,7 @@ W_VARIANTS = [
 ]
 
 
-@artefact(
-    "index_sensitivity",
-    outputs=["extra_index_sensitivity.csv", "extra_index_sensitivity.md"],
-    config=INDEX_CONFIG,
-    tolerance=ROUNDING,
-)
+@table("index_sensitivity", "extra_index_sensitivity", config=INDEX_CONFIG, tolerance=ROUNDING)
 def index_sensitivity(config: dict, outdir: Path) -> list[Path]:
     """extra_index_sensitivity: how the global values and verdicts move under other readings of W
     and of the stiffness index (k, lambda vs sqrt)."""
@@ -798,12 +763,7 @@ def index_sensitivity(config: dict, outdir: Path) -> list[Path]:
     )
 
 
-@artefact(
-    "index_benchmark",
-    outputs=["extra_index_benchmark.csv", "extra_index_benchmark.md"],
-    config=INDEX_CONFIG,
-    tolerance=TIMING,
-)
+@table("index_benchmark", "extra_index_benchmark", config=INDEX_CONFIG, tolerance=TIMING)
 def index_benchmark(config: dict, outdir: Path) -> list[Path]:
     """extra_index_benchmark: all three indices batched over a grid vs a per-pose Python loop."""
     c = index_settings(config)
@@ -1109,13 +1069,13 @@ def draw_fig14(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@drawn_figure(
     "fig14",
-    outputs=["fig14_ga_convergence.png", "fig14_ga_convergence.csv"],
+    "fig14_ga_convergence",
+    draw_fig14,
     needs=[f"{KEY}:ga_runs"],
     config=INDEX_CONFIG,
     tolerance=GA,
-    draws=[("fig14_ga_convergence.png", "fig14_ga_convergence.csv", draw_fig14)],
 )
 def fig14(config: dict, outdir: Path) -> list[Path]:
     """Fig. 14: best combined objective f (eq 40) per generation, one curve per GA run."""
@@ -1135,9 +1095,9 @@ def fig14(config: dict, outdir: Path) -> list[Path]:
     return [csv, draw_fig14(pd.read_csv(csv), outdir / "fig14_ga_convergence.png")]
 
 
-@artefact(
+@table(
     "ga_paper_box",
-    outputs=["extra_ga_paper_box.csv", "extra_ga_paper_box.md"],
+    "extra_ga_paper_box",
     config=INDEX_CONFIG,
     tolerance=GA_CORNER,
     threads=2,
@@ -1188,13 +1148,7 @@ def ga_paper_box(config: dict, outdir: Path) -> list[Path]:
     )
 
 
-@artefact(
-    "table3",
-    outputs=["table3.csv", "table3.md"],
-    needs=[f"{KEY}:ga_runs"],
-    config=INDEX_CONFIG,
-    tolerance=GA,
-)
+@table("table3", "table3", needs=[f"{KEY}:ga_runs"], config=INDEX_CONFIG, tolerance=GA)
 def table3(config: dict, outdir: Path) -> list[Path]:
     """Table 3: design before/after (the paper's), ours from the GA (the best of the runs and the
     run of median f; every run in extra_ga_runs.csv) and the single-objective optima, with Delta,
@@ -1317,15 +1271,16 @@ def draw_pareto(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@drawn_figure(
     "pareto",
-    outputs=["extra_pareto.png", "extra_pareto.csv", "extra_pareto_marks.csv"],
+    "extra_pareto",
+    draw_pareto,
+    "extra_pareto_marks.csv",
     needs=[f"{KEY}:ga_runs"],
     config=INDEX_CONFIG,
     tolerance=GA,
     threads=1,
     resources={"runtime": 90, "mem_mb": 2000},
-    draws=[("extra_pareto.png", "extra_pareto.csv", draw_pareto)],
 )
 def pareto(config: dict, outdir: Path) -> list[Path]:
     """extra_pareto: NSGA-II front of (sigma1, -sigma2, sigma3) over (r_a, r_b, L, d, phi) with the
