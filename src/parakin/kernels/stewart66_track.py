@@ -245,8 +245,16 @@ def qdot(Q, cr, ci, ur, ui, vr, vi, hr, hi, scale, add, n):
                 hr[m, ln] = 0.0
                 hi[m, ln] = 0.0
         for i in range(8):
-            for ln in range(n):
-                _qdot_term(Q, cr, ci, ur, ui, vr, vi, hr, hi, scale, m, i, ln)
+            leg = m >= 1 and i < 4
+            for ln in range(n):  # written out, not a helper: the lane loop must vectorise
+                sr = _row(Q, m, i, vr, ln)
+                si = _row(Q, m, i, vi, ln)
+                if leg:
+                    a, b = cr[m - 1, ln], ci[m - 1, ln]
+                    sr += a * vr[i, ln] - b * vi[i, ln]
+                    si += a * vi[i, ln] + b * vr[i, ln]
+                hr[m, ln] += scale * (ur[i, ln] * sr - ui[i, ln] * si)
+                hi[m, ln] += scale * (ur[i, ln] * si + ui[i, ln] * sr)
 
 
 @njit(**_O)
@@ -256,8 +264,14 @@ def rows_dot(yr, yi, ur, ui, outr, outi, scale, add, n):
         _rows_dot_each(yr, yi, ur, ui, outr, outi, scale, add, n)
         return
     for m in range(7):
-        for ln in range(n):
-            _row_dot(yr, yi, ur, ui, outr, outi, scale, add, m, ln)
+        for ln in range(n):  # written out, not a helper: the lane loop must vectorise
+            re, im = _cdot(yr, yi, m, ur, ui, ln)
+            if add:
+                outr[m, ln] += scale * re
+                outi[m, ln] += scale * im
+            else:
+                outr[m, ln] = scale * re
+                outi[m, ln] = scale * im
 
 
 @njit(**_O)
