@@ -19,6 +19,7 @@ import json
 import math
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -383,14 +384,17 @@ CELLS = [
 ]
 
 
+#: one scratch folder for the whole module, removed at exit (a folder per example used to be
+#: left in the temporary directory: thousands after a few suite runs)
+_SCRATCH = tempfile.TemporaryDirectory(prefix="parakin-fuzz-")
+
+
 @st.composite
 def file_argv(draw):
     """ik/fk --input FILE with hostile CSV content (headers, counts, notations), or .npy of any shape."""
-    import tempfile
-
     command = draw(st.sampled_from(["ik", "fk"]))
     name = draw(st.sampled_from(sorted(mechanisms.REGISTRY)))
-    folder = tempfile.mkdtemp(prefix="parakin-fuzz-")
+    folder = tempfile.mkdtemp(dir=_SCRATCH.name)
     if draw(st.booleans()):
         rows = draw(
             st.lists(
