@@ -9,7 +9,9 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import pkgutil
+import re
 import sys
+import time
 from pathlib import Path
 
 from parakin import papers, registry
@@ -28,6 +30,8 @@ __all__ = [
     "which",
     "record",
     "describe",
+    "cpu_line",
+    "startup_share",
 ]
 
 
@@ -97,10 +101,49 @@ def reproduce(
     else:
         items = [registry.find(found, study, name)]
     paths = []
+    startup = time.process_time()  # the process's CPU so far: interpreter, imports, config
     for item in items:
         out = Path(outdir) if outdir else Path(config["figures_dir"]) / item.study_folder
+        start = time.process_time()
         paths += item.make(config, out)
+        print(cpu_line(item.name, startup, time.process_time() - start), file=sys.stderr)
+        startup = 0.0  # paid once per process
     return paths
+
+
+def cpu_line(name: str, startup: float, work: float) -> str:
+    """The line each pipeline job writes to its log: what its process spent on start-up (the
+    interpreter, the imports, the config) and on the artefact itself, in CPU seconds (all
+    threads), and whether numba was started (its own start, about 0.5-1 s, is then part of the
+    artefact's share). :func:`startup_share` adds them up over a run's logs."""
+    numba = "numba started" if "numba" in sys.modules else "no numba"
+    return f"cpu: {name}: start-up {startup:.3f} s, artefact {work:.3f} s ({numba})"
+
+
+_CPU_LINE = re.compile(
+    r"^cpu: (\S+): start-up ([0-9.]+) s, artefact ([0-9.]+) s \((numba started|no numba)\)$"
+)
+
+
+def startup_share(logs: str | Path) -> dict[str, float]:
+    """The :func:`cpu_line` lines of every log under ``logs`` (a run's ``<generated>/../logs``)
+    added up: jobs, start-up and artefact CPU seconds, the jobs that started numba, and the
+    start-up's share of the jobs' CPU."""
+    rows = [
+        m.groups()
+        for log in sorted(Path(logs).rglob("*.log"))
+        for line in log.read_text(errors="replace").splitlines()
+        if (m := _CPU_LINE.match(line.strip()))
+    ]
+    startup = sum(float(r[1]) for r in rows)
+    work = sum(float(r[2]) for r in rows)
+    return {
+        "jobs": len(rows),
+        "numba_jobs": sum(r[3] == "numba started" for r in rows),
+        "startup_s": startup,
+        "artefact_s": work,
+        "startup_share": startup / (startup + work) if rows else float("nan"),
+    }
 
 
 def check(

@@ -48,9 +48,11 @@ __all__ = [
     "FIGSIZE",
     "FRAME_AXIS_COLORS",
     "KIND_STYLES",
+    "MECHANISM_GRID",
     "PNG_METADATA",
     "STYLE",
     "draw_mechanism",
+    "mechanism_axes",
     "new_figure",
     "save_figure",
     "skeleton_from_table",
@@ -154,15 +156,17 @@ def new_figure(
     *,
     projection: str | None = None,
     rect: tuple[float, float, float, float] | None = None,
+    style: Mapping[str, Any] | None = None,
 ) -> tuple[Figure, Any]:
     """A figure of a fixed journal size with one axes, rendered by Agg whatever the backend.
 
     ``size`` is a key of :data:`FIGSIZE` or a (width, height) in inches. ``projection="3d"``
     gives an :class:`~mpl_toolkits.mplot3d.Axes3D`. ``rect`` places the axes (figure fraction);
-    by default 2-D axes get a tight layout and 3-D axes fill the figure. Returns ``(fig, ax)``.
+    by default 2-D axes get a tight layout and 3-D axes fill the figure. ``style``: rcParams
+    over :data:`STYLE` while the axes is made (e.g. :data:`MECHANISM_GRID`). Returns ``(fig, ax)``.
     """
     figsize = FIGSIZE[size] if isinstance(size, str) else tuple(size)
-    with use_style():
+    with use_style(style):
         fig = Figure(figsize=figsize, dpi=DPI)
         FigureCanvasAgg(fig)
         if projection == "3d":
@@ -173,6 +177,19 @@ def new_figure(
             ax = fig.add_subplot(projection=projection)
             fig.set_layout_engine("constrained")
     return fig, ax
+
+
+#: the light grid of a mechanism drawing's 3-D axes. mplot3d reads a 3-D axis's grid style from
+#: these rcParams when the axes is made and offers no setter afterwards, so the style is applied
+#: by making the axes under it (:func:`mechanism_axes`, and ``draw_mechanism``'s own figure).
+MECHANISM_GRID: dict[str, Any] = {"grid.color": (0.86, 0.86, 0.86, 1.0), "grid.linewidth": 0.4}
+
+
+def mechanism_axes(fig: Figure, *args: Any, **kwargs: Any) -> Axes3D:
+    """A 3-D axes for :func:`draw_mechanism` in ``fig`` (``fig.add_subplot``'s arguments), with
+    the light grid of :data:`MECHANISM_GRID`: a panel of a figure of several mechanisms."""
+    with mpl.rc_context(MECHANISM_GRID):
+        return fig.add_subplot(*args, projection="3d", **kwargs)
 
 
 def figure_tag(path: str | os.PathLike[str]) -> str | None:
@@ -451,7 +468,7 @@ def draw_mechanism(
     With ``ax=None`` a new figure of size ``size`` (see :data:`FIGSIZE`) is created, the title
     (a ``suptitle``) and a legend strip go on top and the 3-D box is zoomed to fill the rest;
     the figure is ``ax.figure``. With a given ``ax`` the legend goes in its upper left corner and
-    the title is the axes title. Drawing uses :data:`STYLE`; the result is deterministic.
+    the title is the axes title; make it with :func:`mechanism_axes` for the same light grid. Drawing uses :data:`STYLE`; the result is deterministic.
     ``labels=False`` / ``frames=False`` / ``legend=False`` leave those out.
     """
     sk = _as_skeleton(skeleton_or_mech, pose)
@@ -460,7 +477,7 @@ def draw_mechanism(
     with use_style():
         own_figure = ax is None
         if ax is None:
-            _, ax = new_figure(size, projection="3d")
+            _, ax = new_figure(size, projection="3d", style=MECHANISM_GRID)
         if not isinstance(ax, Axes3D):
             raise TypeError(f"ax must be a 3-D axes (projection='3d'), got {type(ax).__name__}")
         ax.computed_zorder = False  # draw in the order of KIND_STYLES' zorder, not by depth
@@ -628,9 +645,6 @@ def _style_panes(ax: Axes3D) -> None:
     """Light panes and grid, round-number ticks, small tick labels close to the axes."""
     for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
         axis.set_pane_color((0.97, 0.97, 0.97, 1.0))
-        info = getattr(axis, "_axinfo", None)  # mplot3d keeps grid styles here (no public API)
-        if isinstance(info, dict) and isinstance(info.get("grid"), dict):
-            info["grid"].update(color=(0.86, 0.86, 0.86, 1.0), linewidth=0.4)
         axis.set_major_locator(MaxNLocator(nbins=5, steps=[1, 2, 2.5, 5, 10]))
     ax.tick_params(axis="both", which="major", pad=-1, labelsize=6.5)
     ax.tick_params(axis="z", pad=0)

@@ -30,6 +30,7 @@ from parakin.papers.li2017_stewart36.common import (
 from parakin.papers.sections import table_text
 from parakin.plot import (
     draw_mechanism,
+    mechanism_axes,
     new_figure,
     save_figure,
     skeleton_from_table,
@@ -425,7 +426,7 @@ def draw_solutions(frame: pd.DataFrame, path: Path) -> Path:
     fig.clear()
     fig.set_layout_engine(None)  # placed below: room on the right for the last panel's z label
     for i, (_, sk) in enumerate(groups):
-        a = fig.add_subplot(1, k, i + 1, projection="3d")
+        a = mechanism_axes(fig, 1, k, i + 1)
         pose = sk.iloc[0]
         draw_mechanism(
             skeleton_from_table(sk),
