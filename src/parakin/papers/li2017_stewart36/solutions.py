@@ -16,6 +16,7 @@ from parakin.claims import Claim, load_reference, printed_value
 from parakin.config import rng
 from parakin.io import write_and_draw, write_csv, write_table
 from parakin.mechanisms.stewart36 import pose_from_paper, pose_to_paper
+from parakin.papers.drawing import draw_skeleton_table
 from parakin.papers.li2017_stewart36.common import (
     INPUT_NOTE,
     KEY,
@@ -408,12 +409,12 @@ FIG1_FRAME_LENGTH = 0.4
 
 def draw_fig01(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 1 drawn from its skeleton table (``fig01_structure.csv``, with the base side ``b``)."""
-    ax = draw_mechanism(
-        skeleton_from_table(frame),
+    return draw_skeleton_table(
+        frame,
+        path,
         frame_length=FIG1_FRAME_LENGTH,
         title=f"3-6 platform, b = {float(frame['b'].iloc[0]):g}, Table 3 row 1",
     )
-    return save_figure(ax.figure, path)
 
 
 def draw_solutions(frame: pd.DataFrame, path: Path) -> Path:

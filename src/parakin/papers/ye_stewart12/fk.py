@@ -12,6 +12,7 @@ import pandas as pd
 from parakin.claims import Claim
 from parakin.config import rng
 from parakin.io import write_csv, write_table
+from parakin.papers.drawing import draw_skeleton_table
 from parakin.papers.sections import table_text
 from parakin.papers.ye_stewart12.common import (
     KEY,
@@ -22,7 +23,7 @@ from parakin.papers.ye_stewart12.common import (
     table_and_figure,
     test_pose,
 )
-from parakin.plot import draw_mechanism, save_figure, skeleton_from_table, skeleton_table
+from parakin.plot import skeleton_table
 from parakin.registry import DESCRIPTIVE, EXACT, TIMING
 
 EQS = ("f (21)", "g (22)", "v (23)", "u (24)", "w (25)", "h (26)")
@@ -132,9 +133,10 @@ def _skeleton_frame(
 
 
 def _draw_skeleton(frame: pd.DataFrame, path: Path, title: str, labels: bool) -> Path:
-    sk = skeleton_from_table(frame[["element", "kind", "name", "index", "x", "y", "z"]])
-    ax = draw_mechanism(sk, frame_length=FRAME_LENGTH, title=title, labels=labels)
-    return save_figure(ax.figure, path)
+    skeleton = frame[["element", "kind", "name", "index", "x", "y", "z"]]
+    return draw_skeleton_table(
+        skeleton, path, frame_length=FRAME_LENGTH, title=title, labels=labels
+    )
 
 
 def draw_fig01(frame: pd.DataFrame, path: Path) -> Path:
