@@ -34,6 +34,8 @@ __all__ = [
     "Artefact",
     "artefact",
     "figure",
+    "drawn_figure",
+    "drawn_figures",
     "REGISTRY",
     "load",
     "of_module",
@@ -346,15 +348,27 @@ def table_and_figure(
     return register
 
 
+def drawn_figures(
+    study: str,
+    name: str,
+    draws: Sequence[tuple[str, str, Callable[[Any, Path], Path]]],
+    *more: str,
+    **declared: Any,
+) -> Callable:
+    """Declare an artefact whose figures are each drawn from one of its tables: ``draws`` lists
+    ``(png, csv, draw)`` (the decorated ``make(config, outdir)`` writes both, e.g. with
+    :func:`parakin.io.draw_from_csv`); its outputs are each figure and its table in that order, then
+    the files ``more``; ``declared``: :func:`artefact`'s other fields."""
+    outputs = [file for png, csv, _ in draws for file in (png, csv)]
+    return artefact(study, name, outputs=[*outputs, *more], draws=draws, **declared)
+
+
 def drawn_figure(
     study: str, name: str, stem: str, draw: Callable[[Any, Path], Path], *more: str, **declared: Any
 ) -> Callable:
     """Declare an artefact whose figure ``<stem>.png`` is drawn by ``draw`` from its table
-    ``<stem>.csv`` (the decorated ``make(config, outdir)`` writes both, e.g. with
-    :func:`parakin.io.draw_from_csv`), then the files ``more``; ``declared``: :func:`artefact`'s
-    other fields."""
-    png, csv = f"{stem}.png", f"{stem}.csv"
-    return artefact(study, name, outputs=[png, csv, *more], draws=[(png, csv, draw)], **declared)
+    ``<stem>.csv``, then the files ``more`` (:func:`drawn_figures` with one figure)."""
+    return drawn_figures(study, name, [(f"{stem}.png", f"{stem}.csv", draw)], *more, **declared)
 
 
 def table(study: str, name: str, stem: str, *more: str, **declared: Any) -> Callable:
@@ -396,10 +410,8 @@ def figure(
     make.__module__ = data.__module__
     make.__doc__ = data.__doc__
     make.__wrapped__ = data  # `parakin which` points at the data function
-    outputs = [f"{stem}.png", f"{stem}.csv", *declaration.pop("outputs", ())]
-    return artefact(
-        study, name, outputs=outputs, draws=[(f"{stem}.png", f"{stem}.csv", draw)], **declaration
-    )(make)
+    more = declaration.pop("outputs", ())
+    return drawn_figure(study, name, stem, draw, *more, **declaration)(make)
 
 
 def load(studies: Iterable[str], *, complete: bool = True) -> dict[str, Artefact]:
