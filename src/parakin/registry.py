@@ -36,6 +36,8 @@ __all__ = [
     "figure",
     "drawn_figure",
     "drawn_figures",
+    "table",
+    "table_files",
     "REGISTRY",
     "load",
     "of_module",
@@ -133,6 +135,12 @@ class Tolerance:
     def condition(n: int) -> ConditionNumber:
         """The column limit of condition numbers of matrices up to ``n x n`` (:class:`ConditionNumber`)."""
         return ConditionNumber(n)
+
+    @staticmethod
+    def exactly(*columns: str) -> dict[str, tuple[float, float]]:
+        """Column limits ``(rtol, atol) = (0, 0)`` of ``columns``: counts and other properties of
+        the input that a rerun must give exactly."""
+        return dict.fromkeys(columns, (0.0, 0.0))
 
     @classmethod
     def statistical(cls, reason: str, **fields) -> Tolerance:
@@ -371,10 +379,16 @@ def drawn_figure(
     return drawn_figures(study, name, [(f"{stem}.png", f"{stem}.csv", draw)], *more, **declared)
 
 
+def table_files(*stems: str) -> tuple[str, ...]:
+    """The files :func:`parakin.io.write_table` writes for each of ``stems``: ``<stem>.csv`` and
+    ``<stem>.md``, in that order."""
+    return tuple(f"{stem}{suffix}" for stem in stems for suffix in (".csv", ".md"))
+
+
 def table(study: str, name: str, stem: str, *more: str, **declared: Any) -> Callable:
-    """Declare a table artefact: ``<stem>.csv`` and ``<stem>.md`` (:func:`parakin.io.write_table`)
-    then the files ``more``, in that order; ``declared``: :func:`artefact`'s other fields."""
-    return artefact(study, name, outputs=[f"{stem}.csv", f"{stem}.md", *more], **declared)
+    """Declare a table artefact: ``<stem>.csv`` and ``<stem>.md`` (:func:`table_files`) then the
+    files ``more``, in that order; ``declared``: :func:`artefact`'s other fields."""
+    return artefact(study, name, outputs=[*table_files(stem), *more], **declared)
 
 
 def declarations(study: str) -> tuple[Callable, Callable, Callable, Callable]:

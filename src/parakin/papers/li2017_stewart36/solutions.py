@@ -39,7 +39,7 @@ from parakin.plot import (
     skeleton_table,
     use_style,
 )
-from parakin.registry import ROUNDING
+from parakin.registry import ROUNDING, table_files
 from parakin.solvers import solve_fk
 
 #: Table 3's residuals at the printed poses are closed-form; the certified solution set comes from
@@ -238,8 +238,7 @@ def table3_consistency(config: dict, outdir: Path) -> list[Path]:
 @table(
     "extra_solutions",
     "extra_solutions",
-    "extra_solution_counts_b.csv",
-    "extra_solution_counts_b.md",
+    *table_files("extra_solution_counts_b"),
     config=[KEY],
     tolerance=ROOTS,
 )
@@ -539,8 +538,7 @@ def draw_euler_angles(frame: pd.DataFrame, path: Path) -> Path:
         ("fig09_euler_angles.png", "fig09_euler_angles.csv", draw_euler_angles),
     ],
     "extra_adams_trajectory.csv",
-    "extra_adams_surrogate.csv",
-    "extra_adams_surrogate.md",
+    *table_files("extra_adams_surrogate"),
     config=[KEY],
     tolerance=ROUNDING,
 )
