@@ -34,6 +34,10 @@ __all__ = [
     "Artefact",
     "artefact",
     "figure",
+    "drawn_figure",
+    "drawn_figures",
+    "table",
+    "table_files",
     "REGISTRY",
     "load",
     "of_module",
@@ -131,6 +135,12 @@ class Tolerance:
     def condition(n: int) -> ConditionNumber:
         """The column limit of condition numbers of matrices up to ``n x n`` (:class:`ConditionNumber`)."""
         return ConditionNumber(n)
+
+    @staticmethod
+    def exactly(*columns: str) -> dict[str, tuple[float, float]]:
+        """Column limits ``(rtol, atol) = (0, 0)`` of ``columns``: counts and other properties of
+        the input that a rerun must give exactly."""
+        return dict.fromkeys(columns, (0.0, 0.0))
 
     @classmethod
     def statistical(cls, reason: str, **fields) -> Tolerance:
@@ -346,21 +356,39 @@ def table_and_figure(
     return register
 
 
+def drawn_figures(
+    study: str,
+    name: str,
+    draws: Sequence[tuple[str, str, Callable[[Any, Path], Path]]],
+    *more: str,
+    **declared: Any,
+) -> Callable:
+    """Declare an artefact whose figures are each drawn from one of its tables: ``draws`` lists
+    ``(png, csv, draw)`` (the decorated ``make(config, outdir)`` writes both, e.g. with
+    :func:`parakin.io.draw_from_csv`); its outputs are each figure and its table in that order, then
+    the files ``more``; ``declared``: :func:`artefact`'s other fields."""
+    outputs = [file for png, csv, _ in draws for file in (png, csv)]
+    return artefact(study, name, outputs=[*outputs, *more], draws=draws, **declared)
+
+
 def drawn_figure(
     study: str, name: str, stem: str, draw: Callable[[Any, Path], Path], *more: str, **declared: Any
 ) -> Callable:
     """Declare an artefact whose figure ``<stem>.png`` is drawn by ``draw`` from its table
-    ``<stem>.csv`` (the decorated ``make(config, outdir)`` writes both, e.g. with
-    :func:`parakin.io.draw_from_csv`), then the files ``more``; ``declared``: :func:`artefact`'s
-    other fields."""
-    png, csv = f"{stem}.png", f"{stem}.csv"
-    return artefact(study, name, outputs=[png, csv, *more], draws=[(png, csv, draw)], **declared)
+    ``<stem>.csv``, then the files ``more`` (:func:`drawn_figures` with one figure)."""
+    return drawn_figures(study, name, [(f"{stem}.png", f"{stem}.csv", draw)], *more, **declared)
+
+
+def table_files(*stems: str) -> tuple[str, ...]:
+    """The files :func:`parakin.io.write_table` writes for each of ``stems``: ``<stem>.csv`` and
+    ``<stem>.md``, in that order."""
+    return tuple(f"{stem}{suffix}" for stem in stems for suffix in (".csv", ".md"))
 
 
 def table(study: str, name: str, stem: str, *more: str, **declared: Any) -> Callable:
-    """Declare a table artefact: ``<stem>.csv`` and ``<stem>.md`` (:func:`parakin.io.write_table`)
-    then the files ``more``, in that order; ``declared``: :func:`artefact`'s other fields."""
-    return artefact(study, name, outputs=[f"{stem}.csv", f"{stem}.md", *more], **declared)
+    """Declare a table artefact: ``<stem>.csv`` and ``<stem>.md`` (:func:`table_files`) then the
+    files ``more``, in that order; ``declared``: :func:`artefact`'s other fields."""
+    return artefact(study, name, outputs=[*table_files(stem), *more], **declared)
 
 
 def declarations(study: str) -> tuple[Callable, Callable, Callable, Callable]:
@@ -396,10 +424,8 @@ def figure(
     make.__module__ = data.__module__
     make.__doc__ = data.__doc__
     make.__wrapped__ = data  # `parakin which` points at the data function
-    outputs = [f"{stem}.png", f"{stem}.csv", *declaration.pop("outputs", ())]
-    return artefact(
-        study, name, outputs=outputs, draws=[(f"{stem}.png", f"{stem}.csv", draw)], **declaration
-    )(make)
+    more = declaration.pop("outputs", ())
+    return drawn_figure(study, name, stem, draw, *more, **declaration)(make)
 
 
 def load(studies: Iterable[str], *, complete: bool = True) -> dict[str, Artefact]:

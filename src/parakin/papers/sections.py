@@ -1,13 +1,13 @@
 """A paper's reproduction is a list of section modules; this joins them into one.
 
 Each section module declares its artefacts with ``@artefact`` (:mod:`parakin.registry`) and has
-``claims(figdir, ref) -> list[Claim]`` and ``summary(figdir, ref) -> str``; a summary says what the
-tables in ``figdir`` show so far (:func:`table_text`).
+``claims(figdir, ref) -> list[Claim]`` and ``summary(figdir, ref) -> str``; both say what the
+tables in ``figdir`` show so far (:func:`table_claims`, :func:`table_text`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from types import ModuleType
 
@@ -34,6 +34,15 @@ def combine(sections: Sequence[ModuleType]) -> tuple[dict[str, Callable], Callab
     return artefacts, claims, summary
 
 
+def _from_tables(figdir: Path, makers: Mapping[str | tuple[str, ...], Callable]) -> Iterator:
+    """What each function of ``makers`` makes of its CSVs in ``figdir`` (a name or a tuple of
+    names, read in the order named), in order; an entry whose CSVs are not all there yet is left out."""
+    for names, make in makers.items():
+        names = (names,) if isinstance(names, str) else names
+        if all((figdir / name).exists() for name in names):
+            yield make(*(pd.read_csv(figdir / name) for name in names))
+
+
 def table_text(
     figdir: Path,
     sentences: Mapping[str | tuple[str, ...], Callable[..., str | None]],
@@ -44,11 +53,13 @@ def table_text(
     ``sentences`` maps a CSV name (or a tuple of names) to a function of that table (those tables,
     in the order named) returning its text, or None where the tables do not say enough yet; an entry
     whose tables are not all there yet is left out. The texts are joined by ``sep`` in order."""
-    parts = []
-    for names, say in sentences.items():
-        names = (names,) if isinstance(names, str) else names
-        if all((figdir / name).exists() for name in names):
-            text = say(*(pd.read_csv(figdir / name) for name in names))
-            if text is not None:
-                parts.append(text)
-    return sep.join(parts)
+    return sep.join(text for text in _from_tables(figdir, sentences) if text is not None)
+
+
+def table_claims(
+    figdir: Path, judges: Mapping[str | tuple[str, ...], Callable[..., list[Claim]]]
+) -> list[Claim]:
+    """The claims the tables in ``figdir`` support so far: ``judges`` maps a CSV name (or a tuple
+    of names) to a function of that table (those tables, in the order named) returning its claims;
+    an entry whose tables are not all there yet is left out. The claims keep the entries' order."""
+    return [claim for claims in _from_tables(figdir, judges) for claim in claims]

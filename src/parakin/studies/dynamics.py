@@ -33,7 +33,7 @@ from parakin.dynamics.trajectory import Harmonic, power_balance
 from parakin.io import write_and_draw, write_table
 from parakin.mechanisms import P3P4S, REGISTRY
 from parakin.mechanisms.base import Mechanism
-from parakin.registry import Tolerance, artefact
+from parakin.registry import Tolerance, artefact, drawn_figure
 
 __all__ = [
     "KEY",
@@ -293,14 +293,14 @@ def _per_mechanism(kind: str, data, draw, tolerance: Tolerance, config_keys, **o
 
         make.__name__ = make.__qualname__ = f"{kind}_{name}"
         make.__doc__ = f"{kind.capitalize()} of {name}: the table and the figure drawn from it."
-        artefact(
+        drawn_figure(
             KEY,
             f"{kind}_{name}",
-            outputs=[f"{stem}.png", f"{stem}.csv"],
+            stem,
+            plot,
             config=[f"{KEY}.{k}" for k in config_keys],
             tolerance=tolerance,
             reference=False,
-            draws=[(f"{stem}.png", f"{stem}.csv", plot)],
             **options,
         )(make)
 

@@ -410,10 +410,7 @@ def _declare():
         "all-solutions counts per input are properties of the input: compared exactly; "
         "tracking steps and retries move with rounding (not compared); IK error to 1e-9",
         columns={
-            "index": (0.0, 0.0),
-            "root_count": (0.0, 0.0),
-            "n_found": (0.0, 0.0),
-            "n_real": (0.0, 0.0),
+            **Tolerance.exactly("index", "root_count", "n_found", "n_real"),
             "ik_error": (0.0, 1e-9),
         },
     )

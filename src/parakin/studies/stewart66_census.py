@@ -234,13 +234,13 @@ def _declare():
     #: same paths up to rounding, so every count is compared exactly (the rate is a timing)
     counts = Tolerance.statistical(
         "real-solution counts of certified solutions are properties of the inputs: compared exactly",
-        columns={
-            "complete_inputs": (0.0, 0.0),
-            "platforms_with_max": (0.0, 0.0),
-            "incomplete_inputs": (0.0, 0.0),
-            "undecided_inputs": (0.0, 0.0),
-            "platforms": (0.0, 0.0),
-        },
+        columns=Tolerance.exactly(
+            "complete_inputs",
+            "platforms_with_max",
+            "incomplete_inputs",
+            "undecided_inputs",
+            "platforms",
+        ),
     )
     figure(
         KEY,

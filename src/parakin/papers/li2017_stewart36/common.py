@@ -7,6 +7,8 @@ ASSUMED), so Table 3 row 1 is an exact solution by construction.
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 import pandas as pd
 
@@ -18,8 +20,9 @@ KEY = "li2017_stewart36"
 
 #: the registry's declarations with this paper's key filled in (:func:`registry.declarations`):
 #: ``@artefact(name, outputs=...)``, ``@table(name, stem)``, ``@table_and_figure(name, stem, draw)``,
-#: ``@drawn_figure(name, stem, draw)``
+#: ``@drawn_figure(name, stem, draw)``; ``@drawn_figures(name, [(png, csv, draw), ...])``
 artefact, table, table_and_figure, drawn_figure = registry.declarations(KEY)
+drawn_figures = partial(registry.drawn_figures, KEY)
 TITLE = "Li, Quan & Wu 2017 — 3-6 Stewart platform, chaotic-inertia-weight PSO (Comp. Appl. Softw. 34(12))"
 POSE_COLS = ("alpha", "beta", "gamma", "X", "Y", "Z")
 #: note printed beside every use of the reconstructed input

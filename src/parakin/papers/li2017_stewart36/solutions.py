@@ -7,6 +7,7 @@ Adams study of §4 (Figs 5-11; the drive mapping is unknown, docs/li2017_stewart
 from __future__ import annotations
 
 import time
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -16,18 +17,20 @@ from parakin.claims import Claim, load_reference, printed_value
 from parakin.config import rng
 from parakin.io import write_and_draw, write_csv, write_table
 from parakin.mechanisms.stewart36 import pose_from_paper, pose_to_paper
+from parakin.papers.drawing import draw_skeleton_table
 from parakin.papers.li2017_stewart36.common import (
     INPUT_NOTE,
     KEY,
     POSE_COLS,
     artefact,
     cfg,
+    drawn_figures,
     fk_input,
     mech,
     table,
     table3,
 )
-from parakin.papers.sections import table_text
+from parakin.papers.sections import table_claims, table_text
 from parakin.plot import (
     draw_mechanism,
     mechanism_axes,
@@ -37,7 +40,7 @@ from parakin.plot import (
     skeleton_table,
     use_style,
 )
-from parakin.registry import ROUNDING
+from parakin.registry import ROUNDING, table_files
 from parakin.solvers import solve_fk
 
 #: Table 3's residuals at the printed poses are closed-form; the certified solution set comes from
@@ -236,8 +239,7 @@ def table3_consistency(config: dict, outdir: Path) -> list[Path]:
 @table(
     "extra_solutions",
     "extra_solutions",
-    "extra_solution_counts_b.csv",
-    "extra_solution_counts_b.md",
+    *table_files("extra_solution_counts_b"),
     config=[KEY],
     tolerance=ROOTS,
 )
@@ -409,12 +411,12 @@ FIG1_FRAME_LENGTH = 0.4
 
 def draw_fig01(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 1 drawn from its skeleton table (``fig01_structure.csv``, with the base side ``b``)."""
-    ax = draw_mechanism(
-        skeleton_from_table(frame),
+    return draw_skeleton_table(
+        frame,
+        path,
         frame_length=FIG1_FRAME_LENGTH,
         title=f"3-6 platform, b = {float(frame['b'].iloc[0]):g}, Table 3 row 1",
     )
-    return save_figure(ax.figure, path)
 
 
 def draw_solutions(frame: pd.DataFrame, path: Path) -> Path:
@@ -443,20 +445,14 @@ def draw_solutions(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
-@artefact(
+@drawn_figures(
     "fig01",
-    outputs=[
-        "fig01_structure.png",
-        "fig01_structure.csv",
-        "extra_solutions.png",
-        "extra_solutions_skeletons.csv",
-    ],
-    config=[KEY],
-    tolerance=ROOTS,
-    draws=[
+    [
         ("fig01_structure.png", "fig01_structure.csv", draw_fig01),
         ("extra_solutions.png", "extra_solutions_skeletons.csv", draw_solutions),
     ],
+    config=[KEY],
+    tolerance=ROOTS,
 )
 def fig01(config: dict, outdir: Path) -> list[Path]:
     """Fig. 1 redrawn from our model at Table 3 row 1, plus every above-base solution of the
@@ -535,26 +531,17 @@ def draw_euler_angles(frame: pd.DataFrame, path: Path) -> Path:
     )
 
 
-@artefact(
+@drawn_figures(
     "adams",
-    outputs=[
-        "fig05_cm_velocity.png",
-        "fig05_cm_velocity.csv",
-        "fig06_cm_position.png",
-        "fig06_cm_position.csv",
-        "fig09_euler_angles.png",
-        "fig09_euler_angles.csv",
-        "extra_adams_trajectory.csv",
-        "extra_adams_surrogate.csv",
-        "extra_adams_surrogate.md",
-    ],
-    config=[KEY],
-    tolerance=ROUNDING,
-    draws=[
+    [
         ("fig05_cm_velocity.png", "fig05_cm_velocity.csv", draw_cm_velocity),
         ("fig06_cm_position.png", "fig06_cm_position.csv", draw_cm_position),
         ("fig09_euler_angles.png", "fig09_euler_angles.csv", draw_euler_angles),
     ],
+    "extra_adams_trajectory.csv",
+    *table_files("extra_adams_surrogate"),
+    config=[KEY],
+    tolerance=ROUNDING,
 )
 def adams_artefact(config: dict, outdir: Path) -> list[Path]:
     """Surrogate of the Adams study (Figs 5-11; drive mapping unknown, docs/li2017_stewart36.md#s5): a pose trajectory whose
@@ -629,76 +616,88 @@ def adams_artefact(config: dict, outdir: Path) -> list[Path]:
     )
 
 
-def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
-    """Table 3 row by row against the certified solution set, the solution count, and §4's claim that
-    every Table 3 row lies inside the centre's ranges. The Adams surrogate (extra_adams_*) is an
-    illustration of the drive law, inside the ranges by construction: it judges nothing, and the
-    ranges themselves (Figs 6-11 of an Adams run whose drive mapping is lost) are not comparable."""
+def _counts_b_claims(c: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
+    """Table 3's solution count against the certified FK of the reconstructed input, per b."""
+    return [
+        Claim(
+            KEY,
+            "table3",
+            "n_solutions",
+            printed_value(ref, "table3", "n_solutions"),
+            float(c["above_base"].max()),
+            "1",
+            variant="certified FK: max above-base solutions over the b sweep",
+            evidence=f"{KEY}/extra_solution_counts_b.md",
+            reason=f"the FK is a degree-16 polynomial (16 complex roots in mirror pairs, so <= 8 above the "
+            f"base); we find {', '.join(f'{int(r.real)} real / {int(r.above_base)} above (b = {r.b:g})' for r in c.itertuples())}. "
+            "Table 3's rows are not solutions of one input (see table3.csv residuals) and 3 are duplicates",
+        )
+    ]
+
+
+def _counts_claims(c: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
+    """Table 3's solution count against the most solutions over random inputs."""
     out: list[Claim] = []
-    path = figdir / "extra_solution_counts_b.csv"
-    if path.exists():
-        c = pd.read_csv(path)
+    for col, what in (("max_above_base", "above-base"), ("max_real", "real")):
+        r = c.loc[c[col].idxmax()]
         out.append(
             Claim(
                 KEY,
                 "table3",
                 "n_solutions",
                 printed_value(ref, "table3", "n_solutions"),
-                float(c["above_base"].max()),
+                float(r[col]),
                 "1",
-                variant="certified FK: max above-base solutions over the b sweep",
-                evidence=f"{KEY}/extra_solution_counts_b.md",
-                reason=f"the FK is a degree-16 polynomial (16 complex roots in mirror pairs, so <= 8 above the "
-                f"base); we find {', '.join(f'{int(r.real)} real / {int(r.above_base)} above (b = {r.b:g})' for r in c.itertuples())}. "
-                "Table 3's rows are not solutions of one input (see table3.csv residuals) and 3 are duplicates",
-            )
-        )
-    path = figdir / "extra_solution_counts.csv"
-    if path.exists():
-        c = pd.read_csv(path)
-        for col, what in (("max_above_base", "above-base"), ("max_real", "real")):
-            r = c.loc[c[col].idxmax()]
-            out.append(
-                Claim(
-                    KEY,
-                    "table3",
-                    "n_solutions",
-                    printed_value(ref, "table3", "n_solutions"),
-                    float(r[col]),
-                    "1",
-                    variant=f"certified FK: most {what} solutions over {int(c['samples'].sum())} random inputs "
-                    f"(b = {', '.join(f'{v:g}' for v in c['b'])})",
-                    evidence=f"{KEY}/extra_solution_counts.md",
-                    reason="the polynomial has degree 16, so no input has more than 16 real or 8 above-base "
-                    f"solutions; the paper's {printed_value(ref, 'table3', 'n_solutions')} (all above the base) "
-                    "cannot be distinct solutions of one input",
-                )
-            )
-    path, sols_path = figdir / "table3.csv", figdir / "extra_solutions.csv"
-    whole_path = figdir / "extra_table3_rows.csv"
-    if path.exists() and sols_path.exists() and whole_path.exists():
-        t = pd.read_csv(path)
-        whole = pd.read_csv(whole_path).set_index("row")
-        sols = pd.read_csv(sols_path)
-        sols = sols[sols["above_base"].astype(bool)].reset_index(drop=True)
-        out += _table3_row_claims(t, sols, whole, ref)
-        outside = int((~t["inside_sec4_ranges"].astype(bool)).sum())
-        out.append(
-            Claim(
-                KEY,
-                "sec4",
-                "table3_rows_outside_ranges",
-                printed_value(ref, "sec4", "table3_rows_outside_ranges"),
-                float(outside),
-                "1",
-                variant="the paper's Table 3 against its own §4 ranges",
-                evidence=f"{KEY}/table3.md",
-                reason=f"rows outside: {', '.join(str(r) for r in t.loc[~t['inside_sec4_ranges'].astype(bool), 'row'])} "
-                "(alpha > 80 deg or X < -0.30): the paper contradicts itself (paper against paper, "
-                "no computation of ours)",
+                variant=f"certified FK: most {what} solutions over {int(c['samples'].sum())} random inputs "
+                f"(b = {', '.join(f'{v:g}' for v in c['b'])})",
+                evidence=f"{KEY}/extra_solution_counts.md",
+                reason="the polynomial has degree 16, so no input has more than 16 real or 8 above-base "
+                f"solutions; the paper's {printed_value(ref, 'table3', 'n_solutions')} (all above the base) "
+                "cannot be distinct solutions of one input",
             )
         )
     return out
+
+
+def _table3_claims(
+    t: pd.DataFrame, sols: pd.DataFrame, whole: pd.DataFrame, ref: pd.DataFrame
+) -> list[Claim]:
+    """Table 3 row by row, and §4's claim that its rows lie inside the centre's ranges."""
+    whole = whole.set_index("row")
+    sols = sols[sols["above_base"].astype(bool)].reset_index(drop=True)
+    outside = int((~t["inside_sec4_ranges"].astype(bool)).sum())
+    return _table3_row_claims(t, sols, whole, ref) + [
+        Claim(
+            KEY,
+            "sec4",
+            "table3_rows_outside_ranges",
+            printed_value(ref, "sec4", "table3_rows_outside_ranges"),
+            float(outside),
+            "1",
+            variant="the paper's Table 3 against its own §4 ranges",
+            evidence=f"{KEY}/table3.md",
+            reason=f"rows outside: {', '.join(str(r) for r in t.loc[~t['inside_sec4_ranges'].astype(bool), 'row'])} "
+            "(alpha > 80 deg or X < -0.30): the paper contradicts itself (paper against paper, "
+            "no computation of ours)",
+        )
+    ]
+
+
+def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
+    """Table 3 row by row against the certified solution set, the solution count, and §4's claim that
+    every Table 3 row lies inside the centre's ranges. The Adams surrogate (extra_adams_*) is an
+    illustration of the drive law, inside the ranges by construction: it judges nothing, and the
+    ranges themselves (Figs 6-11 of an Adams run whose drive mapping is lost) are not comparable."""
+    return table_claims(
+        figdir,
+        {
+            "extra_solution_counts_b.csv": lambda c: _counts_b_claims(c, ref),
+            "extra_solution_counts.csv": lambda c: _counts_claims(c, ref),
+            ("table3.csv", "extra_solutions.csv", "extra_table3_rows.csv"): lambda t, sols, whole: (
+                _table3_claims(t, sols, whole, ref)
+            ),
+        },
+    )
 
 
 def _table3_row_claims(
@@ -723,15 +722,19 @@ def _table3_row_claims(
         note = f"; {r['note']}" if isinstance(r["note"], str) and r["note"] else ""
         for q in POSE_COLS:
             quantity = f"row{row}.{q}"
+            unit = "deg" if q in ("alpha", "beta", "gamma") else "1"
+            claim = partial(
+                Claim,
+                KEY,
+                "table3",
+                quantity,
+                printed_value(ref, "table3", quantity),
+                float(near[q]),
+                unit,
+            )
             if row == 1:
                 out.append(
-                    Claim(
-                        KEY,
-                        "table3",
-                        quantity,
-                        printed_value(ref, "table3", quantity),
-                        float(near[q]),
-                        "deg" if q in ("alpha", "beta", "gamma") else "1",
+                    claim(
                         variant=f"certified FK solution of L = IK(row 1) (b = {near['b']:g})",
                         basis="the lost FK input is reconstructed as IK(row 1) (docs/li2017_stewart36.md#g1), "
                         "so row 1 is a solution by construction",
@@ -740,13 +743,7 @@ def _table3_row_claims(
                 continue
             w = whole.loc[row]
             out.append(
-                Claim(
-                    KEY,
-                    "table3",
-                    quantity,
-                    printed_value(ref, "table3", quantity),
-                    float(near[q]),
-                    "deg" if q in ("alpha", "beta", "gamma") else "1",
+                claim(
                     variant=f"nearest certified above-base solution over the b sweep (b = {near['b']:g}, "
                     f"solution {int(near['solution'])}); the row judged as a whole",
                     whole_agrees=bool(w["within_rounding_for_some_b"]),

@@ -13,14 +13,13 @@ from matplotlib.ticker import MaxNLocator
 from parakin.claims import Claim, printed_value
 from parakin.config import rng
 from parakin.io import write_table
+from parakin.papers.drawing import draw_skeleton_table
 from parakin.papers.li2020_2ups.common import KEY, mech, table, table_and_figure
 from parakin.papers.li2020_2ups.symbolic import derivation, loop_closure_model
 from parakin.papers.sections import table_text
 from parakin.plot import (
-    draw_mechanism,
     new_figure,
     save_figure,
-    skeleton_from_table,
     skeleton_table,
     use_style,
 )
@@ -34,12 +33,12 @@ FIG1_FRAME_LENGTH = 0.06
 
 def draw_fig01(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 1 drawn from its skeleton table (``fig01_mechanism.csv``) alone."""
-    ax = draw_mechanism(
-        skeleton_from_table(frame),
+    return draw_skeleton_table(
+        frame,
+        path,
         frame_length=FIG1_FRAME_LENGTH,
         title=f"2-UPS/(S+SPR)R at β = {FIG1_POSE[0]:g}°, γ = {FIG1_POSE[1]:g}°, Y = {FIG1_POSE[2]:g} mm",
     )
-    return save_figure(ax.figure, path)
 
 
 @table_and_figure("fig01", "fig01_mechanism", draw_fig01, config=[KEY], tolerance=DESCRIPTIVE)

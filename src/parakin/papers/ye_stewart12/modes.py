@@ -43,7 +43,7 @@ from parakin.papers.ye_stewart12.common import (
     table_and_figure,
 )
 from parakin.plot import new_figure, save_figure, use_style
-from parakin.registry import DESCRIPTIVE, ITERATIVE
+from parakin.registry import DESCRIPTIVE, ITERATIVE, table_files
 from parakin.solvers import solve_fk
 
 #: step counts of N-R/Broyden over a deviation scan: a step landing at the threshold may take one
@@ -270,10 +270,7 @@ def draw_fig12(frame: pd.DataFrame, path: Path) -> Path:
     "fig12",
     "fig12_dmax_structures",
     draw_fig12,
-    "table6.csv",
-    "table6.md",
-    "extra_scan_speed.csv",
-    "extra_scan_speed.md",
+    *table_files("table6", "extra_scan_speed"),
     config=[KEY],
     tolerance=SCAN,
 )

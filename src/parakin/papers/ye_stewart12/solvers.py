@@ -18,7 +18,7 @@ import pandas as pd
 
 from parakin.claims import Claim, printed_value
 from parakin.io import draw_from_csv, write_csv, write_table
-from parakin.papers.sections import table_text
+from parakin.papers.sections import table_claims, table_text
 from parakin.papers.ye_stewart12.common import (
     KEY,
     METHOD_LABELS,
@@ -276,88 +276,100 @@ def _time_fraction_claim(t: pd.DataFrame, ref: pd.DataFrame) -> Claim:
     )
 
 
-def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
+def _accuracy_claims(t: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
+    """C4: Broyden's accuracy against N-R's (table4_summary)."""
+    t = t.iloc[0]
+    floor = max(float(t["nr_max_error_mm"]), ROUNDOFF_MM)
+    return [
+        Claim(
+            KEY,
+            "text_s3.3",
+            "accuracy_factor",
+            printed_value(ref, "text_s3.3", "accuracy_factor"),
+            float(t["broyden_max_error_mm"]) / floor,
+            "1",
+            variant=f"Broyden error / max(N-R error, {ROUNDOFF_MM:g} mm round-off floor)",
+            reason=(
+                f"C4: max passive-length error Broyden {t['broyden_max_error_mm']:.2g} mm, N-R "
+                f"{t['nr_max_error_mm']:.2g} mm at d = {t['deviation_pct']:g} %. N-R ends at round-off, "
+                f"which differs between machines (the raw ratio here is {t['accuracy_factor']:.3g}), "
+                "so the ratio is taken against a round-off floor: a lower bound that holds on any "
+                "machine"
+            ),
+        )
+    ]
+
+
+def _table5_claims(t: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
+    """C5 and C6: the steps of each solver per d and their means, and Broyden's time fraction."""
     out: list[Claim] = []
-    p = figdir / "table4_summary.csv"
-    if p.exists():
-        t = pd.read_csv(p).iloc[0]
-        floor = max(float(t["nr_max_error_mm"]), ROUNDOFF_MM)
-        out.append(
-            Claim(
-                KEY,
-                "text_s3.3",
-                "accuracy_factor",
-                printed_value(ref, "text_s3.3", "accuracy_factor"),
-                float(t["broyden_max_error_mm"]) / floor,
-                "1",
-                variant=f"Broyden error / max(N-R error, {ROUNDOFF_MM:g} mm round-off floor)",
-                reason=(
-                    f"C4: max passive-length error Broyden {t['broyden_max_error_mm']:.2g} mm, N-R "
-                    f"{t['nr_max_error_mm']:.2g} mm at d = {t['deviation_pct']:g} %. N-R ends at round-off, "
-                    f"which differs between machines (the raw ratio here is {t['accuracy_factor']:.3g}), "
-                    "so the ratio is taken against a round-off floor: a lower bound that holds on any "
-                    "machine"
-                ),
-            )
+    rows, mean = t.iloc[:-1], t.iloc[-1]
+
+    def steps_claim(quantity: str, ours: float, reason: str) -> Claim:
+        return Claim(
+            KEY,
+            "table5",
+            quantity,
+            printed_value(ref, "table5", quantity),
+            ours,
+            "1",
+            reason=reason,
+            basis=TABLE5_ASSUMED,
         )
-    p = figdir / "table5.csv"
-    if p.exists():
-        t = pd.read_csv(p)
-        rows, mean = t.iloc[:-1], t.iloc[-1]
 
-        def steps_claim(quantity: str, ours: float, reason: str) -> Claim:
-            return Claim(
-                KEY,
-                "table5",
-                quantity,
-                printed_value(ref, "table5", quantity),
-                ours,
-                "1",
-                reason=reason,
-                basis=TABLE5_ASSUMED,
-            )
-
-        for _, r in rows.iterrows():
-            d = int(r["deviation_pct"])
-            for key in ("nr", "broyden"):
-                out.append(
-                    steps_claim(
-                        f"d{d}.{key}_steps",
-                        float(r[f"{key}_steps"]),
-                        "C5: |dX|_2 < 1e-6 rule, X0 = (1+d)X*, R = 0 (ASSUMED set-up)"
-                        + (
-                            "; Broyden = the paper's inverse update (31)-(32); the direct update "
-                            f"(beyond the paper) takes {int(r['broyden_direct_steps'])}"
-                            if key == "broyden" and "broyden_direct_steps" in r
-                            else ""
-                        ),
-                    )
-                )
+    for _, r in rows.iterrows():
+        d = int(r["deviation_pct"])
         for key in ("nr", "broyden"):
-            out.append(steps_claim(f"mean.{key}_steps", float(mean[f"{key}_steps"]), "C5"))
-        out.append(_time_fraction_claim(t, ref))
-    p = figdir / "fig08_convergence.csv"
-    if p.exists():
-        t = pd.read_csv(p)
-        out.append(
-            Claim(
-                KEY,
-                "fig08",
-                "broyden.match_step",
-                printed_value(ref, "fig08", "broyden.match_step"),
-                _match_step(t, "broyden"),
-                "1",
-                f"reading '{PAPER_READING}' (the sentence's): {READINGS[PAPER_READING]}",
-                basis=f"'basically coincides' read as within {MATCH_MM:g} mm (the paper gives no threshold)",
-                reason=(
-                    f"C7: the other reading ('stays within') gives {_match_step(t, 'broyden', 'stays within'):g} "
-                    f"(fig08_match_steps); N-R comes within at step {_match_step(t, 'nr'):g}. The paper's "
-                    "'Broyden converges faster' also contradicts its own Table 5 (Broyden needs twice the steps)"
-                ),
-                evidence=f"{KEY}/fig08_match_steps.md",
+            out.append(
+                steps_claim(
+                    f"d{d}.{key}_steps",
+                    float(r[f"{key}_steps"]),
+                    "C5: |dX|_2 < 1e-6 rule, X0 = (1+d)X*, R = 0 (ASSUMED set-up)"
+                    + (
+                        "; Broyden = the paper's inverse update (31)-(32); the direct update "
+                        f"(beyond the paper) takes {int(r['broyden_direct_steps'])}"
+                        if key == "broyden" and "broyden_direct_steps" in r
+                        else ""
+                    ),
+                )
             )
-        )
+    for key in ("nr", "broyden"):
+        out.append(steps_claim(f"mean.{key}_steps", float(mean[f"{key}_steps"]), "C5"))
+    out.append(_time_fraction_claim(t, ref))
     return out
+
+
+def _fig08_claims(t: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
+    """C7: the step from which Broyden 'basically coincides' with the exact pose (Fig. 8)."""
+    return [
+        Claim(
+            KEY,
+            "fig08",
+            "broyden.match_step",
+            printed_value(ref, "fig08", "broyden.match_step"),
+            _match_step(t, "broyden"),
+            "1",
+            f"reading '{PAPER_READING}' (the sentence's): {READINGS[PAPER_READING]}",
+            basis=f"'basically coincides' read as within {MATCH_MM:g} mm (the paper gives no threshold)",
+            reason=(
+                f"C7: the other reading ('stays within') gives {_match_step(t, 'broyden', 'stays within'):g} "
+                f"(fig08_match_steps); N-R comes within at step {_match_step(t, 'nr'):g}. The paper's "
+                "'Broyden converges faster' also contradicts its own Table 5 (Broyden needs twice the steps)"
+            ),
+            evidence=f"{KEY}/fig08_match_steps.md",
+        )
+    ]
+
+
+def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
+    return table_claims(
+        figdir,
+        {
+            "table4_summary.csv": lambda t: _accuracy_claims(t, ref),
+            "table5.csv": lambda t: _table5_claims(t, ref),
+            "fig08_convergence.csv": lambda t: _fig08_claims(t, ref),
+        },
+    )
 
 
 def _table5_sentence(t: pd.DataFrame) -> str:

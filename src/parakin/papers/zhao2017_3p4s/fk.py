@@ -38,7 +38,7 @@ TRAINING = Tolerance.statistical(
     "network training: the per-epoch log is one chaotic trajectory (not compared); the "
     "test error of the trained network is compared within a factor of two",
     columns={c: (1.0, 0.0) for c in ("test_rms_m", "test_max_m", "test_p95_m", "test_e3_m")}
-    | {c: (0.0, 0.0) for c in SETUP},
+    | Tolerance.exactly(*SETUP),
     files=("extra_bp_training.csv", "extra_bp_training.png"),
 )
 #: the hybrid's quasi-Newton refinement converges to the same root from any nearby network guess
@@ -253,7 +253,7 @@ CONVERGENCE = Tolerance.statistical(
     "network training to convergence: the per-epoch curves are chaotic trajectories (not "
     "compared); per region the set-up, the overlap of the 99 % confidence intervals of the "
     "median test error over the restarts and the median p95 and E_3 within a factor of two are",
-    columns={c: (0.0, 0.0) for c in (*SETUP, "restarts", "window", "min_improvement", "max_epochs")}
+    columns=Tolerance.exactly(*SETUP, "restarts", "window", "min_improvement", "max_epochs")
     | {c: (1.0, 0.0) for c in ("test_p95_median_m", "test_e3_median_m")},
     intervals=(("test_rms_ci_low_m", "test_rms_ci_high_m"),),
     files=("extra_bp_convergence_curves.csv", "extra_bp_convergence.png"),

@@ -13,6 +13,7 @@ from scipy.optimize import least_squares, minimize
 from parakin.claims import Claim, load_reference, printed_value
 from parakin.io import write_and_draw, write_table
 from parakin.mechanisms import P3P4S
+from parakin.papers.drawing import draw_skeleton_table
 from parakin.papers.sections import table_text
 from parakin.papers.zhao2017_3p4s.common import KEY, drawn_figure, table, table_and_figure
 from parakin.registry import DESCRIPTIVE, ROUNDING
@@ -318,21 +319,14 @@ FIG01_TITLE = "3-P(4S) at (0, 0, 0.592) m, stated geometry"
 FIG02_TITLE = "Frames and points of §1.1 (eqs 1-5)"
 
 
-def _draw_mechanism(frame: pd.DataFrame, path: Path, labels: bool, title: str) -> Path:
-    from parakin.plot import draw_mechanism, save_figure, skeleton_from_table
-
-    ax = draw_mechanism(skeleton_from_table(frame), labels=labels, frames=labels, title=title)
-    return save_figure(ax.figure, path)
-
-
 def draw_fig01(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 1 from its skeleton table: the mechanism without labels or frames."""
-    return _draw_mechanism(frame, path, labels=False, title=FIG01_TITLE)
+    return draw_skeleton_table(frame, path, labels=False, frames=False, title=FIG01_TITLE)
 
 
 def draw_fig02(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 2 from its skeleton table: the frames {O}, {P}, {u_i} and the points of §1.1."""
-    return _draw_mechanism(frame, path, labels=True, title=FIG02_TITLE)
+    return draw_skeleton_table(frame, path, labels=True, frames=True, title=FIG02_TITLE)
 
 
 def _mechanism_table() -> pd.DataFrame:

@@ -218,6 +218,16 @@ def _ellipsoid_data(
     return J, qd, vel, s, Vt
 
 
+#: the CSV columns of Fig. 11's drive velocities and Fig. 12's platform velocities
+FIG11_COLUMNS = ["qdot1_m_s", "qdot2_m_s", "qdot3_m_s"]
+FIG12_COLUMNS = ["vx_m_s", "vy_m_s", "vz_m_s"]
+
+
+def _grid_table(points: np.ndarray, columns: list[str]) -> pd.DataFrame:
+    """The wireframe's points (n_lat, n_lon, 3) as raveled columns (:func:`_grid_points` inverted)."""
+    return pd.DataFrame({c: points[..., i].ravel() for i, c in enumerate(columns)})
+
+
 def _grid_points(frame: pd.DataFrame, columns: list[str]) -> np.ndarray:
     """The wireframe's points (n_lat, n_lon, 3) from the raveled columns of a Fig. 11/12 CSV."""
     if len(frame) != SPHERE_GRID[0] * SPHERE_GRID[1]:
@@ -258,7 +268,7 @@ def _sphere_figure(pts, path, title, labels, axes=None, semi=None):
 def draw_fig11(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 11 from its CSV: the drive-velocity sphere (``qdot*_m_s``) and the pose height."""
     return _sphere_figure(
-        _grid_points(frame, ["qdot1_m_s", "qdot2_m_s", "qdot3_m_s"]),
+        _grid_points(frame, FIG11_COLUMNS),
         path,
         "Fig. 11: unit sphere of drive velocities, eq. (35)\n"
         f"$\\dot q^T\\dot q = 1$, before design, home pose p = (0, 0, {frame['pose_z_m'].iloc[0]:g}) m",
@@ -272,14 +282,7 @@ def fig11(config: dict, outdir: Path) -> list[Path]:
     m = P3P4S.zhao2017()
     pose = m.home()
     _, qd, _, _, _ = _ellipsoid_data(m, pose)
-    df = pd.DataFrame(
-        {
-            "qdot1_m_s": qd[..., 0].ravel(),
-            "qdot2_m_s": qd[..., 1].ravel(),
-            "qdot3_m_s": qd[..., 2].ravel(),
-            "pose_z_m": float(pose[2]),
-        }
-    )
+    df = _grid_table(qd, FIG11_COLUMNS).assign(pose_z_m=float(pose[2]))
     csv = write_csv(df, outdir / "fig11_velocity_sphere.csv")
     return [csv, draw_fig11(pd.read_csv(csv), outdir / "fig11_velocity_sphere.png")]
 
@@ -291,7 +294,7 @@ def draw_fig12(frame: pd.DataFrame, path: Path) -> Path:
     s = np.array([row[f"sigma_J{i}"] for i in (1, 2, 3)], float)
     Vt = np.array([[row[f"dir{i}_{c}"] for c in "xyz"] for i in (1, 2, 3)], float)
     return _sphere_figure(
-        _grid_points(frame, ["vx_m_s", "vy_m_s", "vz_m_s"]),
+        _grid_points(frame, FIG12_COLUMNS),
         path,
         "Fig. 12: platform velocity ellipsoid $v = J^{-1}\\dot q$, $|\\dot q| = 1$\n"
         f"semi-axes $1/\\sigma_i(J)$; cond(J) = {s[0] / s[-1]:.3f}",
@@ -316,13 +319,7 @@ def fig12(config: dict, outdir: Path) -> list[Path]:
     m = P3P4S.zhao2017()
     pose = m.home()
     J, _, vel, s, Vt = _ellipsoid_data(m, pose)
-    df = pd.DataFrame(
-        {
-            "vx_m_s": vel[..., 0].ravel(),
-            "vy_m_s": vel[..., 1].ravel(),
-            "vz_m_s": vel[..., 2].ravel(),
-        }
-    )
+    df = _grid_table(vel, FIG12_COLUMNS)
     for i in range(3):  # the semi-axes the figure draws, as constant columns
         df[f"sigma_J{i + 1}"] = s[i]
         for j, c in enumerate("xyz"):
@@ -1210,6 +1207,23 @@ def _pareto_marks(frame: pd.DataFrame) -> pd.DataFrame:
     )
 
 
+def _scatter_marks(ax, marks: pd.DataFrame, size: float, labelled: bool) -> None:
+    """The marked designs of :func:`_pareto_marks` as hollow markers in (sigma1, sigma3); with
+    ``labelled``, each named in the legend with its sigma2."""
+    for _, r in marks.iterrows():
+        label = {"label": f"{r['design']}: σ2 = {r['sigma2']:.3g}"} if labelled else {}
+        ax.scatter(
+            r["sigma1"],
+            r["sigma3"],
+            marker=r["marker"],
+            s=size,
+            facecolor="none",
+            edgecolor="#D55E00",
+            lw=1.3,
+            **label,
+        )
+
+
 def draw_pareto(frame: pd.DataFrame, path: Path) -> Path:
     """extra_pareto from its CSV: the front's (sigma1, sigma3) coloured by sigma2, the marked
     designs and the NSGA-II settings (constant columns)."""
@@ -1225,17 +1239,7 @@ def draw_pareto(frame: pd.DataFrame, path: Path) -> Path:
         ax.scatter(
             df["sigma1"], df["sigma3"], c=df["sigma2"], s=8, cmap="viridis", label="NSGA-II front"
         )
-        for _, r in mk.iterrows():
-            ax.scatter(
-                r["sigma1"],
-                r["sigma3"],
-                marker=r["marker"],
-                s=60,
-                facecolor="none",
-                edgecolor="#D55E00",
-                lw=1.3,
-                label=f"{r['design']}: σ2 = {r['sigma2']:.3g}",
-            )
+        _scatter_marks(ax, mk, size=60, labelled=True)
         ax.set_xlabel("global dynamic index σ1 (kg)")
         ax.set_ylabel("global speed index σ3 = mean cond(J)")
         ax.set_title("all designs", fontsize="small")
@@ -1245,17 +1249,8 @@ def draw_pareto(frame: pd.DataFrame, path: Path) -> Path:
         y0, y1 = df["sigma3"].min(), df["sigma3"].max()
         mx, my = 0.08 * max(x1 - x0, 1e-9 * abs(x1)), 0.08 * max(y1 - y0, 1e-9 * abs(y1))
         sc = axz.scatter(df["sigma1"], df["sigma3"], c=df["sigma2"], s=14, cmap="viridis")
-        for _, r in mk.iterrows():
-            if x0 - mx <= r["sigma1"] <= x1 + mx and y0 - my <= r["sigma3"] <= y1 + my:
-                axz.scatter(
-                    r["sigma1"],
-                    r["sigma3"],
-                    marker=r["marker"],
-                    s=80,
-                    facecolor="none",
-                    edgecolor="#D55E00",
-                    lw=1.3,
-                )
+        inside = mk["sigma1"].between(x0 - mx, x1 + mx) & mk["sigma3"].between(y0 - my, y1 + my)
+        _scatter_marks(axz, mk[inside], size=80, labelled=False)
         axz.set_xlim(x0 - mx, x1 + mx)
         axz.set_ylim(y0 - my, y1 + my)
         axz.ticklabel_format(useOffset=False)
