@@ -5,9 +5,10 @@ for every method, per-pose arrays when the call was batched.
 
 :func:`iterate` is the one loop behind every iterative solver. A solver only supplies ``init``
 (extra per-pose state at the start, e.g. Broyden's first Jacobian) and ``step`` (one iteration on
-the poses still running); the loop keeps the ``active`` set, the per-pose counters, the
-convergence tests, the finiteness guard and the status codes, so that every solver stops, counts
-and fails in the same way:
+the poses still running; both in a :class:`Plan`, and :func:`iterative` turns the declaration of
+a solver's options into the registered method that runs it); the loop keeps the ``active`` set,
+the per-pose counters, the convergence tests, the finiteness guard and the status codes, so that
+every solver stops, counts and fails in the same way:
 
 * a pose is *active* until it converges or fails; only active poses are stepped, and only their
   residuals and Jacobians are evaluated (an :class:`Evaluator` counts them per pose);
