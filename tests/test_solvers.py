@@ -396,3 +396,28 @@ def test_broyden_update_option_rejects_unknown_values():
     mech = P3P4S()
     with pytest.raises(ValueError, match=r"update = 'bad' must be one of \('direct', 'inverse'\)"):
         solve_fk(mech, mech.ik([0.01, -0.02, 0.58]), method="broyden", update="bad")
+
+
+@pytest.mark.parametrize(
+    "method", ["newton", "gauss-newton", "broyden", "broyden-ls", "bfgs", "lm", "dogleg"]
+)
+def test_iterative_methods_keep_the_method_protocol(method):
+    """``result.iterative`` builds each method from its options: the public signature is the
+    registered-method protocol around them, the method keeps its name in argument errors, and an
+    option set away from its default reaches the loop (xtol: a small step stops the pose)."""
+    import inspect
+
+    fn = METHODS[method]
+    params = list(inspect.signature(fn).parameters.values())
+    assert [p.name for p in params[:5]] == ["mech", "joints", "x0", "tol", "maxiter"]
+    assert params[-1].name == "callback" and params[-1].default is None
+    assert all(p.kind is p.KEYWORD_ONLY for p in params[3:])
+    assert "xtol" in inspect.signature(fn).parameters
+    with pytest.raises(TypeError, match=rf"^{fn.__name__}\(\) got an unexpected keyword .*'nope'"):
+        fn(P3P4S(), np.zeros((1, 3)), np.zeros((1, 3)), tol=1e-10, maxiter=5, nope=1)
+    mech = P3P4S()
+    q = mech.ik(np.array([[0.01, -0.02, 0.58]]))
+    x0 = mech.home()[None, :] + 1e-3
+    loose = fn(mech, q, x0, tol=0.0, maxiter=50, xtol=1.0)
+    assert loose.method == method and loose.nit.tolist() == [1]
+    assert loose.status.tolist() == [Status.SMALL_STEP]

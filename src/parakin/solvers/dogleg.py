@@ -3,15 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from parakin.kernels.methods import BOUNDS, DEFAULTS
-from parakin.mechanisms.base import Array, Mechanism
+from parakin.mechanisms.base import Array
 from parakin.solvers.newton import newton_direction
-from parakin.solvers.result import Evaluator, FKResult, State, StepInfo, inf_norm, iterate
+from parakin.solvers.result import Evaluator, Plan, State, StepInfo, inf_norm, iterative
 
 __all__ = ["dogleg"]
 
@@ -100,18 +99,13 @@ def _dogleg_iteration(eta: float) -> Callable[..., tuple[State, StepInfo]]:
     return step
 
 
+@iterative("dogleg")
 def dogleg(
-    mech: Mechanism,
-    joints: Array,
-    x0: Array,
     *,
-    tol: float,
-    maxiter: int,
     xtol: float = DEFAULTS["xtol"],
     factor: float = DEFAULTS["factor"],
     eta: float = DEFAULTS["eta"],
-    callback: Callable[[int, Array, Array], Any] | None = None,
-) -> FKResult:
+) -> Plan:
     """Powell's dog-leg trust-region method on ``min |residual(x, q)|^2 / 2``, with the exact
     Jacobian at every accepted iterate.
 
@@ -140,15 +134,4 @@ def dogleg(
         lo, hi = BOUNDS[name]
         if not lo <= value < hi:
             raise ValueError(f"{name} = {value!r} must be in [{lo!r}, {hi!r})")
-    return iterate(
-        mech,
-        joints,
-        x0,
-        init=_dogleg_init(float(factor)),
-        step=_dogleg_iteration(float(eta)),
-        tol=tol,
-        maxiter=maxiter,
-        xtol=xtol,
-        callback=callback,
-        method="dogleg",
-    )
+    return Plan(_dogleg_iteration(float(eta)), init=_dogleg_init(float(factor)))

@@ -9,17 +9,14 @@ square regular system they take exactly the steps of ``newton`` / ``broyden``.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from parakin.mechanisms.base import Array, Mechanism
-from parakin.solvers.result import Evaluator, FKResult, State, StepInfo, inf_norm, iterate
+from parakin.mechanisms.base import Array
+from parakin.solvers.result import Evaluator, Plan, State, Step, StepInfo, inf_norm, iterative
 
-__all__ = ["gauss_newton", "broyden_ls", "lstsq_step"]
-
-Callback = Callable[[int, Array, Array], Any]
+__all__ = ["gauss_newton", "broyden_ls", "lstsq_step", "full_step", "jacobian_init", "secant_step"]
 
 
 def lstsq_step(a: Array, r: Array) -> Array:
@@ -54,75 +51,53 @@ def lstsq_step(a: Array, r: Array) -> Array:
     return out
 
 
-def _gn_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
-    dx = lstsq_step(ev.jacobian(s["x"], rows), s["r"])
-    x = s["x"] - dx
-    return {"x": x, "r": ev.residual(x, rows)}, StepInfo(step=inf_norm(dx))
+def full_step(direction: Callable[[Array, Array], Array]) -> Step:
+    """The step ``x <- x - direction(J(x), r)`` (one Jacobian and one residual evaluation): Newton's
+    with :func:`~parakin.solvers.newton.newton_direction`, Gauss-Newton's with :func:`lstsq_step`."""
+
+    def step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
+        dx = direction(ev.jacobian(s["x"], rows), s["r"])
+        x = s["x"] - dx
+        return {"x": x, "r": ev.residual(x, rows)}, StepInfo(step=inf_norm(dx))
+
+    return step
 
 
-def gauss_newton(
-    mech: Mechanism,
-    joints: Array,
-    x0: Array,
-    *,
-    tol: float,
-    maxiter: int,
-    xtol: float = 0.0,
-    callback: Callback | None = None,
-) -> FKResult:
+@iterative("gauss-newton")
+def gauss_newton(*, xtol: float = 0.0) -> Plan:
     """Gauss-Newton: ``x <- x - pinv(J) r`` (full step, no line search; Dennis & Schnabel 1996,
     §10.2). One Jacobian and one residual evaluation per iteration; ``m >= n`` allowed. Options
     ``xtol`` (step inf-norm stop, 0 = off) and ``callback`` as for ``newton``."""
-    return iterate(
-        mech,
-        joints,
-        x0,
-        step=_gn_step,
-        tol=tol,
-        maxiter=maxiter,
-        xtol=xtol,
-        callback=callback,
-        method="gauss-newton",
-    )
+    return Plan(full_step(lstsq_step))
 
 
-def _bls_init(ev: Evaluator, rows: NDArray[np.intp], s: State) -> State:
+def jacobian_init(ev: Evaluator, rows: NDArray[np.intp], s: State) -> State:
+    """The secant methods' start: ``B`` = the analytic Jacobian at ``x0``."""
     return {"B": ev.jacobian(s["x"], rows)}
 
 
-def _bls_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
-    d = -lstsq_step(s["B"], s["r"])
-    x = s["x"] + d
-    r = ev.residual(x, rows)
-    dd = np.einsum("...i,...i->...", d, d)
-    gain = np.where(dd > 0, 1.0 / np.where(dd > 0, dd, 1.0), 0.0)
-    y = r - s["r"] - np.einsum("...ij,...j->...i", s["B"], d)
-    b = s["B"] + (y * gain[:, None])[:, :, None] * d[:, None, :]
-    return {"x": x, "r": r, "B": b}, StepInfo(step=inf_norm(d))
+def secant_step(direction: Callable[[Array, Array], Array]) -> Step:
+    """``x+ = x + d`` with ``d = -direction(B, r)``, then Broyden's good update
+    ``B+ = B + (y - B d) d^T / d^T d`` with ``y = r+ - r`` (one residual evaluation): ``broyden``'s
+    with :func:`~parakin.solvers.newton.newton_direction`, ``broyden_ls``'s with
+    :func:`lstsq_step`."""
+
+    def step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
+        d = -direction(s["B"], s["r"])
+        x = s["x"] + d
+        r = ev.residual(x, rows)
+        dd = np.einsum("...i,...i->...", d, d)
+        gain = np.where(dd > 0, 1.0 / np.where(dd > 0, dd, 1.0), 0.0)  # no update for a zero step
+        y = r - s["r"] - np.einsum("...ij,...j->...i", s["B"], d)
+        b = s["B"] + (y * gain[:, None])[:, :, None] * d[:, None, :]
+        return {"x": x, "r": r, "B": b}, StepInfo(step=inf_norm(d))
+
+    return step
 
 
-def broyden_ls(
-    mech: Mechanism,
-    joints: Array,
-    x0: Array,
-    *,
-    tol: float,
-    maxiter: int,
-    xtol: float = 0.0,
-    callback: Callback | None = None,
-) -> FKResult:
+@iterative("broyden-ls")
+def broyden_ls(*, xtol: float = 0.0) -> Plan:
     """Broyden's good rank-one secant update of a rectangular ``B`` (``m x n``; Broyden 1965),
     started at the analytic Jacobian at ``x0``, with the least-squares step ``d = -pinv(B) r``.
     One residual evaluation per iteration; for square regular ``B`` identical to ``broyden``."""
-    return iterate(
-        mech,
-        joints,
-        x0,
-        init=_bls_init,
-        step=_bls_step,
-        tol=tol,
-        maxiter=maxiter,
-        xtol=xtol,
-        callback=callback,
-        method="broyden-ls",
-    )
+    return Plan(secant_step(lstsq_step), init=jacobian_init)

@@ -3,15 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from parakin.kernels.methods import DEFAULTS
-from parakin.mechanisms.base import Array, Mechanism
+from parakin.mechanisms.base import Array
 from parakin.solvers.newton import solve_linear
-from parakin.solvers.result import Evaluator, FKResult, State, StepInfo, inf_norm, iterate
+from parakin.solvers.result import Evaluator, Plan, State, StepInfo, inf_norm, iterative
 
 __all__ = ["levenberg_marquardt"]
 
@@ -71,18 +70,13 @@ def _lm_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, St
     )
 
 
+@iterative("lm")
 def levenberg_marquardt(
-    mech: Mechanism,
-    joints: Array,
-    x0: Array,
     *,
-    tol: float,
-    maxiter: int,
     tau: float = DEFAULTS["tau"],
     xtol: float = DEFAULTS["xtol"],
     gtol: float = DEFAULTS["gtol"],
-    callback: Callable[[int, Array, Array], Any] | None = None,
-) -> FKResult:
+) -> Plan:
     """Levenberg-Marquardt on ``min |residual(x, q)|^2 / 2``.
 
     Madsen, Nielsen & Tingleff 2004, "Methods for non-linear least squares problems", Alg. 3.16.
@@ -107,16 +101,4 @@ def levenberg_marquardt(
     ``<= xtol``), ``gtol`` (... when ``|J^T r|_inf <= gtol``); both off at 0, and both accept
     a stationary point as success: check ``residual`` where it matters. ``callback``.
     """
-    return iterate(
-        mech,
-        joints,
-        x0,
-        init=_lm_init(tau),
-        step=_lm_step,
-        tol=tol,
-        maxiter=maxiter,
-        xtol=xtol,
-        gtol=gtol,
-        callback=callback,
-        method="lm",
-    )
+    return Plan(_lm_step, init=_lm_init(tau))

@@ -2,16 +2,12 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any
-
 import numpy as np
-from numpy.typing import NDArray
 
 from parakin.kernels.methods import DEFAULTS
-from parakin.mechanisms.base import Array, Mechanism
-from parakin.solvers.gauss_newton import lstsq_step
-from parakin.solvers.result import Evaluator, FKResult, State, StepInfo, inf_norm, iterate
+from parakin.mechanisms.base import Array
+from parakin.solvers.gauss_newton import full_step, lstsq_step
+from parakin.solvers.result import Plan, iterative
 
 __all__ = ["newton", "solve_linear", "newton_direction"]
 
@@ -48,23 +44,8 @@ def newton_direction(a: Array, r: Array) -> Array:
     return solve_linear(a, r) if a.shape[-1] == a.shape[-2] else lstsq_step(a, r)
 
 
-def _newton_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
-    """``x <- x - J(x)^-1 r(x)``: one Jacobian and one residual evaluation."""
-    dx = newton_direction(ev.jacobian(s["x"], rows), s["r"])
-    x = s["x"] - dx
-    return {"x": x, "r": ev.residual(x, rows)}, StepInfo(step=inf_norm(dx))
-
-
-def newton(
-    mech: Mechanism,
-    joints: Array,
-    x0: Array,
-    *,
-    tol: float,
-    maxiter: int,
-    xtol: float = DEFAULTS["xtol"],
-    callback: Callable[[int, Array, Array], Any] | None = None,
-) -> FKResult:
+@iterative("newton")
+def newton(*, xtol: float = DEFAULTS["xtol"]) -> Plan:
     """Newton-Raphson on ``residual(x, q) = 0`` (Dennis & Schnabel 1996, ch. 5, Alg. 5.1.1).
 
     One iteration is one full step ``x <- x - J^-1 r`` with ``J = jacobian_pose`` evaluated at
@@ -77,14 +58,4 @@ def newton(
     Options: ``xtol`` (stop with success when the step inf-norm is ``<= xtol``; 0 = off),
     ``callback(k, x, residual_norm)`` after every iteration.
     """
-    return iterate(
-        mech,
-        joints,
-        x0,
-        step=_newton_step,
-        tol=tol,
-        maxiter=maxiter,
-        xtol=xtol,
-        callback=callback,
-        method="newton",
-    )
+    return Plan(full_step(newton_direction))

@@ -7,19 +7,17 @@ rule, "iteration error eps = 1e-7", is the ``xtol`` option below).
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from parakin.kernels.methods import DEFAULTS
-from parakin.mechanisms.base import Array, Mechanism
+from parakin.mechanisms.base import Array
+from parakin.solvers.gauss_newton import jacobian_init, secant_step
 from parakin.solvers.newton import newton_direction, solve_linear
-from parakin.solvers.result import Evaluator, FKResult, State, StepInfo, inf_norm, iterate
+from parakin.solvers.result import Evaluator, Plan, State, StepInfo, inf_norm, iterative
 
 __all__ = ["BROYDEN_UPDATES", "bfgs", "broyden"]
-
-Callback = Callable[[int, Array, Array], Any]
 
 
 def _dot(a: Array, b: Array) -> Array:
@@ -37,10 +35,6 @@ def _outer(a: Array, b: Array) -> Array:
 # ---------------------------------------------------------------------------- Broyden
 #: the two forms of Broyden's rank-one secant update (``broyden(..., update=...)``)
 BROYDEN_UPDATES = ("direct", "inverse")
-
-
-def _broyden_init(ev: Evaluator, rows: NDArray[np.intp], s: State) -> State:
-    return {"B": ev.jacobian(s["x"], rows)}
 
 
 def _pinv(a: Array) -> Array:
@@ -80,28 +74,8 @@ def _broyden_inverse_step(
     return {"x": x, "r": r, "H": h}, StepInfo(step=inf_norm(d))
 
 
-def _broyden_step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
-    """``x+ = x - B^-1 r``, then ``B+ = B + (y - B d) d^T / d^T d`` with ``y = r+ - r``."""
-    d = -newton_direction(s["B"], s["r"])
-    x = s["x"] + d
-    r = ev.residual(x, rows)
-    dd = _dot(d, d)
-    gain = np.where(dd > 0, 1.0 / np.where(dd > 0, dd, 1.0), 0.0)  # no update for a zero step
-    b = s["B"] + _outer((r - s["r"] - _matvec(s["B"], d)) * gain[:, None], d)
-    return {"x": x, "r": r, "B": b}, StepInfo(step=inf_norm(d))
-
-
-def broyden(
-    mech: Mechanism,
-    joints: Array,
-    x0: Array,
-    *,
-    tol: float,
-    maxiter: int,
-    xtol: float = DEFAULTS["xtol"],
-    update: str = "direct",
-    callback: Callback | None = None,
-) -> FKResult:
+@iterative("broyden")
+def broyden(*, xtol: float = DEFAULTS["xtol"], update: str = "direct") -> Plan:
     """Broyden's "good" method on ``residual(x, q) = 0``.
 
     Broyden 1965; Dennis & Schnabel 1996, ch. 8.
@@ -128,19 +102,9 @@ def broyden(
     """
     if update not in BROYDEN_UPDATES:
         raise ValueError(f"update = {update!r} must be one of {BROYDEN_UPDATES}")
-    inverse = update == "inverse"
-    return iterate(
-        mech,
-        joints,
-        x0,
-        init=_broyden_inverse_init if inverse else _broyden_init,
-        step=_broyden_inverse_step if inverse else _broyden_step,
-        tol=tol,
-        maxiter=maxiter,
-        xtol=xtol,
-        callback=callback,
-        method="broyden",
-    )
+    if update == "inverse":
+        return Plan(_broyden_inverse_step, init=_broyden_inverse_init)
+    return Plan(secant_step(newton_direction), init=jacobian_init)
 
 
 # ---------------------------------------------------------------------------- BFGS
@@ -231,21 +195,16 @@ def _bfgs_step(c1: float, shrink: float, maxls: int) -> Callable[..., tuple[Stat
     return step
 
 
+@iterative("bfgs")
 def bfgs(
-    mech: Mechanism,
-    joints: Array,
-    x0: Array,
     *,
-    tol: float,
-    maxiter: int,
     xtol: float = DEFAULTS["xtol"],
     gtol: float = DEFAULTS["gtol"],
     c1: float = DEFAULTS["c1"],
     shrink: float = DEFAULTS["shrink"],
     maxls: int = int(DEFAULTS["maxls"]),
     reg: float = DEFAULTS["reg"],
-    callback: Callback | None = None,
-) -> FKResult:
+) -> Plan:
     """BFGS minimising ``f(x) = |residual(x, q)|^2 / 2`` (Nocedal & Wright 2006, Alg. 6.1).
 
     Gradient ``g = J^T r`` from the analytic ``jacobian_pose``. Search direction ``p = -H g``,
@@ -270,16 +229,4 @@ def bfgs(
     "iteration error") or gradient inf-norm ``<= gtol`` (both off at 0). ``xtol``/``gtol``
     accept a stationary point as success, as scipy does: check ``residual`` where it matters.
     """
-    return iterate(
-        mech,
-        joints,
-        x0,
-        init=_bfgs_init(reg),
-        step=_bfgs_step(c1, shrink, maxls),
-        tol=tol,
-        maxiter=maxiter,
-        xtol=xtol,
-        gtol=gtol,
-        callback=callback,
-        method="bfgs",
-    )
+    return Plan(_bfgs_step(c1, shrink, maxls), init=_bfgs_init(reg))

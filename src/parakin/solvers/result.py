@@ -5,9 +5,10 @@ for every method, per-pose arrays when the call was batched.
 
 :func:`iterate` is the one loop behind every iterative solver. A solver only supplies ``init``
 (extra per-pose state at the start, e.g. Broyden's first Jacobian) and ``step`` (one iteration on
-the poses still running); the loop keeps the ``active`` set, the per-pose counters, the
-convergence tests, the finiteness guard and the status codes, so that every solver stops, counts
-and fails in the same way:
+the poses still running; both in a :class:`Plan`, and :func:`iterative` turns the declaration of
+a solver's options into the registered method that runs it); the loop keeps the ``active`` set,
+the per-pose counters, the convergence tests, the finiteness guard and the status codes, so that
+every solver stops, counts and fails in the same way:
 
 * a pose is *active* until it converges or fails; only active poses are stepped, and only their
   residuals and Jacobians are evaluated (an :class:`Evaluator` counts them per pose);
@@ -26,6 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import inspect
 import time
 from collections.abc import Callable
 from enum import IntEnum
@@ -44,10 +46,12 @@ __all__ = [
     "NEAR_SINGULAR",
     "ROW_ERRORS",
     "Status",
+    "Plan",
     "StepInfo",
     "inf_norm",
     "conditioning",
     "iterate",
+    "iterative",
     "rowwise",
     "summarize",
 ]
@@ -414,6 +418,71 @@ def iterate(
         method=method,
         message=summarize(status, maxiter),
     )
+
+
+Callback = Callable[[int, Array, Array], Any]
+
+
+class Plan(NamedTuple):
+    """An iterative method's own part of :func:`iterate`: its ``step`` and, if any, its ``init``."""
+
+    step: Step
+    init: Init | None = None
+
+
+def iterative(method: str) -> Callable[[Callable[..., Plan]], Callable[..., FKResult]]:
+    """Decorator: the FK method named ``method`` (``FKResult.method``) from the declaration of its
+    options, ``plan(*, <options>) -> Plan``.
+
+    ``plan`` declares the options (keyword-only names, defaults and order, and the docstring),
+    checks their values and returns the method's ``init`` and ``step``. The method is
+    ``fn(mech, joints, x0, *, tol, maxiter, <options>, callback=None) -> FKResult``, the
+    registered-method protocol (:mod:`parakin.solvers.registry`), under ``plan``'s name: it runs
+    the plan in :func:`iterate`, with the options ``xtol`` and ``gtol``, where declared, as the
+    loop's stopping tests.
+    """
+
+    def make(plan: Callable[..., Plan]) -> Callable[..., FKResult]:
+        options = inspect.signature(plan).parameters
+        stops = {k: options[k].default for k in ("xtol", "gtol") if k in options}
+
+        def solver(
+            mech: Mechanism,
+            joints: Array,
+            x0: Array,
+            *,
+            tol: float,
+            maxiter: int,
+            callback: Callback | None = None,
+            **chosen: Any,
+        ) -> FKResult:
+            step, init = plan(**chosen)
+            loop = {k: chosen.get(k, default) for k, default in stops.items()}
+            return iterate(
+                mech,
+                joints,
+                x0,
+                step=step,
+                init=init,
+                tol=tol,
+                maxiter=maxiter,
+                callback=callback,
+                method=method,
+                **loop,
+            )
+
+        own = inspect.signature(solver)
+        functools.update_wrapper(solver, plan)  # name (also in argument errors), docstring
+        head, tail = list(own.parameters.values())[:5], own.parameters["callback"]
+        signature = own.replace(parameters=[*head, *options.values(), tail])
+        solver.__signature__ = signature  # type: ignore[attr-defined]
+        solver.__annotations__ = {
+            **{k: p.annotation for k, p in signature.parameters.items()},
+            "return": signature.return_annotation,
+        }
+        return solver
+
+    return make
 
 
 # ------------------------------------------------------------ conditioning at the answer
