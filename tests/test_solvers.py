@@ -413,6 +413,10 @@ def test_iterative_methods_keep_the_method_protocol(method):
     assert params[-1].name == "callback" and params[-1].default is None
     assert all(p.kind is p.KEYWORD_ONLY for p in params[3:])
     assert "xtol" in inspect.signature(fn).parameters
+    import typing
+
+    hints = typing.get_type_hints(fn)  # the annotations resolve (documentation tools read them)
+    assert set(hints) == {p.name for p in params} | {"return"}
     with pytest.raises(TypeError, match=rf"^{fn.__name__}\(\) got an unexpected keyword .*'nope'"):
         fn(P3P4S(), np.zeros((1, 3)), np.zeros((1, 3)), tol=1e-10, maxiter=5, nope=1)
     mech = P3P4S()

@@ -473,6 +473,9 @@ def iterative(method: str) -> Callable[[Callable[..., Plan]], Callable[..., FKRe
 
         own = inspect.signature(solver)
         functools.update_wrapper(solver, plan)  # name (also in argument errors), docstring
+        # its annotations are names of this module (typing.get_type_hints reads the globals of
+        # the function __wrapped__ points to; the signature is set below)
+        del solver.__wrapped__
         head, tail = list(own.parameters.values())[:5], own.parameters["callback"]
         signature = own.replace(parameters=[*head, *options.values(), tail])
         solver.__signature__ = signature  # type: ignore[attr-defined]
