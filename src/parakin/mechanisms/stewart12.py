@@ -40,7 +40,6 @@ from numpy.typing import ArrayLike
 import parakin.dynamics.jet as dj
 from parakin.dynamics.jet import Jet
 from parakin.dynamics.model import Bodies, MassModel, RigidBody, hexapod, hexapod_masses
-from parakin.errors import UnreachableError
 from parakin.geometry import quaternion
 from parakin.kernels import Kernel, evaluate
 from parakin.kernels import stewart12 as kernels
@@ -49,7 +48,7 @@ from parakin.mechanisms.base import (
     Mechanism,
     Skeleton,
     as_batch,
-    describe_first,
+    raise_first,
 )
 
 __all__ = [
@@ -266,13 +265,14 @@ class Stewart12(Mechanism):
     def _check_orientation(self, x: Array) -> None:
         if self.convention == "euler_parameters":
             s = np.einsum("...i,...i->...", x[..., 3:], x[..., 3:])
-            bad = s >= 1.0
-            if np.any(bad):
-                idx = tuple(np.argwhere(bad)[0])
-                raise UnreachableError(
+            raise_first(
+                s >= 1.0,
+                x.shape[:-1],
+                lambda idx: (
                     f"|lambda|^2 = {s[idx]:.6g} must be < 1 for Euler parameters "
-                    f"(lambda0 = sqrt(1 - |lambda|^2)){describe_first(bad, x.shape[:-1])}"
-                )
+                    f"(lambda0 = sqrt(1 - |lambda|^2))"
+                ),
+            )
 
     def joint_centres(self, pose: ArrayLike) -> Array:
         """B1..B6 (..., 6, 3) in the inertial frame."""
@@ -495,23 +495,22 @@ class Stewart12(Mechanism):
         """UnreachableError where a length is not positive or the 12 lengths do not assemble
         (``max |F| > compat_tol (n+L)^2``), naming the value and the limit."""
         q = as_batch(joints, 12, "joints")
-        bad = q <= 0
-        if np.any(bad):
-            idx = tuple(np.argwhere(bad)[0])
-            raise UnreachableError(
-                f"leg length l{idx[-1] + 1} = {q[idx]:.6g} m must be > 0"
-                f"{describe_first(np.any(bad, -1), q.shape[:-1])}"
-            )
+        raise_first(
+            q <= 0,
+            q.shape[:-1],
+            lambda idx: f"leg length l{idx[-1] + 1} = {q[idx]:.6g} m must be > 0",
+        )
         f = np.max(np.abs(self.compatibility(q)), axis=-1)
         limit = self.compat_tol * (self.n + self.L) ** 2
-        bad = ~(f <= limit)
-        if np.any(bad):
-            idx = tuple(np.argwhere(bad)[0])
-            raise UnreachableError(
-                f"leg lengths do not assemble: max |F| of the compatibility equations (21)-(26) = "
-                f"{f[idx]:.6g} m^2 exceeds the limit {limit:.3g} m^2 (compat_tol = {self.compat_tol:g} of "
-                f"(n+L)^2){describe_first(bad, q.shape[:-1])}"
-            )
+        raise_first(
+            ~(f <= limit),
+            q.shape[:-1],
+            lambda idx: (
+                f"leg lengths do not assemble: max |F| of the compatibility equations "
+                f"(21)-(26) = {f[idx]:.6g} m^2 exceeds the limit {limit:.3g} m^2 (compat_tol = "
+                f"{self.compat_tol:g} of (n+L)^2)"
+            ),
+        )
 
     # ------------------------------------------------------------------ drawing
     def skeleton(self, pose: ArrayLike, passive: tuple[int, ...] = ()) -> Skeleton:

@@ -22,6 +22,7 @@ and verified by the IK.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 from types import ModuleType
@@ -36,7 +37,14 @@ from parakin.dynamics.model import Bodies, MassModel, hexapod, hexapod_masses
 from parakin.errors import UnreachableError
 from parakin.geometry import euler_zyx, euler_zyx_from_matrix
 from parakin.kernels import stewart36 as kernels
-from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
+from parakin.mechanisms.base import (
+    Array,
+    Mechanism,
+    Skeleton,
+    as_batch,
+    describe_first,
+    raise_first,
+)
 
 __all__ = ["Stewart36", "TABLE3_ROW1"]
 
@@ -136,29 +144,34 @@ class Stewart36(Mechanism):
         Inputs passing this may still have no real solution (the triangle does not close):
         :meth:`fk_all` then returns no real pose."""
         q = as_batch(joints, 6, "joints")
-        neg = q <= 0
-        if np.any(neg):
-            idx = tuple(np.argwhere(neg)[0])
-            raise UnreachableError(
-                f"leg length L{idx[-1] + 1} = {float(q[idx]):g} must be > 0"
-                f"{describe_first(np.any(neg, -1), q.shape[:-1])}"
-            )
+        raise_first(
+            q <= 0,
+            q.shape[:-1],
+            lambda idx: f"leg length L{idx[-1] + 1} = {float(q[idx]):g} must be > 0",
+        )
         l1, l2 = q[..., 0::2], q[..., 1::2]
-        far = np.abs(l1 - l2) > self.b
-        near = l1 + l2 < self.b
-        for bad, what in (
-            (far, "|L{i} - L{j}| = {v:.6g} exceeds the base edge b = {b}"),
-            (near, "L{i} + L{j} = {v:.6g} is shorter than the base edge b = {b}"),
-        ):
-            if np.any(bad):
-                idx = tuple(np.argwhere(bad)[0])
+        gap, reach = np.abs(l1 - l2), l1 + l2
+
+        def cannot_meet(what: str, value: Array) -> Callable[[tuple[int, ...]], str]:
+            def message(idx: tuple[int, ...]) -> str:
                 k = idx[-1]
-                val = abs(l1[idx] - l2[idx]) if bad is far else l1[idx] + l2[idx]
-                raise UnreachableError(
-                    what.format(i=2 * k + 1, j=2 * k + 2, v=val, b=self.b)
+                return (
+                    what.format(i=2 * k + 1, j=2 * k + 2, v=value[idx], b=self.b)
                     + f": legs {2 * k + 1}, {2 * k + 2} cannot meet at A{k + 1}"
-                    + describe_first(np.any(bad, -1), q.shape[:-1])
                 )
+
+            return message
+
+        raise_first(
+            gap > self.b,
+            q.shape[:-1],
+            cannot_meet("|L{i} - L{j}| = {v:.6g} exceeds the base edge b = {b}", gap),
+        )
+        raise_first(
+            reach < self.b,
+            q.shape[:-1],
+            cannot_meet("L{i} + L{j} = {v:.6g} is shorter than the base edge b = {b}", reach),
+        )
 
     # ------------------------------------------------------------------ drawing
     def skeleton(self, pose: ArrayLike) -> Skeleton:

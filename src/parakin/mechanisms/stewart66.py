@@ -43,7 +43,14 @@ from parakin.dynamics.model import Bodies, MassModel, hexapod, hexapod_masses
 from parakin.errors import UnreachableError
 from parakin.geometry import euler_zyx, euler_zyx_from_matrix
 from parakin.kernels import stewart66 as stewart66_kernels
-from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
+from parakin.mechanisms.base import (
+    Array,
+    Mechanism,
+    Skeleton,
+    as_batch,
+    describe_first,
+    raise_first,
+)
 
 __all__ = [
     "Stewart66",
@@ -327,13 +334,11 @@ class Stewart66(Mechanism):
         """Raise UnreachableError where a leg length is not > 0 (no cheap exact test of assembly
         exists for the 6-6; :meth:`fk_all` reports inputs without a real solution)."""
         q = as_batch(joints, 6, "joints")
-        neg = q <= 0
-        if np.any(neg):
-            idx = tuple(np.argwhere(neg)[0])
-            raise UnreachableError(
-                f"leg length L{idx[-1] + 1} = {float(q[idx]):g} must be > 0"
-                f"{describe_first(np.any(neg, -1), q.shape[:-1])}"
-            )
+        raise_first(
+            q <= 0,
+            q.shape[:-1],
+            lambda idx: f"leg length L{idx[-1] + 1} = {float(q[idx]):g} must be > 0",
+        )
 
     def skeleton(self, pose: ArrayLike) -> Skeleton:
         x = as_batch(pose, 6, "pose")
