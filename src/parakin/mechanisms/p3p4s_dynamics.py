@@ -43,6 +43,7 @@ generic pieces it used to carry (the sixth-order time derivative, the power-bala
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -424,40 +425,39 @@ def limb_kinematics(
     )
 
 
-def drive_accelerations(
-    mech: P3P4S,
-    pose: ArrayLike,
-    velocity: ArrayLike,
-    acceleration: ArrayLike,
-    *,
-    h_form: HForm = "corrected",
-) -> Array:
-    """Eq (13): ``qddot = J a + v^T H v`` (..., 3) in m/s^2."""
-    return limb_kinematics(mech, pose, velocity, acceleration, h_form=h_form).qddot
+def _kinematics_field(name: str, field_name: str, doc: str) -> Callable[..., Array]:
+    """A function giving one field of :func:`limb_kinematics` (``field_name``), documented ``doc``."""
+
+    def value(
+        mech: P3P4S,
+        pose: ArrayLike,
+        velocity: ArrayLike,
+        acceleration: ArrayLike,
+        *,
+        h_form: HForm = "corrected",
+    ) -> Array:
+        return getattr(
+            limb_kinematics(mech, pose, velocity, acceleration, h_form=h_form), field_name
+        )
+
+    value.__name__ = value.__qualname__ = name
+    value.__doc__ = doc
+    return value
 
 
-def rod_accelerations(
-    mech: P3P4S,
-    pose: ArrayLike,
-    velocity: ArrayLike,
-    acceleration: ArrayLike,
-    *,
-    h_form: HForm = "corrected",
-) -> Array:
-    """Eq (14): rod centroid accelerations ``a_di`` (..., 3 limbs, 3) in m/s^2."""
-    return limb_kinematics(mech, pose, velocity, acceleration, h_form=h_form).a_rod
-
-
-def rod_angular_accelerations(
-    mech: P3P4S,
-    pose: ArrayLike,
-    velocity: ArrayLike,
-    acceleration: ArrayLike,
-    *,
-    h_form: HForm = "corrected",
-) -> Array:
-    """Eq (15): rod angular accelerations ``alpha_i`` (..., 3 limbs, 3) in rad/s^2."""
-    return limb_kinematics(mech, pose, velocity, acceleration, h_form=h_form).alpha
+drive_accelerations = _kinematics_field(
+    "drive_accelerations", "qddot", "Eq (13): ``qddot = J a + v^T H v`` (..., 3) in m/s^2."
+)
+rod_accelerations = _kinematics_field(
+    "rod_accelerations",
+    "a_rod",
+    "Eq (14): rod centroid accelerations ``a_di`` (..., 3 limbs, 3) in m/s^2.",
+)
+rod_angular_accelerations = _kinematics_field(
+    "rod_angular_accelerations",
+    "alpha",
+    "Eq (15): rod angular accelerations ``alpha_i`` (..., 3 limbs, 3) in rad/s^2.",
+)
 
 
 # ---------------------------------------------------------------------------------------- dynamics

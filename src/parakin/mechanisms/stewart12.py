@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike
 import parakin.dynamics.jet as dj
 from parakin.dynamics.jet import Jet
 from parakin.dynamics.model import Bodies, MassModel, RigidBody, hexapod, hexapod_masses
-from parakin.geometry import quaternion
+from parakin.geometry import quaternion, skew
 from parakin.kernels import Kernel, evaluate
 from parakin.kernels import stewart12 as kernels
 from parakin.mechanisms.base import (
@@ -75,18 +75,6 @@ NESTED_PASSIVE: dict[int, tuple[int, ...]] = {
 _H = 1e-30  # complex-step size: derivatives exact to rounding
 
 
-def _skew(v: Array) -> Array:
-    z = np.zeros_like(v[..., 0])
-    return np.stack(
-        [
-            np.stack([z, -v[..., 2], v[..., 1]], -1),
-            np.stack([v[..., 2], z, -v[..., 0]], -1),
-            np.stack([-v[..., 1], v[..., 0], z], -1),
-        ],
-        -2,
-    )
-
-
 def rotation_matrix(lam: Array, convention: str) -> Array:
     """Rotation ``(..., 3, 3)`` of the orientation parameters ``lam (..., 3)``; complex-safe
     (used with complex steps), no domain check (see :meth:`Stewart12.ik`)."""
@@ -95,10 +83,10 @@ def rotation_matrix(lam: Array, convention: str) -> Array:
         l0 = np.sqrt(l0sq)
         eye = np.broadcast_to(np.eye(3), lam.shape[:-1] + (3, 3))
         return (2 * l0sq - 1)[..., None, None] * eye + 2 * (
-            lam[..., :, None] * lam[..., None, :] + l0[..., None, None] * _skew(lam)
+            lam[..., :, None] * lam[..., None, :] + l0[..., None, None] * skew(lam)
         )
     if convention == "cayley":
-        s = _skew(lam)
+        s = skew(lam)
         k = 2.0 / (1.0 + np.einsum("...i,...i->...", lam, lam))
         return np.eye(3) + k[..., None, None] * (s + s @ s)
     if convention == "euler_xyz":
@@ -350,7 +338,7 @@ class Stewart12(Mechanism):
             # d(R p)/d lambda_i = omega_i x (R p), omega = 2 (l0 I + lam lam^T / l0 + [lam]x) d lambda (the
             # angular velocity of the unit quaternion (l0, lam)), so e . d(R p)/d lambda_i = omega_i . (R p x e)
             l0 = np.sqrt(1.0 - np.einsum("...i,...i->...", lam, lam))[..., None, None]
-            omega = 2 * (l0 * np.eye(3) + lam[..., :, None] * lam[..., None, :] / l0 + _skew(lam))
+            omega = 2 * (l0 * np.eye(3) + lam[..., :, None] * lam[..., None, :] / l0 + skew(lam))
             c = np.stack(
                 [
                     w[..., 1] * e[..., 2] - w[..., 2] * e[..., 1],
@@ -381,7 +369,7 @@ class Stewart12(Mechanism):
         # dR/dlam_i = -4 lam_i I + 2 (e_i lam^T + lam e_i^T) - 2 (lam_i / l0) [lam]x + 2 l0 [e_i]x
         l0 = np.sqrt(1.0 - np.einsum("...i,...i->...", lam, lam))
         eye = np.eye(3)
-        sk = _skew(lam)
+        sk = skew(lam)
         out = []
         for i in range(3):
             outer = eye[i][:, None] * lam[..., None, :] + lam[..., :, None] * eye[i][None, :]
@@ -389,7 +377,7 @@ class Stewart12(Mechanism):
                 -4 * lam[..., i, None, None] * eye
                 + 2 * outer
                 - 2 * (lam[..., i] / l0)[..., None, None] * sk
-                + 2 * l0[..., None, None] * _skew(eye[i])
+                + 2 * l0[..., None, None] * skew(eye[i])
             )
         return np.stack(out, -3)
 
