@@ -45,7 +45,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -543,27 +543,16 @@ def inverse_dynamics(
     pose: ArrayLike,
     velocity: ArrayLike,
     acceleration: ArrayLike,
-    *,
-    h_form: HForm = "corrected",
-    gravity_moment: bool = False,
-    rod_inertia_factor: float | None = None,
+    **options: Any,
 ) -> Array:
     """Motor forces ``f`` (..., 3) in N along ``+m_i`` for the given platform motion (eqs 16-23).
 
-    Defaults implement the correct physics (docs/zhao2017_3p4s.md#s1.7); the keyword options reproduce the
-    paper's printed slips one by one (see :func:`force_terms`, :data:`PAPER_PRINTED`).
+    The sum of :func:`force_terms`, whose keywords ``options`` are (``h_form``,
+    ``gravity_moment``, ``rod_inertia_factor``). Defaults implement the correct physics
+    (docs/zhao2017_3p4s.md#s1.7); the keyword options reproduce the paper's printed slips one by
+    one (see :func:`force_terms`, :data:`PAPER_PRINTED`).
     """
-    terms = force_terms(
-        mech,
-        params,
-        pose,
-        velocity,
-        acceleration,
-        h_form=h_form,
-        gravity_moment=gravity_moment,
-        rod_inertia_factor=rod_inertia_factor,
-    )
-    return sum(terms.values())
+    return sum(force_terms(mech, params, pose, velocity, acceleration, **options).values())
 
 
 # ---------------------------------------------------------------------------------------- checks

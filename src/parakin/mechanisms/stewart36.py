@@ -66,8 +66,6 @@ class Stewart36(SixLegs):
     leg_top: ClassVar[Array] = LEG_TOP  # two legs share each top point
     top_label: ClassVar[str] = "A"
     kernels: ClassVar[ModuleType] = kernels
-    pose_names: ClassVar[tuple[str, ...]] = ("alpha", "beta", "gamma", "X", "Y", "Z")
-    joint_names: ClassVar[tuple[str, ...]] = ("L1", "L2", "L3", "L4", "L5", "L6")
     pose_units: ClassVar[tuple[str, ...]] = ("rad", "rad", "rad", "1", "1", "1")
     joint_units: ClassVar[tuple[str, ...]] = ("1",) * 6
     paper_pose_units: ClassVar[tuple[str, ...]] = ("deg", "deg", "deg", "1", "1", "1")

@@ -197,8 +197,6 @@ class Stewart66(SixLegs):
     allow_coincident: bool = False
 
     name: ClassVar[str] = "stewart66"
-    pose_names: ClassVar[tuple[str, ...]] = ("alpha", "beta", "gamma", "X", "Y", "Z")
-    joint_names: ClassVar[tuple[str, ...]] = ("L1", "L2", "L3", "L4", "L5", "L6")
     pose_units: ClassVar[tuple[str, ...]] = ("rad", "rad", "rad", "m", "m", "m")
     joint_units: ClassVar[tuple[str, ...]] = ("m",) * 6
     paper_pose_units: ClassVar[tuple[str, ...]] = ("deg", "deg", "deg", "m", "m", "m")

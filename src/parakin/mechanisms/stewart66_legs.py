@@ -30,6 +30,8 @@ class SixLegs(Mechanism, register=False):
     ``platform_world(pose)``, them in the fixed frame; :attr:`leg_top` (the platform point of each
     leg) and :attr:`top_label` (how drawings name the platform points) if not the 6-6's."""
 
+    pose_names: ClassVar[tuple[str, ...]] = ("alpha", "beta", "gamma", "X", "Y", "Z")
+    joint_names: ClassVar[tuple[str, ...]] = ("L1", "L2", "L3", "L4", "L5", "L6")
     #: index into ``platform_points`` of each leg's platform point
     leg_top: ClassVar[Array] = np.arange(6)
     #: label of the platform points in drawings (``"P_1"``, ...)
