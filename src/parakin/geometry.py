@@ -111,8 +111,10 @@ def euler_xyz_from_matrix(r: ArrayLike) -> NDArray[np.float64]:
 
 
 def skew(v: ArrayLike) -> NDArray[np.float64]:
-    """Skew-symmetric matrix ``[v]x`` with ``skew(v) @ w == cross(v, w)``; ``(..., 3) -> (..., 3, 3)``."""
-    v = np.asarray(v, dtype=float)
+    """Skew-symmetric matrix ``[v]x`` with ``skew(v) @ w == cross(v, w)``; ``(..., 3) -> (..., 3, 3)``.
+    A complex ``v`` stays complex (complex-step derivatives, the 6-6's homotopy)."""
+    v = np.asarray(v)
+    v = v if np.iscomplexobj(v) else v.astype(float, copy=False)
     x, y, z = v[..., 0], v[..., 1], v[..., 2]
     o = np.zeros_like(x)
     return np.stack(

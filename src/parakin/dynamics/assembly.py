@@ -10,7 +10,7 @@ rotation relative to its reference, a slide joint's travel and a hinge joint's a
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -20,7 +20,14 @@ from parakin.dynamics.model import MassModel, RigidBody, motion
 from parakin.geometry import quaternion
 from parakin.mechanisms.base import Array, Mechanism, as_batch
 
-__all__ = ["Assembly", "assemble", "joint_coordinates", "quaternion", "rotation_angle"]
+__all__ = [
+    "Assembly",
+    "EngineModel",
+    "assemble",
+    "joint_coordinates",
+    "quaternion",
+    "rotation_angle",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,6 +75,17 @@ class Assembly:
         po, pr = self.frame(self.parents[k])
         prt = np.swapaxes(pr, -1, -2)
         return jet.vmatvec(prt, self.origin[..., k, :] - po), prt @ self.rotation[..., k, :, :]
+
+
+@dataclass(frozen=True, eq=False)
+class EngineModel:
+    """What an independent engine's model of ``mech`` (MuJoCo, pinocchio) is built from: the mass
+    model and the reference assembly (:func:`assemble`) it was written at; each engine's model
+    adds its own objects and index maps."""
+
+    mech: Mechanism
+    mass: MassModel
+    reference: Assembly = field(repr=False)
 
 
 def assemble(mech: Mechanism, pose: ArrayLike, mass: MassModel | None = None) -> Assembly:

@@ -35,8 +35,8 @@ from numpy.typing import ArrayLike
 import parakin.dynamics.jet as jet
 from parakin.dynamics.model import Bodies, BodyGroup, BodyMotion, MassModel, RigidBody, motion
 from parakin.dynamics.program import available, record
-from parakin.errors import ShapeError, SingularityError, UnreachableError
-from parakin.mechanisms.base import Array, Mechanism, as_batch, describe_first
+from parakin.errors import ShapeError, SingularityError
+from parakin.mechanisms.base import Array, Mechanism, as_batch, describe_first, raise_first
 
 __all__ = [
     "SINGULAR_CONDITION",
@@ -121,13 +121,13 @@ def _checked(mech: Mechanism, pose: ArrayLike, rate: ArrayLike, *more: ArrayLike
     except ValueError:
         shapes = ", ".join(f"{w} {a.shape}" for w, a in zip(("pose", *_NAMES), (x, *arrays)))
         raise ShapeError(f"{shapes} do not broadcast") from None
-    inside = mech.in_domain(out[0])
-    if not np.all(inside):
-        idx = tuple(int(i) for i in np.argwhere(~inside)[0])
-        raise UnreachableError(
+    raise_first(
+        ~mech.in_domain(out[0]),
+        out[0].shape[:-1],
+        lambda idx: (
             f"pose {np.round(out[0][idx], 6).tolist()} is outside {mech.name}'s domain (no IK)"
-            f"{describe_first(~inside, out[0].shape[:-1])}"
-        )
+        ),
+    )
     return tuple(out)
 
 

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from parakin.dynamics.assembly import Assembly, assemble, joint_coordinates, quaternion
+from parakin.dynamics.assembly import Assembly, EngineModel, assemble, joint_coordinates, quaternion
 from parakin.dynamics.inverse import state
 from parakin.dynamics.model import MassModel
 from parakin.errors import ShapeError
@@ -159,12 +159,9 @@ def mjcf(
 
 
 @dataclass(frozen=True, eq=False)
-class MujocoModel:
+class MujocoModel(EngineModel):
     """A compiled MuJoCo model of a mechanism, its reference assembly and index maps."""
 
-    mech: Mechanism
-    mass: MassModel
-    reference: Assembly = field(repr=False)
     xml: str = field(repr=False)
     model: Any = field(repr=False)
 

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from parakin.dynamics.assembly import Assembly, assemble, joint_coordinates
+from parakin.dynamics.assembly import Assembly, EngineModel, assemble, joint_coordinates
 from parakin.dynamics.inverse import State, state
 from parakin.dynamics.model import MassModel
 from parakin.errors import ShapeError
@@ -59,12 +59,9 @@ def available() -> bool:
 
 
 @dataclass(frozen=True, eq=False)
-class PinocchioModel:
+class PinocchioModel(EngineModel):
     """A pinocchio model of a mechanism, its loop constraints and index maps."""
 
-    mech: Mechanism
-    mass: MassModel
-    reference: Assembly = field(repr=False)
     model: Any = field(repr=False)
     constraints: Any = field(repr=False)
     joint_ids: dict = field(repr=False)

@@ -83,19 +83,21 @@ class Symbol:
         self.index = index
 
     # ------------------------------------------------------------------ arithmetic
-    def __add__(self, other):
+    def _with(self, other, op: int, op_constant: int, identity: float):
+        """``self op other``: one op of two symbols, or ``op_constant`` with a number (none where
+        the number is the op's identity)."""
         if isinstance(other, Symbol):
-            return self.tape.binary(ADD, self, other)
+            return self.tape.binary(op, self, other)
         c = _number(other)
-        return self if c == 0.0 else self.tape.with_constant(ADDC, self, c)
+        return self if c == identity else self.tape.with_constant(op_constant, self, c)
+
+    def __add__(self, other):
+        return self._with(other, ADD, ADDC, 0.0)
 
     __radd__ = __add__
 
     def __sub__(self, other):
-        if isinstance(other, Symbol):
-            return self.tape.binary(SUB, self, other)
-        c = _number(other)
-        return self if c == 0.0 else self.tape.with_constant(SUBC, self, c)
+        return self._with(other, SUB, SUBC, 0.0)
 
     def __rsub__(self, other):
         c = _number(other)
@@ -114,10 +116,7 @@ class Symbol:
     __rmul__ = __mul__
 
     def __truediv__(self, other):
-        if isinstance(other, Symbol):
-            return self.tape.binary(DIV, self, other)
-        c = _number(other)
-        return self if c == 1.0 else self.tape.with_constant(DIVC, self, c)
+        return self._with(other, DIV, DIVC, 1.0)
 
     def __rtruediv__(self, other):
         c = _number(other)

@@ -140,6 +140,23 @@ def describe_first(mask: NDArray[np.bool_], batch_shape: tuple[int, ...]) -> str
     return where + more
 
 
+def raise_first(
+    mask: NDArray[np.bool_],
+    batch_shape: tuple[int, ...],
+    message: Callable[[tuple[int, ...]], str],
+    error: type[Exception] = UnreachableError,
+) -> None:
+    """Raise ``error`` where ``mask`` has a True entry: ``message(idx)`` of the first one's index
+    ``idx``, then :func:`describe_first`'s where and how many more. ``mask`` covers the batch
+    (``batch_shape``) and may have trailing axes (a limb, a leg): ``idx`` then names the entry and
+    the count is of the samples with any."""
+    if not np.any(mask):
+        return
+    idx = tuple(np.argwhere(mask)[0])
+    per_sample = mask if mask.shape == batch_shape else np.any(mask, axis=-1)
+    raise error(message(idx) + describe_first(per_sample, batch_shape))
+
+
 class Mechanism(ABC):
     """Base class of every mechanism: subclasses are frozen dataclasses of their parameters."""
 
@@ -181,12 +198,14 @@ class Mechanism(ABC):
         x = as_batch(pose, self.n_pose, "pose")
         q, ok = evaluate(self._declared_kernel, "ik", x)
         bad = ~ok & np.all(np.isfinite(x), axis=-1)  # a non-finite pose: NaN, named by callers
-        if np.any(bad):
-            idx = tuple(np.argwhere(bad)[0])
-            raise UnreachableError(
+        raise_first(
+            bad,
+            x.shape[:-1],
+            lambda idx: (
                 f"pose {tuple(np.round(x[idx], 6).tolist())} is outside the domain of "
-                f"{type(self).__name__}: no inverse kinematics{describe_first(bad, x.shape[:-1])}"
-            )
+                f"{type(self).__name__}: no inverse kinematics"
+            ),
+        )
         return q
 
     def residual(self, pose: ArrayLike, joints: ArrayLike) -> Array:

@@ -31,10 +31,10 @@ from numpy.typing import ArrayLike
 import parakin.dynamics.jet as dj
 from parakin.dynamics.jet import Jet
 from parakin.dynamics.model import Bodies, BodyGroup, MassModel, RigidBody, rods
-from parakin.errors import SingularityError, UnreachableError
+from parakin.errors import SingularityError
 from parakin.kernels import evaluate
 from parakin.kernels import p3p4s as kernels
-from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
+from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, raise_first
 
 __all__ = ["P3P4S"]
 
@@ -165,14 +165,16 @@ class P3P4S(Mechanism):
         q, ok = evaluate(self._declared_kernel, "ik", x)
         if not np.all(ok):
             _, disc = self._discriminant(x)
-            bad = disc < 0  # a non-finite pose gives NaN strokes: its callers name it not finite
-            if np.any(bad):
-                idx = tuple(np.argwhere(bad)[0])
-                raise UnreachableError(
-                    f"pose (x, y, z) = {tuple(np.round(x[idx[:-1]], 6).tolist())} m is unreachable: "
-                    f"limb {idx[-1] + 1} needs L^2 - x_u^2 - z_u^2 = {disc[idx]:.6g} m^2 >= 0 (eq. 5, "
-                    f"L = {self.L} m){describe_first(np.any(bad, axis=-1), x.shape[:-1])}"
-                )
+            # a non-finite pose gives NaN strokes (disc < 0 is False): its callers name it
+            raise_first(
+                disc < 0,
+                x.shape[:-1],
+                lambda idx: (
+                    f"pose (x, y, z) = {tuple(np.round(x[idx[:-1]], 6).tolist())} m is "
+                    f"unreachable: limb {idx[-1] + 1} needs L^2 - x_u^2 - z_u^2 = {disc[idx]:.6g} m^2 "
+                    f">= 0 (eq. 5, L = {self.L} m)"
+                ),
+            )
         return q
 
     def _rod(self, pose: Array, joints: Array) -> Array:
@@ -189,12 +191,12 @@ class P3P4S(Mechanism):
         x = as_batch(pose, 3, "pose")
         n = self.rod_directions(x, joints)
         nm = np.einsum("...ij,ij->...i", n, self.m)
-        bad = np.abs(nm) < 1e-12
-        if np.any(bad):
-            raise SingularityError(
-                f"n_i . m_i = 0 (rod perpendicular to its rail): J of eq. (8) is singular"
-                f"{describe_first(np.any(bad, -1), x.shape[:-1])}"
-            )
+        raise_first(
+            np.abs(nm) < 1e-12,
+            x.shape[:-1],
+            lambda idx: "n_i . m_i = 0 (rod perpendicular to its rail): J of eq. (8) is singular",
+            SingularityError,
+        )
         return n / nm[..., None]
 
     def rod_directions(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
@@ -260,14 +262,15 @@ class P3P4S(Mechanism):
         """UnreachableError where the computed pose lies (by rounding) just outside the workspace,
         so that :meth:`ik` would reject it: ``fk`` returns only poses its IK accepts."""
         _, disc = self._discriminant(pose)
-        out = np.any(disc < 0, axis=-1)
-        if np.any(out):
-            idx = tuple(np.argwhere(out)[0]) if out.ndim else ()
-            raise UnreachableError(
-                f"strokes (l1, l2, l3) = {tuple(np.round(q[idx], 6).tolist())} m put the platform on the workspace "
-                f"edge: at the computed pose L^2 - x_u^2 - z_u^2 = {disc[idx].min():.3g} m^2 < 0 (eq. 5), which ik "
-                f"rejects{describe_first(out, q.shape[:-1])}"
-            )
+        raise_first(
+            np.any(disc < 0, axis=-1),
+            q.shape[:-1],
+            lambda idx: (
+                f"strokes (l1, l2, l3) = {tuple(np.round(q[idx], 6).tolist())} m put the "
+                f"platform on the workspace edge: at the computed pose L^2 - x_u^2 - z_u^2 = "
+                f"{disc[idx].min():.3g} m^2 < 0 (eq. 5), which ik rejects"
+            ),
+        )
 
     def check_joints(self, joints: ArrayLike) -> None:
         """Raise UnreachableError unless the strokes assemble in the working mode (via :meth:`fk`)."""
@@ -308,14 +311,15 @@ class P3P4S(Mechanism):
         s = p0 - c[..., 0, :]
         half_b = np.einsum("...j,...j->...", u, s)
         disc = half_b**2 - uu * (np.einsum("...j,...j->...", s, s) - self.L**2)
-        bad = disc < 0
-        if np.any(bad):
-            idx = tuple(np.argwhere(bad)[0]) if bad.ndim else ()
-            raise UnreachableError(
-                f"strokes (l1, l2, l3) = {tuple(np.round(q[idx], 6).tolist())} m cannot be assembled: the three "
-                f"spheres of radius L = {self.L} m do not meet (discriminant {disc[idx]:.3g} < 0)"
-                f"{describe_first(bad, q.shape[:-1])}"
-            )
+        raise_first(
+            disc < 0,
+            q.shape[:-1],
+            lambda idx: (
+                f"strokes (l1, l2, l3) = {tuple(np.round(q[idx], 6).tolist())} m cannot be "
+                f"assembled: the three spheres of radius L = {self.L} m do not meet (discriminant "
+                f"{disc[idx]:.3g} < 0)"
+            ),
+        )
         root = np.sqrt(disc)
         t1, t2 = (-half_b + root) / uu, (-half_b - root) / uu
         p1 = p0 + t1[..., None] * u
@@ -328,15 +332,16 @@ class P3P4S(Mechanism):
             # working mode: every rod leans along its rail (n_i . m_i > 0), i.e. the strokes are
             # the minus root of eq (5); otherwise ik(fk(q)) != q and the pose is another assembly
             nm = np.einsum("...ij,ij->...i", self._rod(pose, q), self.m)
-            wrong = np.any(nm <= 0, axis=-1)
-            if np.any(wrong):
-                idx = tuple(np.argwhere(wrong)[0]) if wrong.ndim else ()
+
+            def other_mode(idx: tuple[int, ...]) -> str:
                 limb = int(np.argmax(nm[idx] <= 0)) + 1
-                raise UnreachableError(
-                    f"strokes (l1, l2, l3) = {tuple(np.round(q[idx], 6).tolist())} m assemble only with limb {limb} "
-                    f"in the other mode (n_{limb} . m_{limb} = {nm[idx][limb - 1] / self.L:.3g} <= 0, the plus root "
-                    f"of eq. 5){describe_first(wrong, q.shape[:-1])}"
+                return (
+                    f"strokes (l1, l2, l3) = {tuple(np.round(q[idx], 6).tolist())} m assemble only "
+                    f"with limb {limb} in the other mode (n_{limb} . m_{limb} = "
+                    f"{nm[idx][limb - 1] / self.L:.3g} <= 0, the plus root of eq. 5)"
                 )
+
+            raise_first(np.any(nm <= 0, axis=-1), q.shape[:-1], other_mode)
         return pose
 
     # ------------------------------------------------------------------ dynamics (issue 27)

@@ -43,8 +43,9 @@ generic pieces it used to carry (the sixth-order time derivative, the power-bala
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -424,40 +425,39 @@ def limb_kinematics(
     )
 
 
-def drive_accelerations(
-    mech: P3P4S,
-    pose: ArrayLike,
-    velocity: ArrayLike,
-    acceleration: ArrayLike,
-    *,
-    h_form: HForm = "corrected",
-) -> Array:
-    """Eq (13): ``qddot = J a + v^T H v`` (..., 3) in m/s^2."""
-    return limb_kinematics(mech, pose, velocity, acceleration, h_form=h_form).qddot
+def _kinematics_field(name: str, field_name: str, doc: str) -> Callable[..., Array]:
+    """A function giving one field of :func:`limb_kinematics` (``field_name``), documented ``doc``."""
+
+    def value(
+        mech: P3P4S,
+        pose: ArrayLike,
+        velocity: ArrayLike,
+        acceleration: ArrayLike,
+        *,
+        h_form: HForm = "corrected",
+    ) -> Array:
+        return getattr(
+            limb_kinematics(mech, pose, velocity, acceleration, h_form=h_form), field_name
+        )
+
+    value.__name__ = value.__qualname__ = name
+    value.__doc__ = doc
+    return value
 
 
-def rod_accelerations(
-    mech: P3P4S,
-    pose: ArrayLike,
-    velocity: ArrayLike,
-    acceleration: ArrayLike,
-    *,
-    h_form: HForm = "corrected",
-) -> Array:
-    """Eq (14): rod centroid accelerations ``a_di`` (..., 3 limbs, 3) in m/s^2."""
-    return limb_kinematics(mech, pose, velocity, acceleration, h_form=h_form).a_rod
-
-
-def rod_angular_accelerations(
-    mech: P3P4S,
-    pose: ArrayLike,
-    velocity: ArrayLike,
-    acceleration: ArrayLike,
-    *,
-    h_form: HForm = "corrected",
-) -> Array:
-    """Eq (15): rod angular accelerations ``alpha_i`` (..., 3 limbs, 3) in rad/s^2."""
-    return limb_kinematics(mech, pose, velocity, acceleration, h_form=h_form).alpha
+drive_accelerations = _kinematics_field(
+    "drive_accelerations", "qddot", "Eq (13): ``qddot = J a + v^T H v`` (..., 3) in m/s^2."
+)
+rod_accelerations = _kinematics_field(
+    "rod_accelerations",
+    "a_rod",
+    "Eq (14): rod centroid accelerations ``a_di`` (..., 3 limbs, 3) in m/s^2.",
+)
+rod_angular_accelerations = _kinematics_field(
+    "rod_angular_accelerations",
+    "alpha",
+    "Eq (15): rod angular accelerations ``alpha_i`` (..., 3 limbs, 3) in rad/s^2.",
+)
 
 
 # ---------------------------------------------------------------------------------------- dynamics
@@ -543,27 +543,16 @@ def inverse_dynamics(
     pose: ArrayLike,
     velocity: ArrayLike,
     acceleration: ArrayLike,
-    *,
-    h_form: HForm = "corrected",
-    gravity_moment: bool = False,
-    rod_inertia_factor: float | None = None,
+    **options: Any,
 ) -> Array:
     """Motor forces ``f`` (..., 3) in N along ``+m_i`` for the given platform motion (eqs 16-23).
 
-    Defaults implement the correct physics (docs/zhao2017_3p4s.md#s1.7); the keyword options reproduce the
-    paper's printed slips one by one (see :func:`force_terms`, :data:`PAPER_PRINTED`).
+    The sum of :func:`force_terms`, whose keywords ``options`` are (``h_form``,
+    ``gravity_moment``, ``rod_inertia_factor``). Defaults implement the correct physics
+    (docs/zhao2017_3p4s.md#s1.7); the keyword options reproduce the paper's printed slips one by
+    one (see :func:`force_terms`, :data:`PAPER_PRINTED`).
     """
-    terms = force_terms(
-        mech,
-        params,
-        pose,
-        velocity,
-        acceleration,
-        h_form=h_form,
-        gravity_moment=gravity_moment,
-        rod_inertia_factor=rod_inertia_factor,
-    )
-    return sum(terms.values())
+    return sum(force_terms(mech, params, pose, velocity, acceleration, **options).values())
 
 
 # ---------------------------------------------------------------------------------------- checks

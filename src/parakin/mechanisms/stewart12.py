@@ -40,8 +40,7 @@ from numpy.typing import ArrayLike
 import parakin.dynamics.jet as dj
 from parakin.dynamics.jet import Jet
 from parakin.dynamics.model import Bodies, MassModel, RigidBody, hexapod, hexapod_masses
-from parakin.errors import UnreachableError
-from parakin.geometry import quaternion
+from parakin.geometry import quaternion, skew
 from parakin.kernels import Kernel, evaluate
 from parakin.kernels import stewart12 as kernels
 from parakin.mechanisms.base import (
@@ -49,7 +48,7 @@ from parakin.mechanisms.base import (
     Mechanism,
     Skeleton,
     as_batch,
-    describe_first,
+    raise_first,
 )
 
 __all__ = [
@@ -76,18 +75,6 @@ NESTED_PASSIVE: dict[int, tuple[int, ...]] = {
 _H = 1e-30  # complex-step size: derivatives exact to rounding
 
 
-def _skew(v: Array) -> Array:
-    z = np.zeros_like(v[..., 0])
-    return np.stack(
-        [
-            np.stack([z, -v[..., 2], v[..., 1]], -1),
-            np.stack([v[..., 2], z, -v[..., 0]], -1),
-            np.stack([-v[..., 1], v[..., 0], z], -1),
-        ],
-        -2,
-    )
-
-
 def rotation_matrix(lam: Array, convention: str) -> Array:
     """Rotation ``(..., 3, 3)`` of the orientation parameters ``lam (..., 3)``; complex-safe
     (used with complex steps), no domain check (see :meth:`Stewart12.ik`)."""
@@ -96,10 +83,10 @@ def rotation_matrix(lam: Array, convention: str) -> Array:
         l0 = np.sqrt(l0sq)
         eye = np.broadcast_to(np.eye(3), lam.shape[:-1] + (3, 3))
         return (2 * l0sq - 1)[..., None, None] * eye + 2 * (
-            lam[..., :, None] * lam[..., None, :] + l0[..., None, None] * _skew(lam)
+            lam[..., :, None] * lam[..., None, :] + l0[..., None, None] * skew(lam)
         )
     if convention == "cayley":
-        s = _skew(lam)
+        s = skew(lam)
         k = 2.0 / (1.0 + np.einsum("...i,...i->...", lam, lam))
         return np.eye(3) + k[..., None, None] * (s + s @ s)
     if convention == "euler_xyz":
@@ -266,13 +253,14 @@ class Stewart12(Mechanism):
     def _check_orientation(self, x: Array) -> None:
         if self.convention == "euler_parameters":
             s = np.einsum("...i,...i->...", x[..., 3:], x[..., 3:])
-            bad = s >= 1.0
-            if np.any(bad):
-                idx = tuple(np.argwhere(bad)[0])
-                raise UnreachableError(
+            raise_first(
+                s >= 1.0,
+                x.shape[:-1],
+                lambda idx: (
                     f"|lambda|^2 = {s[idx]:.6g} must be < 1 for Euler parameters "
-                    f"(lambda0 = sqrt(1 - |lambda|^2)){describe_first(bad, x.shape[:-1])}"
-                )
+                    f"(lambda0 = sqrt(1 - |lambda|^2))"
+                ),
+            )
 
     def joint_centres(self, pose: ArrayLike) -> Array:
         """B1..B6 (..., 6, 3) in the inertial frame."""
@@ -350,7 +338,7 @@ class Stewart12(Mechanism):
             # d(R p)/d lambda_i = omega_i x (R p), omega = 2 (l0 I + lam lam^T / l0 + [lam]x) d lambda (the
             # angular velocity of the unit quaternion (l0, lam)), so e . d(R p)/d lambda_i = omega_i . (R p x e)
             l0 = np.sqrt(1.0 - np.einsum("...i,...i->...", lam, lam))[..., None, None]
-            omega = 2 * (l0 * np.eye(3) + lam[..., :, None] * lam[..., None, :] / l0 + _skew(lam))
+            omega = 2 * (l0 * np.eye(3) + lam[..., :, None] * lam[..., None, :] / l0 + skew(lam))
             c = np.stack(
                 [
                     w[..., 1] * e[..., 2] - w[..., 2] * e[..., 1],
@@ -381,7 +369,7 @@ class Stewart12(Mechanism):
         # dR/dlam_i = -4 lam_i I + 2 (e_i lam^T + lam e_i^T) - 2 (lam_i / l0) [lam]x + 2 l0 [e_i]x
         l0 = np.sqrt(1.0 - np.einsum("...i,...i->...", lam, lam))
         eye = np.eye(3)
-        sk = _skew(lam)
+        sk = skew(lam)
         out = []
         for i in range(3):
             outer = eye[i][:, None] * lam[..., None, :] + lam[..., :, None] * eye[i][None, :]
@@ -389,7 +377,7 @@ class Stewart12(Mechanism):
                 -4 * lam[..., i, None, None] * eye
                 + 2 * outer
                 - 2 * (lam[..., i] / l0)[..., None, None] * sk
-                + 2 * l0[..., None, None] * _skew(eye[i])
+                + 2 * l0[..., None, None] * skew(eye[i])
             )
         return np.stack(out, -3)
 
@@ -495,23 +483,22 @@ class Stewart12(Mechanism):
         """UnreachableError where a length is not positive or the 12 lengths do not assemble
         (``max |F| > compat_tol (n+L)^2``), naming the value and the limit."""
         q = as_batch(joints, 12, "joints")
-        bad = q <= 0
-        if np.any(bad):
-            idx = tuple(np.argwhere(bad)[0])
-            raise UnreachableError(
-                f"leg length l{idx[-1] + 1} = {q[idx]:.6g} m must be > 0"
-                f"{describe_first(np.any(bad, -1), q.shape[:-1])}"
-            )
+        raise_first(
+            q <= 0,
+            q.shape[:-1],
+            lambda idx: f"leg length l{idx[-1] + 1} = {q[idx]:.6g} m must be > 0",
+        )
         f = np.max(np.abs(self.compatibility(q)), axis=-1)
         limit = self.compat_tol * (self.n + self.L) ** 2
-        bad = ~(f <= limit)
-        if np.any(bad):
-            idx = tuple(np.argwhere(bad)[0])
-            raise UnreachableError(
-                f"leg lengths do not assemble: max |F| of the compatibility equations (21)-(26) = "
-                f"{f[idx]:.6g} m^2 exceeds the limit {limit:.3g} m^2 (compat_tol = {self.compat_tol:g} of "
-                f"(n+L)^2){describe_first(bad, q.shape[:-1])}"
-            )
+        raise_first(
+            ~(f <= limit),
+            q.shape[:-1],
+            lambda idx: (
+                f"leg lengths do not assemble: max |F| of the compatibility equations "
+                f"(21)-(26) = {f[idx]:.6g} m^2 exceeds the limit {limit:.3g} m^2 (compat_tol = "
+                f"{self.compat_tol:g} of (n+L)^2)"
+            ),
+        )
 
     # ------------------------------------------------------------------ drawing
     def skeleton(self, pose: ArrayLike, passive: tuple[int, ...] = ()) -> Skeleton:

@@ -22,6 +22,7 @@ and verified by the IK.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 from types import ModuleType
@@ -30,13 +31,17 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 
-import parakin.dynamics.jet as dj
-from parakin.dynamics.jet import Jet
-from parakin.dynamics.model import Bodies, MassModel, hexapod, hexapod_masses
+from parakin.dynamics.model import MassModel, hexapod_masses
 from parakin.errors import UnreachableError
-from parakin.geometry import euler_zyx, euler_zyx_from_matrix
+from parakin.geometry import euler_zyx_from_matrix
 from parakin.kernels import stewart36 as kernels
-from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
+from parakin.mechanisms.base import (
+    Array,
+    as_batch,
+    describe_first,
+    raise_first,
+)
+from parakin.mechanisms.stewart66_legs import SixLegs
 
 __all__ = ["Stewart36", "TABLE3_ROW1"]
 
@@ -48,7 +53,7 @@ TABLE3_ROW1 = (79.675, 47.468, 10.064, -0.282, 0.130, 1.571)
 
 
 @dataclass(frozen=True)
-class Stewart36(Mechanism):
+class Stewart36(SixLegs):
     """3-6 Stewart platform, dimensionless lengths (top side ``a`` = 1, docs/li2017_stewart36.md#s1.1).
 
     ``b``: base hexagon side, LOST with Table 2 (docs/li2017_stewart36.md#g1): default 3 (ASSUMED; sweep 0.5, 1, 2, 3).
@@ -58,9 +63,9 @@ class Stewart36(Mechanism):
     a: float = 1.0  #: top triangle side (dimensionless unit, paper §3)
 
     name: ClassVar[str] = "stewart36"
+    leg_top: ClassVar[Array] = LEG_TOP  # two legs share each top point
+    top_label: ClassVar[str] = "A"
     kernels: ClassVar[ModuleType] = kernels
-    pose_names: ClassVar[tuple[str, ...]] = ("alpha", "beta", "gamma", "X", "Y", "Z")
-    joint_names: ClassVar[tuple[str, ...]] = ("L1", "L2", "L3", "L4", "L5", "L6")
     pose_units: ClassVar[tuple[str, ...]] = ("rad", "rad", "rad", "1", "1", "1")
     joint_units: ClassVar[tuple[str, ...]] = ("1",) * 6
     paper_pose_units: ClassVar[tuple[str, ...]] = ("deg", "deg", "deg", "1", "1", "1")
@@ -80,6 +85,11 @@ class Stewart36(Mechanism):
         return np.array(
             [[-a / (2 * _SQ3), a / 2, 0.0], [-a / (2 * _SQ3), -a / 2, 0.0], [a / _SQ3, 0.0, 0.0]]
         )
+
+    @property
+    def platform_points(self) -> Array:
+        """:attr:`top_points`, as :class:`SixLegs` names them."""
+        return self.top_points
 
     @cached_property
     def base_points(self) -> Array:
@@ -101,11 +111,6 @@ class Stewart36(Mechanism):
         )
 
     # ------------------------------------------------------------------ kinematics
-    def rotation(self, pose: ArrayLike) -> Array:
-        """``T = Rz(alpha) Ry(beta) Rx(gamma)`` (..., 3, 3)."""
-        x = as_batch(pose, 6, "pose")
-        return euler_zyx(x[..., 0], x[..., 1], x[..., 2])
-
     def platform_world(self, pose: ArrayLike) -> Array:
         """A1, A2, A3 in the fixed frame (eq. 1), shape (..., 3, 3)."""
         x = as_batch(pose, 6, "pose")
@@ -125,56 +130,35 @@ class Stewart36(Mechanism):
         f = self.residual(pose, joints)
         return np.sum(f * f, axis=-1)
 
-    def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike) -> Array:
-        """``d f / d L = -2 diag(L)``."""
-        q = as_batch(joints, 6, "joints")
-        return -2 * q[..., :, None] * np.eye(6)
-
     def check_joints(self, joints: ArrayLike) -> None:
         """Raise UnreachableError where a leg pair cannot reach its base edge: ``L_i > 0`` and
         ``|L_2k-1 - L_2k| <= b <= L_2k-1 + L_2k`` (the circle of A_k must exist, docs/li2017_stewart36.md#s1.5).
         Inputs passing this may still have no real solution (the triangle does not close):
         :meth:`fk_all` then returns no real pose."""
         q = as_batch(joints, 6, "joints")
-        neg = q <= 0
-        if np.any(neg):
-            idx = tuple(np.argwhere(neg)[0])
-            raise UnreachableError(
-                f"leg length L{idx[-1] + 1} = {float(q[idx]):g} must be > 0"
-                f"{describe_first(np.any(neg, -1), q.shape[:-1])}"
-            )
+        self._check_positive(q)
         l1, l2 = q[..., 0::2], q[..., 1::2]
-        far = np.abs(l1 - l2) > self.b
-        near = l1 + l2 < self.b
-        for bad, what in (
-            (far, "|L{i} - L{j}| = {v:.6g} exceeds the base edge b = {b}"),
-            (near, "L{i} + L{j} = {v:.6g} is shorter than the base edge b = {b}"),
-        ):
-            if np.any(bad):
-                idx = tuple(np.argwhere(bad)[0])
+        gap, reach = np.abs(l1 - l2), l1 + l2
+
+        def cannot_meet(what: str, value: Array) -> Callable[[tuple[int, ...]], str]:
+            def message(idx: tuple[int, ...]) -> str:
                 k = idx[-1]
-                val = abs(l1[idx] - l2[idx]) if bad is far else l1[idx] + l2[idx]
-                raise UnreachableError(
-                    what.format(i=2 * k + 1, j=2 * k + 2, v=val, b=self.b)
+                return (
+                    what.format(i=2 * k + 1, j=2 * k + 2, v=value[idx], b=self.b)
                     + f": legs {2 * k + 1}, {2 * k + 2} cannot meet at A{k + 1}"
-                    + describe_first(np.any(bad, -1), q.shape[:-1])
                 )
 
-    # ------------------------------------------------------------------ drawing
-    def skeleton(self, pose: ArrayLike) -> Skeleton:
-        """Fig. 1 redrawn from the model: hexagon base, triangle platform, six legs, both frames."""
-        x = as_batch(pose, 6, "pose")
-        if x.ndim != 1:
-            raise ValueError(f"skeleton() draws one pose, got a batch of shape {x.shape[:-1]}")
-        top = self.platform_world(x)
-        pts = {f"B_{k + 1}": self.base_points[k] for k in range(6)}
-        pts.update({f"A_{k + 1}": top[k] for k in range(3)})
-        segs = [("actuator", np.stack([top[LEG_TOP[i]], self.base_points[i]])) for i in range(6)]
-        return Skeleton(
-            points=pts,
-            segments=segs,
-            polygons=[("base", self.base_points.copy()), ("platform", top.copy())],
-            frames={"O": (np.zeros(3), np.eye(3)), "o": (x[3:].copy(), self.rotation(x))},
+            return message
+
+        raise_first(
+            gap > self.b,
+            q.shape[:-1],
+            cannot_meet("|L{i} - L{j}| = {v:.6g} exceeds the base edge b = {b}", gap),
+        )
+        raise_first(
+            reach < self.b,
+            q.shape[:-1],
+            cannot_meet("L{i} + L{j} = {v:.6g} is shorter than the base edge b = {b}", reach),
         )
 
     # ------------------------------------------------------------------ all forward solutions
@@ -444,12 +428,6 @@ class Stewart36(Mechanism):
         return hexapod_masses(
             self.top_points, leg, 5.0, 1.0, 0.5, note="stewart36 illustrative defaults"
         )
-
-    def bodies(self, pose: Jet) -> Bodies:
-        """The platform (``T = Rz Ry Rx``, origin ``O_A``) and six S-P-S legs, leg i from ``B_i``
-        to ``A_p(i)`` (two legs share each top point; :func:`parakin.dynamics.model.hexapod`)."""
-        rotation = dj.euler_zyx(pose[..., 0], pose[..., 1], pose[..., 2])
-        return hexapod(pose[..., 3:], rotation, self.base_points, self.top_points[LEG_TOP])
 
 
 # ---------------------------------------------------------------------------------------- helpers

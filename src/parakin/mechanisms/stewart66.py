@@ -36,14 +36,17 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 
-import parakin.dynamics.jet as dj
 import parakin.mechanisms.stewart66_homotopy as hc
-from parakin.dynamics.jet import Jet
-from parakin.dynamics.model import Bodies, MassModel, hexapod, hexapod_masses
+from parakin.dynamics.model import MassModel, hexapod_masses
 from parakin.errors import UnreachableError
 from parakin.geometry import euler_zyx, euler_zyx_from_matrix
 from parakin.kernels import stewart66 as stewart66_kernels
-from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
+from parakin.mechanisms.base import (
+    Array,
+    as_batch,
+    describe_first,
+)
+from parakin.mechanisms.stewart66_legs import SixLegs
 
 __all__ = [
     "Stewart66",
@@ -180,7 +183,7 @@ class FKAll:
 
 
 @dataclass(frozen=True)
-class Stewart66(Mechanism):
+class Stewart66(SixLegs):
     """General 6-6 Gough-Stewart platform (SI units): ``base`` and ``platform`` are (6, 3) point sets
     (stored as tuples, so the mechanism stays hashable and its parameters print as JSON).
 
@@ -194,8 +197,6 @@ class Stewart66(Mechanism):
     allow_coincident: bool = False
 
     name: ClassVar[str] = "stewart66"
-    pose_names: ClassVar[tuple[str, ...]] = ("alpha", "beta", "gamma", "X", "Y", "Z")
-    joint_names: ClassVar[tuple[str, ...]] = ("L1", "L2", "L3", "L4", "L5", "L6")
     pose_units: ClassVar[tuple[str, ...]] = ("rad", "rad", "rad", "m", "m", "m")
     joint_units: ClassVar[tuple[str, ...]] = ("m",) * 6
     paper_pose_units: ClassVar[tuple[str, ...]] = ("deg", "deg", "deg", "m", "m", "m")
@@ -281,10 +282,6 @@ class Stewart66(Mechanism):
         )
 
     # ------------------------------------------------------------------ kinematics
-    def rotation(self, pose: ArrayLike) -> Array:
-        x = as_batch(pose, 6, "pose")
-        return euler_zyx(x[..., 0], x[..., 1], x[..., 2])
-
     def platform_world(self, pose: ArrayLike) -> Array:
         """Platform anchors in the fixed frame, (..., 6, 3)."""
         x = as_batch(pose, 6, "pose")
@@ -318,37 +315,10 @@ class Stewart66(Mechanism):
         cols = (c[..., 2], ca * c[..., 1] - sa * c[..., 0], np.einsum("...j,...ij->...i", tx, c))
         return 2 * np.concatenate([np.stack(cols, axis=-1), v], axis=-1)
 
-    def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike) -> Array:
-        """``d f / d L = -2 diag(L)``."""
-        q = as_batch(joints, 6, "joints")
-        return -2 * q[..., :, None] * np.eye(6)
-
     def check_joints(self, joints: ArrayLike) -> None:
         """Raise UnreachableError where a leg length is not > 0 (no cheap exact test of assembly
         exists for the 6-6; :meth:`fk_all` reports inputs without a real solution)."""
-        q = as_batch(joints, 6, "joints")
-        neg = q <= 0
-        if np.any(neg):
-            idx = tuple(np.argwhere(neg)[0])
-            raise UnreachableError(
-                f"leg length L{idx[-1] + 1} = {float(q[idx]):g} must be > 0"
-                f"{describe_first(np.any(neg, -1), q.shape[:-1])}"
-            )
-
-    def skeleton(self, pose: ArrayLike) -> Skeleton:
-        x = as_batch(pose, 6, "pose")
-        if x.ndim != 1:
-            raise ValueError(f"skeleton() draws one pose, got a batch of shape {x.shape[:-1]}")
-        top = self.platform_world(x)
-        pts = {f"B_{k + 1}": self.base_points[k] for k in range(6)}
-        pts.update({f"P_{k + 1}": top[k] for k in range(6)})
-        segs = [("actuator", np.stack([top[i], self.base_points[i]])) for i in range(6)]
-        return Skeleton(
-            points=pts,
-            segments=segs,
-            polygons=[("base", self.base_points.copy()), ("platform", top.copy())],
-            frames={"O": (np.zeros(3), np.eye(3)), "o": (x[3:].copy(), self.rotation(x))},
-        )
+        self._check_positive(as_batch(joints, 6, "joints"))
 
     # ------------------------------------------------------------------ all forward solutions
     @cached_property
@@ -648,9 +618,3 @@ class Stewart66(Mechanism):
         return hexapod_masses(
             self.platform_points, leg, 10.0, 1.5, 1.0, note="stewart66 illustrative defaults"
         )
-
-    def bodies(self, pose: Jet) -> Bodies:
-        """The platform (Z-Y-X Euler rotation, origin ``(X, Y, Z)``) and six S-P-S legs
-        :func:`parakin.dynamics.model.hexapod`; joints: the leg lengths."""
-        rotation = dj.euler_zyx(pose[..., 0], pose[..., 1], pose[..., 2])
-        return hexapod(pose[..., 3:], rotation, self.base_points, self.platform_points)

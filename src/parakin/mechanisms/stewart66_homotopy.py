@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from parakin.geometry import skew
+
 __all__ = [
     "GAMMA",
     "ALPHA0",
@@ -75,18 +77,6 @@ GAMMA = _gamma()
 _E = np.diag([1.0, 1, 1, 1, 0, 0, 0, 0])  # x^T E x = e.e
 
 
-def _skew(v: np.ndarray) -> np.ndarray:
-    z = np.zeros_like(v[..., 0])
-    return np.stack(
-        [
-            np.stack([z, -v[..., 2], v[..., 1]], -1),
-            np.stack([v[..., 2], z, -v[..., 0]], -1),
-            np.stack([-v[..., 1], v[..., 0], z], -1),
-        ],
-        -2,
-    )
-
-
 def quadrics(base: np.ndarray, platform: np.ndarray, c: np.ndarray) -> np.ndarray:
     """The seven symmetric matrices ``Q_k`` (..., 7, 8, 8) of the module docstring, complex.
 
@@ -104,7 +94,7 @@ def quadrics(base: np.ndarray, platform: np.ndarray, c: np.ndarray) -> np.ndarra
     qeg = np.zeros(np.broadcast_shapes(b.shape, p.shape)[:-1] + (4, 4), dtype=np.result_type(b, p))
     qeg[..., 0, 1:] = d
     qeg[..., 1:, 0] = -d
-    qeg[..., 1:, 1:] = _skew(p) + _skew(b)
+    qeg[..., 1:, 1:] = skew(p) + skew(b)
     q[..., 1:, :4, :4] = qee
     q[..., 1:, :4, 4:] = qeg
     q[..., 1:, 4:, :4] = np.swapaxes(qeg, -1, -2)

@@ -38,11 +38,10 @@ from numpy.typing import ArrayLike
 import parakin.dynamics.jet as dj
 from parakin.dynamics.jet import Jet
 from parakin.dynamics.model import Bodies, BodyGroup, Closure, MassModel, RigidBody, strut
-from parakin.errors import UnreachableError
 from parakin.geometry import rot_x, rot_y
 from parakin.kernels import evaluate
 from parakin.kernels import ups2 as kernels
-from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, describe_first
+from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, raise_first
 
 __all__ = ["UPS2"]
 
@@ -214,27 +213,28 @@ class UPS2(Mechanism):
         """
         x = as_batch(pose, 3, "pose")
         q, ok = evaluate(self._declared_kernel, "ik", x)
-        bad = ~ok
-        if np.any(bad):
-            idx = tuple(np.argwhere(bad)[0])
-            raise UnreachableError(
+        raise_first(
+            ~ok,
+            x.shape[:-1],
+            lambda idx: (
                 f"pose Y = {x[idx][2]:.6g} m is unreachable: |Y| must be < c = {self.c} m "
-                f"(eq. 14, rho = sqrt(c^2 - Y^2)){describe_first(bad, x.shape[:-1])}"
-            )
+                f"(eq. 14, rho = sqrt(c^2 - Y^2))"
+            ),
+        )
         if check_limits:
             self._check_limits(q)
         return q
 
     def _check_limits(self, q: Array) -> None:
         lim = np.asarray(self.stroke_limits)
-        over = np.abs(q) > lim * (1 + 1e-12)
-        if np.any(over):
-            idx = tuple(np.argwhere(over)[0])
-            j = idx[-1]
-            raise UnreachableError(
-                f"stroke l{j + 1} = {q[idx] * 1e3:.6g} mm exceeds the limit +/-{lim[j] * 1e3:.6g} mm "
-                f"(eq. 19){describe_first(np.any(over, axis=-1), q.shape[:-1])}"
-            )
+        raise_first(
+            np.abs(q) > lim * (1 + 1e-12),
+            q.shape[:-1],
+            lambda idx: (
+                f"stroke l{idx[-1] + 1} = {q[idx] * 1e3:.6g} mm exceeds the limit "
+                f"+/-{lim[idx[-1]] * 1e3:.6g} mm (eq. 19)"
+            ),
+        )
 
     def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike | None = None) -> Array:
         """``d residual / d q = -I``."""
@@ -391,14 +391,15 @@ class UPS2(Mechanism):
                 np.linalg.norm(np.nan_to_num(sols - self.home()) / (hi - lo), axis=-1),
                 np.inf,
             )
-        none = ~np.any(inside, axis=-1)
-        if np.any(none):
-            idx = tuple(np.argwhere(none)[0]) if none.ndim else ()
-            raise UnreachableError(
-                f"strokes (l1, l2, l3) = {tuple(np.round(q[idx] * 1e3, 6).tolist())} mm cannot be assembled "
-                f"with |beta|, |gamma| < 90 deg (Y = {float(self.y_from_l1(q[idx][0] + self.home_lengths[0])):.6g} m, "
-                f"c = {self.c} m){describe_first(none, q.shape[:-1])}"
-            )
+        raise_first(
+            ~np.any(inside, axis=-1),
+            q.shape[:-1],
+            lambda idx: (
+                f"strokes (l1, l2, l3) = {tuple(np.round(q[idx] * 1e3, 6).tolist())} mm cannot "
+                f"be assembled with |beta|, |gamma| < 90 deg (Y = "
+                f"{float(self.y_from_l1(q[idx][0] + self.home_lengths[0])):.6g} m, c = {self.c} m)"
+            ),
+        )
         best = np.argmin(dist, axis=-1)
         return np.take_along_axis(sols, best[..., None, None], axis=-2)[..., 0, :]
 

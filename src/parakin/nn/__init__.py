@@ -5,15 +5,8 @@ Levenberg-Marquardt as MATLAB's ``trainlm``; :func:`load_network` reads a saved 
 that ships with parakin (:mod:`parakin.nn.packaged`).
 """
 
-from parakin.nn.bp import BPNetwork, residual_jacobian, residuals, torch_forward, train_lm
+from parakin.nn import bp
+from parakin.nn.bp import *  # noqa: F403  (the names of bp.__all__, declared there once)
 from parakin.nn.packaged import load_network, packaged_network_path
 
-__all__ = [
-    "BPNetwork",
-    "train_lm",
-    "torch_forward",
-    "residuals",
-    "residual_jacobian",
-    "load_network",
-    "packaged_network_path",
-]
+__all__ = [*bp.__all__, "load_network", "packaged_network_path"]
