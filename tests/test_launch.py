@@ -25,6 +25,7 @@ pytestmark = pytest.mark.skipif(not launch.supported(), reason="no fork/pidfd on
 def _env(**extra: str) -> dict[str, str]:
     env = {k: v for k, v in os.environ.items() if k != launch.ENV}
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), env.get("PYTHONPATH", "")])
+    env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")  # as in a one-thread pipeline job
     env.update(extra)
     return env
 
@@ -121,6 +122,31 @@ def test_without_a_server_the_job_runs_itself_and_starts_one(tmp_path):
     assert first.returncode == 0, first.stderr
     assert (tmp_path / "out" / "table1.csv").exists()
     assert sock.with_suffix(".log").exists()  # a server was started for the jobs to come
+
+
+def test_only_single_threaded_jobs_are_served():
+    """A served job's BLAS has one thread (its pool is made before the fork): a job that asks
+    for more, or does not say, runs alone; an empty PARAKIN_SERVER turns the server off."""
+    one = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+    assert launch.servable({launch.ENV: "auto", **one})
+    assert not launch.servable({launch.ENV: "", **one})
+    assert not launch.servable(one)
+    assert not launch.servable({launch.ENV: "auto", **one, "OMP_NUM_THREADS": "2"})
+    assert not launch.servable({launch.ENV: "auto", "OPENBLAS_NUM_THREADS": "1"})
+
+
+def test_one_server_per_slurm_job(monkeypatch, tmp_path):
+    """A job never hands its work to a server in another SLURM job's allocation (SLURM would
+    count it there and stop it with that job); a path in PARAKIN_SERVER is used as it is."""
+    monkeypatch.setenv(launch.ENV, "auto")
+    monkeypatch.delenv("SLURM_JOB_ID", raising=False)
+    here = launch.socket_path()
+    monkeypatch.setenv("SLURM_JOB_ID", "101")
+    first = launch.socket_path()
+    monkeypatch.setenv("SLURM_JOB_ID", "102")
+    assert len({here, first, launch.socket_path()}) == 3
+    monkeypatch.setenv(launch.ENV, str(tmp_path / "s.sock"))
+    assert launch.socket_path() == tmp_path / "s.sock"
 
 
 def test_source_stamp_follows_the_sources(tmp_path):

@@ -1,9 +1,15 @@
 """The Snakemake pipeline end to end on the quick config: it runs, and two runs give
-byte-identical tables and figures (seeds from config, deterministic output)."""
+byte-identical tables and figures (seeds from config, deterministic output): the first with every
+job in a process of its own, the second with the single-threaded jobs run by the job server (the
+pipeline's default, parakin.launch), so the server is shown to change no output."""
 
+import contextlib
 import filecmp
 import json
+import os
+import re
 import shutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -12,13 +18,16 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from parakin import launch
 from parakin.io import is_timing_column
 from parakin.pipeline import artefacts
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def run_pipeline(workdir: Path) -> Path:
+def run_pipeline(workdir: Path, server: str = "") -> Path:
+    """The quick pipeline in a copy of the workflow in ``workdir``; ``server``: the job server's
+    socket (``PARAKIN_SERVER``), empty for none."""
     for item in ("Snakefile", "workflow", "config"):
         src = ROOT / item
         (shutil.copytree if src.is_dir() else shutil.copy)(src, workdir / item)
@@ -35,6 +44,7 @@ def run_pipeline(workdir: Path) -> Path:
             "-q",
         ],
         cwd=workdir,
+        env={**os.environ, launch.ENV: server},
         capture_output=True,
         text=True,
         timeout=900,
@@ -44,10 +54,20 @@ def run_pipeline(workdir: Path) -> Path:
 
 
 @pytest.fixture(scope="module")
-def two_runs(tmp_path_factory):
-    return run_pipeline(tmp_path_factory.mktemp("run1")), run_pipeline(
-        tmp_path_factory.mktemp("run2")
-    )
+def served(tmp_path_factory):
+    """The job server's socket for the second run; afterwards its log (one line per job)."""
+    socket = tmp_path_factory.mktemp("server") / "s.sock"
+    yield socket
+    log = socket.with_suffix(".log")
+    if log.exists() and (m := re.search(r"parakin server (\d+):", log.read_text())):
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(int(m.group(1)), signal.SIGTERM)
+
+
+@pytest.fixture(scope="module")
+def two_runs(tmp_path_factory, served):
+    alone = run_pipeline(tmp_path_factory.mktemp("run1"))
+    return alone, run_pipeline(tmp_path_factory.mktemp("run2"), server=str(served))
 
 
 def test_pipeline_writes_table1_and_report(two_runs):
@@ -102,6 +122,24 @@ def test_two_runs_are_byte_identical(two_runs):
     gen_a, gen_b = a.parent / "generated", b.parent / "generated"
     for f in sorted(p.relative_to(gen_a) for p in gen_a.rglob("*") if p.is_file()):
         assert _same(gen_a / f, gen_b / f), f
+
+
+@pytest.mark.skipif(not launch.supported(), reason="no fork/pidfd on this platform")
+def test_second_run_went_through_the_job_server(two_runs, served):
+    """The byte-identity above compares served jobs with jobs run alone: the second run's
+    single-threaded artefact jobs went through the server (one line each in its log), but for
+    those that came before it listened, and none failed; the multi-threaded ones ran alone."""
+    log = served.with_suffix(".log").read_text()
+    done = dict(
+        ((s, n), code)
+        for s, n, code in re.findall(r"parakin reproduce (\S+) (\S+): exit (-?\d+)", log)
+    )
+    logs = two_runs[1].parent / "logs"
+    ran = [a for a in artefacts().values() if (logs / a.study / f"{a.name}.log").exists()]
+    single = {(a.study, a.name) for a in ran if a.threads == 1}
+    assert set(done) <= single
+    assert len(done) >= 0.8 * len(single), f"{len(done)} of {len(single)} jobs served"
+    assert set(done.values()) == {"0"}
 
 
 def test_quick_table1_agrees_with_committed(two_runs):

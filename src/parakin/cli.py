@@ -23,7 +23,6 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from parakin import kernels, mechanisms
 from parakin.errors import ParakinError
@@ -158,6 +157,8 @@ def _param_text(text: str, default):
     YAML/JSON list (``[[0, 0, 0], [1, 0, 0], ...]``)."""
     if not _numeric_shape(default):
         return text
+    import yaml  # here, not at the top: a solve on the command line does not need it
+
     try:
         return yaml.safe_load(text)
     except yaml.YAMLError:
@@ -166,6 +167,8 @@ def _param_text(text: str, default):
 
 def _geometry(path: str) -> dict:
     """The parameters in ``--geometry FILE`` (YAML or JSON, the names of the Python API)."""
+    import yaml
+
     from parakin.config import check_bounds
 
     try:
@@ -843,6 +846,19 @@ def cmd_report(args) -> int:
     return 0
 
 
+class _VersionAction(argparse.Action):
+    """``--version``: argparse's version action, with the version looked up only when asked
+    (importlib.metadata is about 10 ms of every command's start otherwise)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, **kwargs):
+        kwargs.setdefault("help", "show the program's version number and exit")
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"parakin {_version()}")
+        parser.exit()
+
+
 def _version() -> str:
     from importlib.metadata import PackageNotFoundError, version
 
@@ -938,7 +954,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="parakin: parallel-mechanism kinematics (IK/FK, solvers, benchmarks) and the "
         "reproduction of four papers.",
     )
-    parser.add_argument("--version", action="version", version=f"parakin {_version()}")
+    parser.add_argument("--version", action=_VersionAction)
     action = parser.add_subparsers(
         title="commands", dest="command", required=True, metavar="COMMAND", parser_class=_Parser
     )

@@ -10,15 +10,26 @@ carries over from one job to the next) with its own arguments, working directory
 its output comes back on the command's stdout and its exit status is the command's.
 
 The first job finds no server, starts one in the background and runs itself. The server stops
-after ``PARAKIN_SERVER_IDLE`` seconds without a job (default 300) and as soon as parakin's source
+after ``PARAKIN_SERVER_IDLE`` seconds without a job (default 120) and as soon as parakin's source
 files change (a job never runs on other code than its own: it then runs itself, and the next one
-starts a new server). Without the variable, or where anything goes wrong on the way, the command
-runs in its own process as always. BLAS runs on one thread in the server's jobs (numpy's thread
-pool is made before the fork); numba and torch threads are as in a job of its own.
+starts a new server). Without the variable (or with it empty), or where anything goes wrong on the
+way, the command runs in its own process as always. The pipeline sets ``PARAKIN_SERVER=auto`` for
+its jobs unless the variable is already set (workflow/rules/common.smk).
+
+Only single-threaded jobs are served: BLAS runs on one thread in the server's jobs (numpy's thread
+pool is made before the fork), so a job that asks for more (``OPENBLAS_NUM_THREADS`` or
+``OMP_NUM_THREADS`` other than 1, or unset) runs in its own process, where its BLAS gets the
+threads it asks for; numba and torch threads are as in a job of its own. The long jobs are the
+multi-threaded ones, so their start-up is a small part of their CPU anyway.
+
+A served job's log counts as start-up its own CPU before the artefact plus the CPU its client
+command spent before handing it over (:func:`client_cpu`). The server's own warm-up, paid once per
+server, is written to the server's log beside its socket.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -41,12 +52,18 @@ _TRAILER = b"\x00parakin-exit "
 _SOURCES = Path(__file__).resolve().parent
 
 
+#: the client command's CPU seconds before it handed its job over (set in a served job only)
+_CLIENT_CPU = 0.0
+#: the thread variables a served job's BLAS must ask no more than one thread of
+_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")
+
+
 def main(argv: list[str] | None = None) -> int:
-    """``parakin ...``: a pipeline job (:data:`PIPELINE_COMMANDS`) through the server where
-    ``PARAKIN_SERVER`` is set, everything else (and any job the server cannot take) by
-    :func:`parakin.cli.main`."""
+    """``parakin ...``: a single-threaded pipeline job (:data:`PIPELINE_COMMANDS`) through the
+    server where ``PARAKIN_SERVER`` is set, everything else (and any job the server cannot take)
+    by :func:`parakin.cli.main`."""
     args = sys.argv[1:] if argv is None else list(argv)
-    if args[:1] and args[0] in PIPELINE_COMMANDS and os.environ.get(ENV) and supported():
+    if args[:1] and args[0] in PIPELINE_COMMANDS and servable(os.environ) and supported():
         code = _delegate(args)
         if code is not None:
             return code
@@ -55,18 +72,33 @@ def main(argv: list[str] | None = None) -> int:
     return cli_main(args)
 
 
+def servable(env) -> bool:
+    """Whether a job with environment ``env`` goes to the server: ``PARAKIN_SERVER`` is set and
+    not empty, and it asks BLAS for one thread (see the module)."""
+    return bool(env.get(ENV)) and all(env.get(v) == "1" for v in _THREAD_VARIABLES)
+
+
+def client_cpu() -> float:
+    """CPU seconds the client command spent before handing this job to the server (0 in a job
+    that runs in its own process): part of the job's start-up."""
+    return _CLIENT_CPU
+
+
 def supported() -> bool:
     """Whether this platform can run the server (fork, Unix sockets, Linux's pidfd)."""
     return hasattr(os, "fork") and hasattr(os, "pidfd_open") and hasattr(socket, "AF_UNIX")
 
 
 def socket_path() -> Path:
-    """The server's socket: ``$PARAKIN_SERVER`` if it is a path, else one per user, Python and
-    parakin checkout in the temporary directory."""
+    """The server's socket: ``$PARAKIN_SERVER`` if it is a path, else one per user, Python,
+    parakin checkout and SLURM job in the temporary directory. (Per SLURM job: a server lives in
+    the job that started it, and SLURM stops it with that job; a job of its own must not run its
+    work in another job's allocation.)"""
     value = os.environ.get(ENV, "auto")
     if value not in ("auto", "1", "on"):
         return Path(value)
-    key = hashlib.sha256(f"{sys.executable}\0{_SOURCES}".encode()).hexdigest()[:12]
+    slurm_job = os.environ.get("SLURM_JOB_ID", "")
+    key = hashlib.sha256(f"{sys.executable}\0{_SOURCES}\0{slurm_job}".encode()).hexdigest()[:12]
     user = os.getuid() if hasattr(os, "getuid") else "user"
     return Path(tempfile.gettempdir()) / f"parakin-{user}" / f"server-{key}.sock"
 
@@ -94,6 +126,7 @@ def _delegate(args: list[str]) -> int | None:
     with conn:
         request = {"argv": args, "cwd": os.getcwd(), "env": dict(os.environ)}
         request["stamp"] = source_stamp()
+        request["cpu"] = time.process_time()
         try:
             conn.sendall(json.dumps(request).encode() + b"\n")
             if conn.recv(len(_ACCEPTED)) != _ACCEPTED:
@@ -127,10 +160,23 @@ def _relay(conn: socket.socket) -> int:
     return int(code.strip() or 1)
 
 
+#: seconds a server may take to warm up and listen before another job may start one
+_STARTING_S = 60.0
+
+
 def _start_server(path: Path) -> None:
-    """Start a server on ``path`` in the background (its log beside the socket)."""
+    """Start a server on ``path`` in the background (its log beside the socket), unless another
+    job started one less than :data:`_STARTING_S` ago that is still warming up (its marker
+    ``.starting`` beside the socket): the jobs that come meanwhile run on their own rather than
+    each paying a server's warm-up."""
+    starting = path.with_suffix(".starting")
     try:
         path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+        with contextlib.suppress(FileNotFoundError):
+            if time.time() - starting.stat().st_mtime < _STARTING_S:
+                return
+            starting.unlink()
+        os.close(os.open(starting, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
         if path.exists():
             path.unlink()  # a server that died: nobody listens
         log = open(path.with_suffix(".log"), "ab")
@@ -172,6 +218,8 @@ def _run_job(conn: socket.socket, request: dict) -> None:
         os.environ.clear()
         os.environ.update(request["env"])
         sys.argv = ["parakin", *request["argv"]]
+        global _CLIENT_CPU
+        _CLIENT_CPU = float(request.get("cpu", 0.0))
         from parakin.cli import main as cli_main
 
         code = cli_main(request["argv"])
@@ -189,19 +237,22 @@ def _run_job(conn: socket.socket, request: dict) -> None:
 
 def serve(path: Path, idle: float | None = None) -> None:
     """Listen on ``path`` and run each job in a fork of this warm process (see the module)."""
-    idle = float(os.environ.get("PARAKIN_SERVER_IDLE", "300")) if idle is None else idle
+    idle = float(os.environ.get("PARAKIN_SERVER_IDLE", "120")) if idle is None else idle
     _warm_up()
+    print(f"parakin server {os.getpid()}: warm-up {time.process_time():.3f} s of CPU", flush=True)
     stamp = source_stamp()
     path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
     listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     try:
         listener.bind(str(path))
     except OSError:  # another server is there first
+        path.with_suffix(".starting").unlink(missing_ok=True)
         return
     listener.listen(64)
+    path.with_suffix(".starting").unlink(missing_ok=True)
     sel = selectors.DefaultSelector()
     sel.register(listener, selectors.EVENT_READ)
-    jobs: dict[int, tuple[socket.socket, int]] = {}  # pidfd -> (connection, pid)
+    jobs: dict[int, tuple[socket.socket, int, str]] = {}  # pidfd -> (connection, pid, command)
     last = time.monotonic()
     try:
         while jobs or time.monotonic() - last < idle:
@@ -218,6 +269,16 @@ def serve(path: Path, idle: float | None = None) -> None:
         sel.close()
         listener.close()
         path.unlink(missing_ok=True)
+        import resource  # Unix only, as the server is
+
+        cpu = sum(
+            getattr(resource.getrusage(who), f)
+            for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)
+            for f in ("ru_utime", "ru_stime")
+        )
+        print(
+            f"parakin server {os.getpid()}: stopped, {cpu:.3f} s of CPU with its jobs", flush=True
+        )
 
 
 def _accept(listener, stamp: str, sel, jobs) -> bool:
@@ -245,21 +306,22 @@ def _accept(listener, stamp: str, sel, jobs) -> bool:
     if pid == 0:
         _run_job(conn, request)
     fd = os.pidfd_open(pid)
-    jobs[fd] = (conn, pid)
+    jobs[fd] = (conn, pid, " ".join(request["argv"][:3]))
     sel.register(fd, selectors.EVENT_READ)
     sel.register(conn, selectors.EVENT_READ, pid)  # readable: the client went away
     return True
 
 
 def _finish(fd: int, sel, jobs) -> None:
-    """A job ended: its exit status to its client."""
-    conn, pid = jobs.pop(fd)
+    """A job ended: its exit status to its client (and a line to the server's log)."""
+    conn, pid, command = jobs.pop(fd)
     sel.unregister(fd)
     sel.unregister(conn)
     os.close(fd)
     _, status = os.waitpid(pid, 0)
     code = os.waitstatus_to_exitcode(status)
     code = code if code >= 0 else 128 - code  # killed by a signal: the shell's convention
+    print(f"job {pid}: parakin {command}: exit {code}", flush=True)
     try:
         conn.sendall(_TRAILER + str(code).encode())
     except OSError:

@@ -14,7 +14,7 @@ import sys
 import time
 from pathlib import Path
 
-from parakin import papers, registry
+from parakin import launch, papers, registry
 from parakin import studies as extra_studies
 from parakin.config import DEFAULT_CONFIG, ROOT, load_config
 from parakin.errors import ConfigError
@@ -101,7 +101,8 @@ def reproduce(
     else:
         items = [registry.find(found, study, name)]
     paths = []
-    startup = time.process_time()  # the process's CPU so far: interpreter, imports, config
+    # the process's CPU so far (interpreter, imports, config), and its client's when served
+    startup = time.process_time() + launch.client_cpu()
     for item in items:
         out = Path(outdir) if outdir else Path(config["figures_dir"]) / item.study_folder
         start = time.process_time()

@@ -14,32 +14,38 @@
   models generated from the same description.
 
 The mechanism modules import :mod:`~parakin.dynamics.jet` and :mod:`~parakin.dynamics.model`
-only (they import no mechanism), so the order of imports here keeps the graph acyclic.
+only (they import no mechanism); the names below are imported from their modules on first use.
 """
 
-from parakin.dynamics.inverse import (  # noqa: I001 (after the modules the mechanisms import)
-    InverseDynamics,
-    energy,
-    generalized_forces,
-    inverse_dynamics,
-    mass_matrix,
-    state,
-)
-from parakin.dynamics.jet import Jet, Spin
-from parakin.dynamics.model import Bodies, BodyGroup, Closure, MassModel, RigidBody
-
-__all__ = [
-    "Jet",
-    "Spin",
-    "Bodies",
-    "BodyGroup",
-    "Closure",
-    "MassModel",
-    "RigidBody",
+#: the public names of each module, imported on first use (PEP 562), so that a mechanism module
+#: importing :mod:`~parakin.dynamics.jet` does not pay for the rest (a solve on the command line
+#: needs none of it)
+_JET = ("Jet", "Spin")
+_MODEL = ("Bodies", "BodyGroup", "Closure", "MassModel", "RigidBody")
+_INVERSE = (
     "InverseDynamics",
     "energy",
     "generalized_forces",
     "inverse_dynamics",
     "mass_matrix",
     "state",
-]
+)
+
+
+def __getattr__(name: str):
+    if name in _JET:
+        from parakin.dynamics import jet as module
+    elif name in _MODEL:
+        from parakin.dynamics import model as module
+    elif name in _INVERSE:
+        from parakin.dynamics import inverse as module
+    else:
+        raise AttributeError(f"module 'parakin.dynamics' has no attribute {name!r}")
+    return getattr(module, name)
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_JET, *_MODEL, *_INVERSE})
+
+
+__all__ = [*_JET, *_MODEL, *_INVERSE]

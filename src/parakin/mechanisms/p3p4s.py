@@ -23,18 +23,19 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property
 from types import ModuleType
-from typing import ClassVar, Literal
+from typing import TYPE_CHECKING, ClassVar, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-import parakin.dynamics.jet as dj
-from parakin.dynamics.jet import Jet
-from parakin.dynamics.model import Bodies, BodyGroup, MassModel, RigidBody, rods
 from parakin.errors import SingularityError
 from parakin.kernels import evaluate
 from parakin.kernels import p3p4s as kernels
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch, raise_first
+
+if TYPE_CHECKING:  # the dynamics are imported where they are used: a solve does not need them
+    from parakin.dynamics.jet import Jet
+    from parakin.dynamics.model import Bodies, MassModel
 
 __all__ = ["P3P4S"]
 
@@ -351,6 +352,8 @@ class P3P4S(Mechanism):
         ``I_dio``). Not in the paper, and not entering the dynamics because those bodies only
         translate: the platform's inertia (a thin disc of radius ``r_a``) and the sliders'
         (``1e-3 kg m^2`` about each axis)."""
+        from parakin.dynamics.model import MassModel, RigidBody
+
         z = ZHAO2017_MASSES
         return MassModel(
             {
@@ -366,6 +369,9 @@ class P3P4S(Mechanism):
         sliders on their rails (the actuated slide joints, strokes by eq 5) and the two side rods
         of each parallelogram, from ``c_i +- (d/2) t_i`` on the slider to ``d_i +- (d/2) t_i`` on
         the platform (``t_i`` the horizontal edge direction): S-S links."""
+        import parakin.dynamics.jet as dj
+        from parakin.dynamics.model import Bodies, BodyGroup, rods
+
         w = pose[..., None, :] - self.delta * self.e
         b = dj.dot(w, self.m)
         strokes = b - dj.sqrt(self.L**2 - (dj.dot(w, w) - b * b))  # eq 5, working branch
