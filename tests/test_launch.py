@@ -57,8 +57,8 @@ def server(tmp_path_factory):
         time.sleep(0.1)
     assert path.exists(), proc.stderr.read().decode() if proc.poll() is not None else "no socket"
     yield path
-    proc.terminate()
-    proc.wait(timeout=30)
+    proc.terminate()  # stops as when idle: exit status 0, socket removed
+    assert proc.wait(timeout=30) == 0 and not path.exists()
 
 
 def test_a_job_through_the_server_is_the_job_on_its_own(server, tmp_path):

@@ -1,8 +1,9 @@
 """The ``parakin`` command's entry point, and a server that runs pipeline jobs in one warm process.
 
 Every job of the pipeline is one ``parakin reproduce ...`` command (or ``report``, ``check``). On its own each pays Python's
-start, the imports (numpy, scipy, pandas, matplotlib, sympy, parakin) and numba's start: about
-1.3-1.8 s of CPU per job, a third of the quick pipeline's CPU time (issue 30). With
+start, the imports (numpy, scipy, pandas, matplotlib, sympy, parakin) and, where it compiles,
+numba's start: 0.7-1.1 s of CPU per job, 23 % of the quick pipeline's CPU time on its own against
+5 % through the server (measured: docs/kernels.md, "Start-up"). With
 ``PARAKIN_SERVER=auto`` (or a socket path) in its environment, ``parakin reproduce`` hands its
 job to a server that has all of that loaded and **forks a fresh copy of itself for each job**:
 the start-up is paid once per server, while every job still runs in a process of its own (nothing
@@ -14,7 +15,8 @@ after ``PARAKIN_SERVER_IDLE`` seconds without a job (default 120) and as soon as
 files change (a job never runs on other code than its own: it then runs itself, and the next one
 starts a new server). Without the variable (or with it empty), or where anything goes wrong on the
 way, the command runs in its own process as always. The pipeline sets ``PARAKIN_SERVER=auto`` for
-its jobs unless the variable is already set (workflow/rules/common.smk).
+its jobs unless the variable is already set, and not inside a SLURM job, whose steps SLURM stops
+with all their processes (workflow/rules/common.smk).
 
 Only single-threaded jobs are served: BLAS runs on one thread in the server's jobs (numpy's thread
 pool is made before the fork), so a job that asks for more (``OPENBLAS_NUM_THREADS`` or
@@ -34,6 +36,7 @@ import hashlib
 import json
 import os
 import selectors
+import signal
 import socket
 import subprocess
 import sys
@@ -210,6 +213,7 @@ def _run_job(conn: socket.socket, request: dict) -> None:
     """In the forked child: the job as its own process would run it, then exit."""
     code = 1
     try:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a cancelled job stops, as on its own
         null = os.open(os.devnull, os.O_RDONLY)
         os.dup2(null, 0)
         os.dup2(conn.fileno(), 1)
@@ -238,6 +242,7 @@ def _run_job(conn: socket.socket, request: dict) -> None:
 def serve(path: Path, idle: float | None = None) -> None:
     """Listen on ``path`` and run each job in a fork of this warm process (see the module)."""
     idle = float(os.environ.get("PARAKIN_SERVER_IDLE", "120")) if idle is None else idle
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))  # stop as when idle: socket removed
     _warm_up()
     print(f"parakin server {os.getpid()}: warm-up {time.process_time():.3f} s of CPU", flush=True)
     stamp = source_stamp()
@@ -331,8 +336,6 @@ def _finish(fd: int, sel, jobs) -> None:
 
 def _cancel(pid: int) -> None:
     """Stop a job whose command was stopped (Snakemake cancelled it, or Ctrl-C)."""
-    import signal
-
     try:
         os.kill(pid, signal.SIGTERM)
     except ProcessLookupError:
