@@ -25,7 +25,7 @@ threads it asks for; numba and torch threads are as in a job of its own. The lon
 multi-threaded ones, so their start-up is a small part of their CPU anyway.
 
 A served job's log counts as start-up its own CPU before the artefact plus the CPU its client
-command spent before handing it over (:func:`client_cpu`). The server's own warm-up, paid once per
+command spent before handing it over (:data:`parakin.pipeline.startup_elsewhere`). The server's own warm-up, paid once per
 server, is written to the server's log beside its socket.
 """
 
@@ -55,8 +55,6 @@ _TRAILER = b"\x00parakin-exit "
 _SOURCES = Path(__file__).resolve().parent
 
 
-#: the client command's CPU seconds before it handed its job over (set in a served job only)
-_CLIENT_CPU = 0.0
 #: the thread variables a served job's BLAS must ask no more than one thread of
 _THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")
 
@@ -79,12 +77,6 @@ def servable(env) -> bool:
     """Whether a job with environment ``env`` goes to the server: ``PARAKIN_SERVER`` is set and
     not empty, and it asks BLAS for one thread (see the module)."""
     return bool(env.get(ENV)) and all(env.get(v) == "1" for v in _THREAD_VARIABLES)
-
-
-def client_cpu() -> float:
-    """CPU seconds the client command spent before handing this job to the server (0 in a job
-    that runs in its own process): part of the job's start-up."""
-    return _CLIENT_CPU
 
 
 def supported() -> bool:
@@ -222,9 +214,10 @@ def _run_job(conn: socket.socket, request: dict) -> None:
         os.environ.clear()
         os.environ.update(request["env"])
         sys.argv = ["parakin", *request["argv"]]
-        global _CLIENT_CPU
-        _CLIENT_CPU = float(request.get("cpu", 0.0))
+        from parakin import pipeline
         from parakin.cli import main as cli_main
+
+        pipeline.startup_elsewhere = float(request.get("cpu", 0.0))
 
         code = cli_main(request["argv"])
     except SystemExit as exc:  # argparse's errors (status 2)
