@@ -149,6 +149,39 @@ def test_one_server_per_slurm_job(monkeypatch, tmp_path):
     assert launch.socket_path() == tmp_path / "s.sock"
 
 
+def _other_kernel_family() -> str:
+    return "Haswell" if os.environ.get("OPENBLAS_CORETYPE") == "Sandybridge" else "Sandybridge"
+
+
+def test_another_start_up_environment_gets_another_server(monkeypatch):
+    """A forked job keeps its server's BLAS kernels, threads, numba and Python settings: a job
+    that asks for others must not share a server with jobs that do not."""
+    monkeypatch.setenv(launch.ENV, "auto")
+    here = launch.socket_path()
+    monkeypatch.setenv("OPENBLAS_CORETYPE", _other_kernel_family())
+    assert launch.socket_path() != here
+    monkeypatch.setenv("SNAKEMAKE_SOMETHING_PER_JOB", "1")  # what jobs do not read as they start
+    monkeypatch.setenv("PATH", os.environ.get("PATH", "") + os.pathsep + "/nowhere")
+    other = launch.socket_path()
+    monkeypatch.undo()
+    monkeypatch.setenv(launch.ENV, "auto")
+    monkeypatch.setenv("OPENBLAS_CORETYPE", _other_kernel_family())
+    assert launch.socket_path() == other
+
+
+def test_a_server_refuses_a_job_of_another_start_up_environment(server):
+    """Given by path (no key in it), a server answers "other" to a job whose start-up environment
+    differs from its own (the job then runs on its own), and goes on serving."""
+    env = _env(OPENBLAS_CORETYPE=_other_kernel_family())
+    request = {"argv": ["reproduce"], "cwd": str(ROOT), "env": env, "stamp": launch.source_stamp()}
+    for _ in range(2):  # still listening after the first refusal
+        conn = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        conn.connect(str(server))
+        conn.sendall(json.dumps(request).encode() + b"\n")
+        assert conn.recv(16) == b"other\n"
+        conn.close()
+
+
 def test_source_stamp_follows_the_sources(tmp_path):
     (tmp_path / "a.py").write_text("x = 1\n")
     before = launch.source_stamp(tmp_path)

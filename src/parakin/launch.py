@@ -13,7 +13,10 @@ its output comes back on the command's stdout and its exit status is the command
 The first job finds no server, starts one in the background and runs itself. The server stops
 after ``PARAKIN_SERVER_IDLE`` seconds without a job (default 120) and as soon as parakin's source
 files change (a job never runs on other code than its own: it then runs itself, and the next one
-starts a new server). Without the variable (or with it empty), or where anything goes wrong on the
+starts a new server). What a process reads from its environment as it starts (the BLAS kernel
+family and threads, numba, Python, the temporary and cache directories: :func:`startup_environment`)
+a forked job takes from its server, so a server serves only jobs whose values are its own; with
+``auto``, jobs of another environment find a server of their own. Without the variable (or with it empty), or where anything goes wrong on the
 way, the command runs in its own process as always. The pipeline sets ``PARAKIN_SERVER=auto`` for
 its jobs unless the variable is already set, and not inside a SLURM job, whose steps SLURM stops
 with all their processes (workflow/rules/common.smk).
@@ -49,7 +52,7 @@ __all__ = ["main", "serve"]
 ENV = "PARAKIN_SERVER"
 #: the commands a pipeline job runs: these go through the server where there is one
 PIPELINE_COMMANDS = ("reproduce", "report", "check")
-_ACCEPTED, _STALE = b"ok\n", b"stale\n"
+_ACCEPTED, _STALE, _OTHER = b"ok\n", b"stale\n", b"other\n"
 #: what follows a job's output on the socket: this marker and the exit status
 _TRAILER = b"\x00parakin-exit "
 _SOURCES = Path(__file__).resolve().parent
@@ -57,6 +60,14 @@ _SOURCES = Path(__file__).resolve().parent
 
 #: the thread variables a served job's BLAS must ask no more than one thread of
 _THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")
+#: the environment a process reads as it starts, which a forked job inherits from its server
+#: whatever its own says: BLAS and OpenMP (the kernel family ``OPENBLAS_CORETYPE``, threads),
+#: numba, Python, matplotlib, the loader, the temporary and cache directories and parakin's
+#: kernel switches. A server serves only jobs whose values of these are its own.
+_STARTUP_PREFIXES = (
+    "OPENBLAS_", "GOTOBLAS", "OMP_", "GOMP_", "KMP_", "MKL_", "NUMBA_", "PYTHON", "MPL", "LD_",
+    "TMP", "TEMP", "HOME", "XDG_", "PARAKIN_KERNEL",
+)  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -79,6 +90,13 @@ def servable(env) -> bool:
     return bool(env.get(ENV)) and all(env.get(v) == "1" for v in _THREAD_VARIABLES)
 
 
+def startup_environment(env) -> dict[str, str]:
+    """The variables of ``env`` that take effect when a process starts (:data:`_STARTUP_PREFIXES`):
+    a job whose values differ from a server's runs elsewhere (``OPENBLAS_CORETYPE=Sandybridge``
+    right after a run on the default kernels must not get the server's kernels)."""
+    return {k: env[k] for k in sorted(env) if k.startswith(_STARTUP_PREFIXES)}
+
+
 def supported() -> bool:
     """Whether this platform can run the server (fork, Unix sockets, Linux's pidfd)."""
     return hasattr(os, "fork") and hasattr(os, "pidfd_open") and hasattr(socket, "AF_UNIX")
@@ -86,14 +104,17 @@ def supported() -> bool:
 
 def socket_path() -> Path:
     """The server's socket: ``$PARAKIN_SERVER`` if it is a path, else one per user, Python,
-    parakin checkout and SLURM job in the temporary directory. (Per SLURM job: a server lives in
+    parakin checkout, SLURM job and start-up environment (:func:`startup_environment`) in the
+    temporary directory. (Per SLURM job: a server lives in
     the job that started it, and SLURM stops it with that job; a job of its own must not run its
     work in another job's allocation.)"""
     value = os.environ.get(ENV, "auto")
     if value not in ("auto", "1", "on"):
         return Path(value)
     slurm_job = os.environ.get("SLURM_JOB_ID", "")
-    key = hashlib.sha256(f"{sys.executable}\0{_SOURCES}\0{slurm_job}".encode()).hexdigest()[:12]
+    startup = json.dumps(startup_environment(os.environ))
+    key = f"{sys.executable}\0{_SOURCES}\0{slurm_job}\0{startup}"
+    key = hashlib.sha256(key.encode()).hexdigest()[:12]
     user = os.getuid() if hasattr(os, "getuid") else "user"
     return Path(tempfile.gettempdir()) / f"parakin-{user}" / f"server-{key}.sock"
 
@@ -125,7 +146,7 @@ def _delegate(args: list[str]) -> int | None:
         try:
             conn.sendall(json.dumps(request).encode() + b"\n")
             if conn.recv(len(_ACCEPTED)) != _ACCEPTED:
-                return None  # stale sources: the server is stopping
+                return None  # stale sources (the server is stopping) or another environment
         except OSError:
             return None
         return _relay(conn)
@@ -236,6 +257,7 @@ def serve(path: Path, idle: float | None = None) -> None:
     """Listen on ``path`` and run each job in a fork of this warm process (see the module)."""
     idle = float(os.environ.get("PARAKIN_SERVER_IDLE", "120")) if idle is None else idle
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))  # stop as when idle: socket removed
+    startup = startup_environment(os.environ)  # as inherited, before the warm-up sets threads
     _warm_up()
     print(f"parakin server {os.getpid()}: warm-up {time.process_time():.3f} s of CPU", flush=True)
     stamp = source_stamp()
@@ -256,7 +278,7 @@ def serve(path: Path, idle: float | None = None) -> None:
         while jobs or time.monotonic() - last < idle:
             for key, _ in sel.select(timeout=1.0):
                 if key.fileobj is listener:
-                    if not _accept(listener, stamp, sel, jobs):
+                    if not _accept(listener, stamp, startup, sel, jobs):
                         return  # sources changed: stop (the running jobs finish on their own)
                 elif key.data is not None:  # the client of job key.data closed its end
                     _cancel(key.data)
@@ -279,8 +301,9 @@ def serve(path: Path, idle: float | None = None) -> None:
         )
 
 
-def _accept(listener, stamp: str, sel, jobs) -> bool:
-    """Take one job: fork it, or refuse it where the sources changed (returns False)."""
+def _accept(listener, stamp: str, startup: dict, sel, jobs) -> bool:
+    """Take one job: fork it; refuse it where the sources changed (returns False: the server
+    stops) or where its start-up environment is not the server's (the job runs on its own)."""
     conn, _ = listener.accept()
     conn.settimeout(10.0)
     try:
@@ -295,6 +318,10 @@ def _accept(listener, stamp: str, sel, jobs) -> bool:
             conn.sendall(_STALE)
             conn.close()
             return False
+        if startup_environment(request.get("env", {})) != startup:
+            conn.sendall(_OTHER)
+            conn.close()
+            return True
         conn.sendall(_ACCEPTED)
     except (OSError, ValueError):
         conn.close()
