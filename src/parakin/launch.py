@@ -1,7 +1,7 @@
 """The ``parakin`` command's entry point, and a server that runs pipeline jobs in one warm process.
 
-Every job of the pipeline is one ``parakin reproduce ...`` command (or ``report``, ``check``). On its own each pays Python's
-start, the imports (numpy, scipy, pandas, matplotlib, sympy, parakin) and, where it compiles,
+Every job of the pipeline is one ``parakin reproduce ...`` command (or ``report``, ``check``). On
+its own each pays Python's start, the imports (numpy, scipy, pandas, matplotlib, sympy, parakin) and, where it compiles,
 numba's start: 0.7-1.1 s of CPU per job, 23 % of the quick pipeline's CPU time on its own against
 5 % through the server (measured: docs/kernels.md, "Start-up"). With
 ``PARAKIN_SERVER=auto`` (or a socket path) in its environment, ``parakin reproduce`` hands its
@@ -14,10 +14,11 @@ The first job finds no server, starts one in the background and runs itself. The
 after ``PARAKIN_SERVER_IDLE`` seconds without a job (default 120) and as soon as parakin's source
 files change (a job never runs on other code than its own: it then runs itself, and the next one
 starts a new server). What a process reads from its environment as it starts (the BLAS kernel
-family and threads, numba, Python, the temporary and cache directories: :func:`startup_environment`)
-a forked job takes from its server, so a server serves only jobs whose values are its own; with
-``auto``, jobs of another environment find a server of their own. Without the variable (or with it empty), or where anything goes wrong on the
-way, the command runs in its own process as always. The pipeline sets ``PARAKIN_SERVER=auto`` for
+family and threads, numba, Python, the temporary and cache directories:
+:func:`startup_environment`) a forked job takes from its server, so a server serves only jobs
+whose values are its own; with ``auto``, jobs of another environment find a server of their own.
+Without the variable (or with it empty), or where anything goes wrong on the way, the command runs
+in its own process as always. The pipeline sets ``PARAKIN_SERVER=auto`` for
 its jobs unless the variable is already set, and not inside a SLURM job, whose steps SLURM stops
 with all their processes (workflow/rules/common.smk).
 
@@ -28,8 +29,8 @@ threads it asks for; numba and torch threads are as in a job of its own. The lon
 multi-threaded ones, so their start-up is a small part of their CPU anyway.
 
 A served job's log counts as start-up its own CPU before the artefact plus the CPU its client
-command spent before handing it over (:data:`parakin.pipeline.startup_elsewhere`). The server's own warm-up, paid once per
-server, is written to the server's log beside its socket.
+command spent before handing it over (:data:`parakin.pipeline.startup_elsewhere`). The server's
+own warm-up, paid once per server, is written to the server's log beside its socket.
 """
 
 from __future__ import annotations
@@ -105,9 +106,8 @@ def supported() -> bool:
 def socket_path() -> Path:
     """The server's socket: ``$PARAKIN_SERVER`` if it is a path, else one per user, Python,
     parakin checkout, SLURM job and start-up environment (:func:`startup_environment`) in the
-    temporary directory. (Per SLURM job: a server lives in
-    the job that started it, and SLURM stops it with that job; a job of its own must not run its
-    work in another job's allocation.)"""
+    temporary directory. (Per SLURM job: a server lives in the job that started it, and SLURM
+    stops it with that job; a job of its own must not run its work in another job's allocation.)"""
     value = os.environ.get(ENV, "auto")
     if value not in ("auto", "1", "on"):
         return Path(value)
