@@ -94,3 +94,44 @@ def test_statistics_of_chaotic_runs_compare_by_interval_overlap(tmp_path):
 def test_condition_rule_rejects_a_bad_dimension():
     with pytest.raises(ValueError, match="n = 0"):
         registry.ConditionNumber(0)
+
+
+BASIN = registry.Tolerance(
+    "iterative",
+    0.0,
+    0.0,
+    "medians over the converged starts",
+    columns={"p_converge": (0.0, 0.05), "median_iterations": (0.0, 1.0)},
+    over_successes={"median_iterations": ("p_converge", "trials")},
+)
+
+
+def test_a_median_over_successes_is_compared_only_over_enough_successes(tmp_path):
+    """200 starts, p_converge within 0.05: 10 starts may differ, so a median over the converged
+    starts is compared only where both runs have more than 20."""
+    record = {
+        "trials": [200] * 3,
+        "p_converge": [0.0, 0.5, 0.105],
+        "median_iterations": [np.nan, 7.0, 9.0],
+    }
+    # the issue's cell: one start of 200 converged on another BLAS kernel (57 iterations), none in
+    # the record; and 20 against 21 converged: too few to fix a median either way
+    run = {**record, "p_converge": [0.005, 0.5, 0.1], "median_iterations": [57.0, 7.0, 30.0]}
+    rec, new = _pair(tmp_path, record, run)
+    assert compare_file(rec, new, BASIN)[0] == "within tolerance"
+    # with 100 converged starts on each side the median is compared, within its atol of one
+    rec, new = _pair(tmp_path, record, {**run, "median_iterations": [57.0, 8.0, 30.0]})
+    assert compare_file(rec, new, BASIN)[0] == "within tolerance"
+    rec, new = _pair(tmp_path, record, {**run, "median_iterations": [57.0, 9.5, 30.0]})
+    assert compare_file(rec, new, BASIN)[:2] == ("differs", "median_iterations")
+    # ... and the fraction itself is still compared in every row
+    rec, new = _pair(tmp_path, record, {**run, "p_converge": [0.06, 0.5, 0.1]})
+    assert compare_file(rec, new, BASIN)[:2] == ("differs", "p_converge")
+
+
+def test_a_value_against_none_differs_without_bound(tmp_path):
+    """A number where the record has NaN (or the reverse) is an infinite excess, not zero."""
+    tol = registry.Tolerance("iterative", 0.0, 1.0, "counts")
+    rec, new = _pair(tmp_path, {"n": [1.0, np.nan]}, {"n": [1.0, 57.0]})
+    status, column, excess, detail = compare_file(rec, new, tol)
+    assert (status, column, excess) == ("differs", "n", np.inf) and "57 vs record nan" in detail

@@ -14,7 +14,9 @@ from; timing columns (:func:`parakin.io.is_timing_column`) never decide anything
 is decides how it is compared: closed forms and converged solves within ``(rtol, atol)``;
 condition numbers by class near a singularity (:class:`parakin.registry.ConditionNumber`: the
 round-off digits of a singular matrix are never compared); the statistics of a chaotic computation
-(GA, PSO, network training over independent runs) by the overlap of their confidence intervals.
+(GA, PSO, network training over independent runs) by the overlap of their confidence intervals; a
+statistic over a row's successful trials only (the median iterations of the converged starts)
+where both runs have enough successes that the ones allowed to differ cannot be half its sample.
 """
 
 from __future__ import annotations
@@ -63,6 +65,12 @@ def _compare_frames(rec: pd.DataFrame, new: pd.DataFrame, tol) -> tuple[str, str
     if len(rec) != len(new):
         return "differs", "", math.inf, f"{len(new)} rows != record {len(rec)}"
     worst = ("within tolerance", "", 0.0, "")
+    stats = [c for c in tol.over_successes if c in rec.columns]
+    if stats:
+        rec, new = rec.copy(), new.copy()
+        for col in stats:
+            drop = ~tol.comparable_successes(col, rec, new)
+            rec.loc[drop, col] = new.loc[drop, col] = np.nan  # too few successes to compare
     interval_cols = {c for pair in tol.intervals for c in pair}
     for low, high in tol.intervals:
         if low in rec.columns and high in rec.columns:
@@ -102,11 +110,13 @@ def _compare_numbers(x: np.ndarray, y: np.ndarray, limit) -> tuple[float, str] |
     rtol, atol = limit
     with np.errstate(invalid="ignore"):
         allowed = atol + rtol * np.abs(x)
-        gap = np.abs(y - x)
+        gap = np.where(np.isnan(x) != np.isnan(y), np.inf, np.abs(y - x))  # a value against none
     bad = ~(same_nan | same_inf) & ~(gap <= allowed)
     if not bad.any():
         return None
-    excess = float(np.nanmax(np.where(bad, gap / np.where(allowed > 0, allowed, np.inf), 0)))
+    with np.errstate(invalid="ignore"):
+        ratio = np.where(np.isinf(gap), np.inf, gap / np.where(allowed > 0, allowed, np.inf))
+    excess = float(np.nanmax(np.where(bad, ratio, 0)))
     i = int(np.argmax(bad))
     excess = excess if math.isfinite(excess) else math.inf
     return excess, f"row {i}: {y[i]:.6g} vs record {x[i]:.6g} (rtol {rtol:g}, atol {atol:g})"

@@ -106,7 +106,13 @@ class Tolerance:
     has one of the given values (e.g. the final generation). ``intervals``: pairs of columns
     ``(low, high)`` holding a confidence interval (of the median over independent runs of a chaotic
     computation); a rerun agrees when its interval overlaps the record's (for two 99 % intervals of
-    one distribution, apart by chance about 3 times in 10^4).
+    one distribution, apart by chance about 3 times in 10^4). ``over_successes`` maps a column
+    holding a statistic over the successful trials of its row only (the median iterations of the
+    converged solves) to ``(fraction, trials)``, the columns of the success fraction and the number
+    of trials: the fraction's own tolerance lets ``(atol + rtol |fraction|) trials`` successes
+    differ between runs, and a median is fixed only while fewer than half its sample may change
+    (its breakdown point is 1/2), so the statistic is compared only in rows where both runs have
+    more than twice that many successes (:meth:`comparable_successes`).
     """
 
     kind: str
@@ -118,6 +124,7 @@ class Tolerance:
     files: tuple[str, ...] = ()
     rows: tuple[str, tuple] | None = None
     intervals: tuple[tuple[str, str], ...] = ()
+    over_successes: dict[str, tuple[str, str]] = field(default_factory=dict)
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -130,6 +137,19 @@ class Tolerance:
     def limits(self, column: str) -> tuple[float, float] | ConditionNumber:
         """``(rtol, atol)`` of one column, or its :class:`ConditionNumber` rule."""
         return self.columns.get(column, (self.rtol, self.atol))
+
+    def comparable_successes(self, column: str, record, run):
+        """The rows (a boolean array) of the tables ``record`` and ``run`` where ``column``, a
+        statistic over each row's successes (``over_successes``), is compared: both runs have more
+        than twice the successes the fraction's tolerance lets differ."""
+        import numpy as np
+
+        fraction, trials = self.over_successes[column]
+        rtol, atol = self.limits(fraction)
+        p0, p1 = record[fraction].to_numpy(float), run[fraction].to_numpy(float)
+        n = record[trials].to_numpy(float)
+        may_differ = (atol + rtol * np.abs(p0)) * n
+        return (p0 * n > 2 * may_differ) & (p1 * n > 2 * may_differ)
 
     @staticmethod
     def condition(n: int) -> ConditionNumber:
