@@ -111,11 +111,10 @@ def _compare_numbers(x: np.ndarray, y: np.ndarray, limit) -> tuple[float, str] |
     with np.errstate(invalid="ignore"):
         allowed = atol + rtol * np.abs(x)
         gap = np.where(np.isnan(x) != np.isnan(y), np.inf, np.abs(y - x))  # a value against none
+        ratio = np.where(np.isinf(gap), np.inf, gap / np.where(allowed > 0, allowed, np.inf))
     bad = ~(same_nan | same_inf) & ~(gap <= allowed)
     if not bad.any():
         return None
-    with np.errstate(invalid="ignore"):
-        ratio = np.where(np.isinf(gap), np.inf, gap / np.where(allowed > 0, allowed, np.inf))
     excess = float(np.nanmax(np.where(bad, ratio, 0)))
     i = int(np.argmax(bad))
     excess = excess if math.isfinite(excess) else math.inf
