@@ -879,8 +879,8 @@ def optimise(config: dict, runs: int | None = None) -> dict:
     The normalisation of eq (38) comes first: the six single-objective optima (each index's min
     and max over the box, one GA run each: the same on every kernel family, but another seed base
     can find other extremes, docs/zhao2017_3p4s.md#s4.7), shared by all runs; then each run of the
-    combined objective (eq 40) from its own seed. Returns ``extremes`` ((name, sense) -> (value, x)), ``vmin``, ``vmax`` and ``runs`` (per run: x, fun,
-    best per generation)."""
+    combined objective (eq 40) from its own seed. Returns ``extremes`` ((name, sense) -> (value,
+    x)), ``vmin``, ``vmax`` and ``runs`` (per run: x, fun, best per generation)."""
     key = _key(config)
     n = int(opt_settings(config)["runs"] if runs is None else runs)
     names = ("sigma1", "sigma2", "sigma3")
