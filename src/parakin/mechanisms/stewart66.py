@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from importlib import resources
 from types import ModuleType
 from typing import Any, ClassVar
@@ -86,6 +86,8 @@ HOME_HEIGHT = 1.5
 RETRIES = 3
 #: step control of the once-per-geometry tracking from the stored generic start (cautious)
 START_TRACK: dict[str, float] = {"h0": 0.02, "tau": 5e-4, "hmin": 1e-13, "max_steps": 3000}
+#: attempts at a geometry's start system: the direct segment, then detours through random problems
+START_ATTEMPTS = 6
 #: step control of the per-input tracking (see :func:`parakin.mechanisms.stewart66_homotopy.track`)
 TRACK_OPTIONS: dict[str, float] = {
     "h0": 0.2,
@@ -180,6 +182,26 @@ class FKAll:
     ik_error: Array
     steps: np.ndarray
     retries: np.ndarray
+
+
+@lru_cache(maxsize=START_ATTEMPTS)
+def _start_leg(attempt: int) -> tuple[np.ndarray, tuple, np.ndarray, np.ndarray]:
+    """Where attempt ``attempt`` at a geometry's start system (:attr:`Stewart66.fk_start`) sets
+    out from: ``(patch, (B, P, c), x, ok)``, the chart, the problem and its 40 solutions with the
+    flags of those reached. Attempt 0 sets out from the stored generic start; a retry first takes
+    the stored solutions, on a new random chart, to a random complex problem (a detour, so the
+    second leg follows other paths). That first leg is the same for every geometry, so it is
+    tracked once per process (a retry took two tracks before)."""
+    st = load_start()
+    start = (st["base"], st["platform"], st["c"])
+    if attempt == 0:
+        return st["patch"], start, st["solutions"], np.ones(len(st["solutions"]), dtype=bool)
+    rng = np.random.default_rng(FIBER_SEED + attempt)
+    patch = (rng.normal(size=8) + 1j * rng.normal(size=8)) / 4
+    x0 = st["solutions"] / (st["solutions"] @ patch)[:, None]
+    mid = hc.random_problem(rng)
+    x, ok, _ = hc.track(hc.GeneralHomotopy(patch, start, mid), x0, **START_TRACK)
+    return patch, mid, x, ok
 
 
 @dataclass(frozen=True)
@@ -334,32 +356,17 @@ class Stewart66(SixLegs):
         """This geometry's own start system: the stored generic start moved (general parameter
         homotopy, 40 paths) to this geometry with random complex leg constants ``c``. Its certified
         distinct finite endpoints are the root count of the geometry (40 unless special)."""
-        st = load_start()
         b, p, *_ = self._scaled
         rng = np.random.default_rng(FIBER_SEED)
         c1 = _central_c(b) + 1j * rng.normal(size=6)
-        m = len(st["solutions"])
+        m = len(load_start()["solutions"])
         q1 = hc.quadrics(b, p, c1)
         best = np.zeros((0, 8), dtype=complex)
-        patch = st["patch"]
-        for attempt in range(6):
-            start = (st["base"], st["platform"], st["c"])
-            target = (b, p, c1)
-            if attempt:  # a different path: a new random patch and a random complex detour
-                rng_a = np.random.default_rng(FIBER_SEED + attempt)
-                patch = (rng_a.normal(size=8) + 1j * rng_a.normal(size=8)) / 4
-                best = best / (best @ patch)[:, None]
-                x0 = st["solutions"] / (st["solutions"] @ patch)[:, None]
-                mid = hc.random_problem(rng_a)
-                hom = hc.GeneralHomotopy(patch, start, mid)
-                xm, okm, _ = hc.track(hom, x0, **START_TRACK)
-                hom = hc.GeneralHomotopy(patch, mid, target)
-                x, ok, _ = hc.track(hom, xm, **START_TRACK)
-                ok &= okm
-            else:
-                hom = hc.GeneralHomotopy(patch, start, target)
-                x, ok, _ = hc.track(hom, st["solutions"], **START_TRACK)
-            x = np.concatenate([best, x[ok]])
+        for attempt in range(START_ATTEMPTS):
+            patch, source, x0, ok0 = _start_leg(attempt)
+            best = best / (best @ patch)[:, None]
+            x, ok, _ = hc.track(hc.GeneralHomotopy(patch, source, (b, p, c1)), x0, **START_TRACK)
+            x = np.concatenate([best, x[ok & ok0]])
             q = np.broadcast_to(q1, (len(x), 7, 8, 8))
             x, beta, jn = hc.newton_refine(q, patch, x, iters=4)
             alpha = hc.certify(q, beta, jn)
