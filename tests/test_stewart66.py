@@ -369,6 +369,47 @@ def test_numpy_path_when_kernels_are_off(mech, monkeypatch):
     assert s66._compiled_kernel(q0) is None
 
 
+def _projective_sets_agree(a, b, tol=1e-9):
+    """Two sets of Study points (rows, any chart) are the same projective points."""
+    if len(a) != len(b):
+        return False
+    a = a / np.linalg.norm(a, axis=1, keepdims=True)
+    b = b / np.linalg.norm(b, axis=1, keepdims=True)
+    # |<a, b>| = 1 exactly for the same projective point (unit representatives)
+    return bool(np.all(np.abs(np.abs(a.conj() @ b.T) - 1).min(1) < tol))
+
+
+def test_compiled_start_tracker_follows_the_numpy_paths(random_mechs):
+    """parakin.kernels.stewart66_start is hc.track compiled: on one geometry's 40 start paths it
+    takes the same steps and reaches the same endpoints (before refinement) wherever both
+    trackers reach t = 1, and
+    fk_start's certified solutions are the numpy path's, as projective points."""
+    pytest.importorskip("numba")
+    from parakin import kernels
+    from parakin.kernels import stewart66_start as ks
+    from parakin.mechanisms import stewart66 as s66
+
+    if not kernels.enabled():
+        pytest.skip("compiled kernels switched off")
+    st = load_start()
+    m = random_mechs[1]
+    target = (*m._scaled[:2], m.fk_start["c"])
+    hom = hc.GeneralHomotopy(st["patch"], (st["base"], st["platform"], st["c"]), target)
+    xc, okc, sc = ks.track(hom, st["solutions"], **s66.START_TRACK)
+    xn, okn, sn = hc.track(hom, st["solutions"], **s66.START_TRACK)
+    both = okc & okn
+    assert both.sum() >= 30
+    # the same algorithm: the same steps, path by path, but where rounding tips one decision
+    assert np.mean(sc[both] == sn[both]) >= 0.9
+    d = np.abs(xc[both] - xn[both]).max(1) / np.abs(xn[both]).max(1)
+    assert np.median(d) < 1e-8  # the same paths, apart by the corrector's accuracy at the end
+    compiled = Stewart66(base=m.base_points, platform=m.platform_points)
+    with kernels.interpreted():
+        numpy_start = Stewart66(base=m.base_points, platform=m.platform_points).fk_start
+    assert len(compiled.fk_start["solutions"]) == len(numpy_start["solutions"]) == 40
+    assert _projective_sets_agree(compiled.fk_start["solutions"], numpy_start["solutions"])
+
+
 # ------------------------------------------------------------------------- peers
 def test_peer_bench_with_bertini():
     """``parakin bench --peers``: Bertini 2 (optional wheel) tracks the same parameter homotopy to

@@ -200,8 +200,21 @@ def _start_leg(attempt: int) -> tuple[np.ndarray, tuple, np.ndarray, np.ndarray]
     patch = (rng.normal(size=8) + 1j * rng.normal(size=8)) / 4
     x0 = st["solutions"] / (st["solutions"] @ patch)[:, None]
     mid = hc.random_problem(rng)
-    x, ok, _ = hc.track(hc.GeneralHomotopy(patch, start, mid), x0, **START_TRACK)
+    x, ok, _ = _start_track(hc.GeneralHomotopy(patch, start, mid), x0)
     return patch, mid, x, ok
+
+
+def _start_track(hom: hc.GeneralHomotopy, x0: np.ndarray):
+    """The cautious tracking (:data:`START_TRACK`) of a start system's paths: compiled
+    (:mod:`parakin.kernels.stewart66_start`, the same algorithm path by path) where the kernels
+    are on, else :func:`parakin.mechanisms.stewart66_homotopy.track`."""
+    from parakin import kernels
+
+    if kernels.enabled():
+        from parakin.kernels import stewart66_start
+
+        return stewart66_start.track(hom, x0, **START_TRACK)
+    return hc.track(hom, x0, **START_TRACK)
 
 
 @dataclass(frozen=True)
@@ -365,7 +378,7 @@ class Stewart66(SixLegs):
         for attempt in range(START_ATTEMPTS):
             patch, source, x0, ok0 = _start_leg(attempt)
             best = best / (best @ patch)[:, None]
-            x, ok, _ = hc.track(hc.GeneralHomotopy(patch, source, (b, p, c1)), x0, **START_TRACK)
+            x, ok, _ = _start_track(hc.GeneralHomotopy(patch, source, (b, p, c1)), x0)
             x = np.concatenate([best, x[ok & ok0]])
             q = np.broadcast_to(q1, (len(x), 7, 8, 8))
             x, beta, jn = hc.newton_refine(q, patch, x, iters=4)
