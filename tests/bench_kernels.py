@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from parakin import kernels
 from parakin.bench import _compiled_mechanisms, _sample
 from parakin.solvers import solve_fk
 
@@ -48,3 +49,22 @@ def test_stewart36_all_solutions(benchmark):
     benchmark.pedantic(
         solve_fk, args=(mech, q), kwargs={"method": "all-solutions"}, rounds=1, iterations=1
     )
+
+
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "numpy"])
+def test_stewart66_start_on_a_new_geometry(benchmark, compiled):
+    """``Stewart66.fk_start`` on a geometry not seen before: the cost of the first ``fk_all`` on a
+    user's own 6-6, with the start system's paths tracked compiled or in numpy. The detour a retry
+    takes is tracked once per process, before the timing."""
+    from parakin.studies.stewart66 import random_platform
+
+    rng = np.random.default_rng(3)
+    with kernels.interpreted(not compiled):
+        assert len(random_platform(rng).fk_start["solutions"]) == 40  # compiles; tracks the detour
+        res = benchmark.pedantic(
+            lambda mech: mech.fk_start,
+            setup=lambda: ((random_platform(rng),), {}),
+            rounds=20,
+            iterations=1,
+        )
+    assert len(res["solutions"]) == 40
