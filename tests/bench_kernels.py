@@ -68,3 +68,67 @@ def test_stewart66_start_on_a_new_geometry(benchmark, compiled):
             iterations=1,
         )
     assert len(res["solutions"]) == 40
+
+
+def _iteration_parts():
+    """Compiled loops that call one part of a Newton iteration ``reps`` times on one pose (the
+    pose moves by a rounding-size amount each time, so that no call can be hoisted out)."""
+    import numba
+
+    from parakin.kernels import drivers
+
+    @numba.njit
+    def kernel_part(f, p, x, q, out, reps):
+        for i in range(reps):
+            x[0] += 1e-15 * (i & 1)
+            f(p, x, q, out)
+
+    @numba.njit
+    def direction(jm, r, dx, w, a, g, reps):
+        for i in range(reps):
+            r[0] += 1e-15 * (i & 1)
+            drivers._direction(jm, r, dx, w, a, g)
+
+    return kernel_part, direction
+
+
+@pytest.mark.parametrize("part", ["residual", "jacobian", "direction", "solve"])
+@pytest.mark.parametrize("name", ["stewart12", "stewart36"])
+def test_newton_iteration_parts(benchmark, name, part):
+    """The profile of one batched Newton iteration (issue 29): the kernel's residual, its Jacobian
+    and the step (``drivers._direction``: the normal equations J^T J and their LU for the 12 legs
+    of the cube, the LU of J for the 3-6), each 1 000 times in a compiled loop on one core, and
+    the whole solve (``solve``: 1 000 of ``test_batched``'s inputs from home, the serial entry, one
+    core); ``extra_info['ns_per_call']``, for ``solve`` also the mean iterations per solve."""
+    mech = MECHS[name]
+    x, q = _sample(mech, 1, seed=18)
+    x, q = np.ascontiguousarray(x[0]), np.ascontiguousarray(q[0])
+    m, n = len(q), len(x)
+    compiled = kernels.compiled(kernels.kernel_of(mech).module)
+    p = kernels.kernel_of(mech).params
+    kernel_part, direction = _iteration_parts()
+    jm, r = np.empty((m, n)), np.empty(m)
+    compiled.jacobian(p, x, q, jm)
+    compiled.residual(p, x, q, r)
+    reps, scratch, out = 1000, None, None
+    if part == "solve":
+        kernel = kernels.kernel_of(mech)
+        _, qs = _sample(mech, reps, seed=18)
+        x0 = np.ascontiguousarray(np.broadcast_to(kernel.home, (reps, n)))
+        opts = kernels.methods.pack("newton", 1e-10, 100, {})
+        xs, info, out = np.empty((reps, n)), np.zeros((reps, 4), np.int64), np.empty(reps)
+        serial = kernels.entries_of(kernel.module, "newton").serial
+        run = lambda: (info.fill(0), serial(p, qs, x0, opts, xs, info, out))  # noqa: E731
+        scratch = (out,)
+    elif part == "direction":
+        scratch = (np.empty(n), np.empty((n, n + 1)), np.empty((n, n)), np.empty(n))
+        run = lambda: direction(jm, r, *scratch, reps)  # noqa: E731
+    else:
+        f, out = getattr(compiled, part), (jm if part == "jacobian" else r)
+        run = lambda: kernel_part(f, p, x.copy(), q, out, reps)  # noqa: E731
+    run()  # compiles
+    assert np.isfinite(scratch[0] if part == "direction" else out).all()
+    benchmark.pedantic(run, rounds=50, iterations=1)
+    benchmark.extra_info["ns_per_call"] = 1e9 * benchmark.stats.stats.min / reps
+    if part == "solve":
+        benchmark.extra_info["iterations_per_solve"] = float(info[:, 1].mean())

@@ -171,8 +171,8 @@ def kernel_goals(
     same run): per mechanism, the median single-call latency of ``solve_fk`` (Newton, LM, Broyden,
     BFGS; one joint vector per call, start = home) over ``scipy-root``'s, and the batched Newton
     and LM throughput (``n_batch`` inputs, one call); the 3-6 Stewart's all-solutions FK (inputs/s,
-    ``n_all`` inputs) and the 6-6's (ms per input and inputs/s, ``n_all_66`` inputs; 0 skips it),
-    each also against its numpy path (``PARAKIN_KERNELS=0``) in the same run; and Li 2017's PSO
+    ``n_all`` inputs) and the 6-6's (``n_all_66`` inputs, 0 skips it: one input per call on one
+    thread, median ms; a batch on every core, inputs/s), each batch also against its numpy path (``PARAKIN_KERNELS=0``) in the same run; and Li 2017's PSO
     experiment as published (50 runs x 50 particles x 1000 iterations, seconds).
     One row per measurement: ``mechanism, what, value, unit, goal, met``. The mechanisms are the
     registered ones with kernels (:data:`parakin.mechanisms.base.REGISTRY`)."""
@@ -272,20 +272,44 @@ def _stewart36_all_goals(mech: Mechanism, n_all: int, repeats: int) -> list[dict
 
 
 def _stewart66_all_goals(n_all_66: int, repeats: int) -> list[dict]:
-    """The 6-6 Stewart's all-solutions FK (ms per input, inputs/s), compiled and numpy path."""
+    """The 6-6 Stewart's all-solutions FK as issue 29 states its goals: one input per call on one
+    thread (median ms, ``<= 1 ms``) and a batch on every core (inputs/s, ``>= 2000``); the batch
+    also on the numpy path. A batch's time per input is not a single call's: a call of one input
+    waits for its longest path (docs/peers.md, "What is left")."""
     m66 = REGISTRY["stewart66"]()
     _, q66 = _sample(m66, n_all_66, seed=20)
     m66.fk_all(q66[:2])  # warm-up: the geometry's start system, the cached kernels
+    single = _one_thread_median(m66.fk_all, q66, repeats)
     t = best_time(lambda: m66.fk_all(q66), repeats)
     with _kernels_off():
         t_np = best_time(lambda: m66.fk_all(q66), 1)
     per = GOALS["stewart66_all_ms"]
     return [
-        _goal_row(m66.name, "all-solutions FK", 1e3 * t / len(q66), "ms/input", per, higher=False),
-        _goal_row(m66.name, "all-solutions FK", len(q66) / t, "inputs/s", GOALS["stewart66_all_per_s"]),
-        _goal_row(m66.name, "all-solutions FK, numpy path", 1e3 * t_np / len(q66), "ms/input", np.nan),
-        _goal_row(m66.name, "all-solutions FK vs numpy path", t_np / t, "x", np.nan),
+        _goal_row(m66.name, "all-solutions FK, one input per call, 1 thread", 1e3 * single, "ms/input", per, higher=False),
+        _goal_row(m66.name, "all-solutions FK batched, time per input", 1e3 * t / len(q66), "ms/input", np.nan),
+        _goal_row(m66.name, "all-solutions FK batched", len(q66) / t, "inputs/s", GOALS["stewart66_all_per_s"]),
+        _goal_row(m66.name, "all-solutions FK batched, numpy path", 1e3 * t_np / len(q66), "ms/input", np.nan),
+        _goal_row(m66.name, "all-solutions FK batched vs numpy path", t_np / t, "x", np.nan),
     ]  # fmt: skip
+
+
+def _one_thread_median(f: Callable[[Any], Any], items: Any, repeats: int) -> float:
+    """Median seconds of ``f(item)`` over ``items`` (each ``repeats`` times) with numba's thread
+    pool at one thread (restored after)."""
+    import numba
+
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        lat = []
+        for _ in range(repeats):
+            for item in items:
+                t0 = time.perf_counter()
+                f(item)
+                lat.append(time.perf_counter() - t0)
+    finally:
+        numba.set_num_threads(threads)
+    return float(np.median(lat))
 
 
 def _pso_goals(mech: Mechanism) -> list[dict]:
