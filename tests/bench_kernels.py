@@ -39,7 +39,8 @@ def test_batched(benchmark, problem, method):
     res = benchmark.pedantic(
         solve_fk, args=(mech, q), kwargs={"method": method}, rounds=3, iterations=1
     )
-    benchmark.extra_info["solves_per_s"] = len(q) / benchmark.stats.stats.min
+    if benchmark.stats is not None:  # None under --benchmark-disable (one plain call)
+        benchmark.extra_info["solves_per_s"] = len(q) / benchmark.stats.stats.min
     benchmark.extra_info["success_rate"] = float(np.mean(res.success))  # beside the speed
     # a success is a right answer: the pose's IK gives the joints back (from the whole pose box,
     # the 3-6's and the 6-6's plain Newton from home fail often; that is measured, not asserted)
@@ -133,6 +134,7 @@ def test_newton_iteration_parts(benchmark, name, part):
     run()  # compiles
     assert np.isfinite(scratch[0] if part == "direction" else out).all()
     benchmark.pedantic(run, rounds=50, iterations=1)
-    benchmark.extra_info["ns_per_call"] = 1e9 * benchmark.stats.stats.min / reps
+    if benchmark.stats is not None:  # None under --benchmark-disable (one plain call)
+        benchmark.extra_info["ns_per_call"] = 1e9 * benchmark.stats.stats.min / reps
     if part == "solve":
         benchmark.extra_info["iterations_per_solve"] = float(info[:, 1].mean())
