@@ -106,33 +106,30 @@ def test_newton_iteration_parts(benchmark, name, part):
     the whole solve (``solve``: 1 000 of ``test_batched``'s inputs from home, the serial entry, one
     core); ``extra_info['ns_per_call']``, for ``solve`` also the mean iterations per solve."""
     mech = MECHS[name]
+    kernel = kernels.kernel_of(mech)
     x, q = _sample(mech, 1, seed=18)
     x, q = np.ascontiguousarray(x[0]), np.ascontiguousarray(q[0])
-    m, n = len(q), len(x)
-    compiled = kernels.compiled(kernels.kernel_of(mech).module)
-    p = kernels.kernel_of(mech).params
+    m, n, p, reps = len(q), len(x), kernel.params, 1000
+    compiled = kernels.compiled(kernel.module)
     kernel_part, direction = _iteration_parts()
     jm, r = np.empty((m, n)), np.empty(m)
     compiled.jacobian(p, x, q, jm)
     compiled.residual(p, x, q, r)
-    reps, scratch, out = 1000, None, None
     if part == "solve":
-        kernel = kernels.kernel_of(mech)
         _, qs = _sample(mech, reps, seed=18)
         x0 = np.ascontiguousarray(np.broadcast_to(kernel.home, (reps, n)))
         opts = kernels.methods.pack("newton", 1e-10, 100, {})
         xs, info, out = np.empty((reps, n)), np.zeros((reps, 4), np.int64), np.empty(reps)
         serial = kernels.entries_of(kernel.module, "newton").serial
         run = lambda: (info.fill(0), serial(p, qs, x0, opts, xs, info, out))  # noqa: E731
-        scratch = (out,)
     elif part == "direction":
-        scratch = (np.empty(n), np.empty((n, n + 1)), np.empty((n, n)), np.empty(n))
-        run = lambda: direction(jm, r, *scratch, reps)  # noqa: E731
+        out, scratch = np.empty(n), (np.empty((n, n + 1)), np.empty((n, n)), np.empty(n))
+        run = lambda: direction(jm, r, out, *scratch, reps)  # noqa: E731
     else:
         f, out = getattr(compiled, part), (jm if part == "jacobian" else r)
         run = lambda: kernel_part(f, p, x.copy(), q, out, reps)  # noqa: E731
     run()  # compiles
-    assert np.isfinite(scratch[0] if part == "direction" else out).all()
+    assert np.isfinite(out).all()  # what the part writes
     benchmark.pedantic(run, rounds=50, iterations=1)
     if benchmark.stats is not None:  # None under --benchmark-disable (one plain call)
         benchmark.extra_info["ns_per_call"] = 1e9 * benchmark.stats.stats.min / reps

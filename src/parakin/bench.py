@@ -22,7 +22,7 @@ import pandas as pd
 from parakin.kernels import methods
 from parakin.mechanisms.base import REGISTRY, Array, Mechanism
 from parakin.solvers import solve_fk
-from parakin.timing import best_of, best_time
+from parakin.timing import best_of, best_time, one_thread
 
 __all__ = ["SolverSpec", "bench_fk", "BASELINE"]
 
@@ -172,8 +172,9 @@ def kernel_goals(
     BFGS; one joint vector per call, start = home) over ``scipy-root``'s, and the batched Newton
     and LM throughput (``n_batch`` inputs, one call); the 3-6 Stewart's all-solutions FK (inputs/s,
     ``n_all`` inputs) and the 6-6's (``n_all_66`` inputs, 0 skips it: one input per call on one
-    thread, median ms; a batch on every core, inputs/s), each batch also against its numpy path (``PARAKIN_KERNELS=0``) in the same run; and Li 2017's PSO
-    experiment as published (50 runs x 50 particles x 1000 iterations, seconds).
+    thread, median ms; a batch on every core, inputs/s), each batch also against its numpy path
+    (``PARAKIN_KERNELS=0``) in the same run; and Li 2017's PSO experiment as published (50 runs x
+    50 particles x 1000 iterations, seconds).
     One row per measurement: ``mechanism, what, value, unit, goal, met``. The mechanisms are the
     registered ones with kernels (:data:`parakin.mechanisms.base.REGISTRY`)."""
     rows: list[dict[str, Any]] = []
@@ -296,19 +297,13 @@ def _stewart66_all_goals(n_all_66: int, repeats: int) -> list[dict]:
 def _one_thread_median(f: Callable[[Any], Any], items: Any, repeats: int) -> float:
     """Median seconds of ``f(item)`` over ``items`` (each ``repeats`` times) with numba's thread
     pool at one thread (restored after)."""
-    import numba
-
-    threads = numba.get_num_threads()
-    numba.set_num_threads(1)
-    try:
-        lat = []
+    lat = []
+    with one_thread():
         for _ in range(repeats):
             for item in items:
                 t0 = time.perf_counter()
                 f(item)
                 lat.append(time.perf_counter() - t0)
-    finally:
-        numba.set_num_threads(threads)
     return float(np.median(lat))
 
 

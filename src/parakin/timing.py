@@ -3,11 +3,12 @@ collection off while a call is timed, as timeit does), the shortest of the calls
 
 from __future__ import annotations
 
+import contextlib
 import timeit
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
-__all__ = ["best_of", "best_time"]
+__all__ = ["best_of", "best_time", "one_thread"]
 
 
 def best_of(f: Callable[[], Any], repeats: int) -> tuple[float, Any]:
@@ -24,3 +25,20 @@ def best_of(f: Callable[[], Any], repeats: int) -> tuple[float, Any]:
 def best_time(f: Callable[[], Any], repeats: int) -> float:
     """The shortest of ``repeats`` (at least one) timed calls of ``f``, in seconds."""
     return best_of(f, repeats)[0]
+
+
+@contextlib.contextmanager
+def one_thread() -> Iterator[None]:
+    """numba's thread count set to 1 inside the block (what "single-threaded" means for the
+    compiled code), the caller's count restored after; without numba, nothing to set."""
+    try:
+        import numba
+    except ImportError:  # the numpy path: one thread anyway
+        yield
+        return
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(threads)

@@ -34,6 +34,7 @@ import pandas as pd
 
 from parakin.geometry import euler_zyx
 from parakin.mechanisms.stewart66 import DIETMAIER_LENGTHS, Stewart66
+from parakin.timing import one_thread
 
 __all__ = [
     "bertini_available",
@@ -213,11 +214,8 @@ def bench_peers(
     say = progress or (lambda s: None)
     mech.fk_all(q[:2])  # the start system, the compiled kernels
     threads = numba.get_num_threads()
-    numba.set_num_threads(1)
-    try:
+    with one_thread():
         t_one, infos = _time_each(lambda i: mech.fk_all(q[i], return_info=True), len(q))
-    finally:
-        numba.set_num_threads(threads)
     t0 = time.perf_counter()
     batch = mech.fk_all(q, return_info=True)
     t_batch = (time.perf_counter() - t0) / len(q)

@@ -18,7 +18,6 @@ Timing columns end in ``_s`` / ``_per_s`` and never decide anything.
 
 from __future__ import annotations
 
-import contextlib
 import time
 from pathlib import Path
 from typing import Any
@@ -27,6 +26,7 @@ import numpy as np
 import pandas as pd
 
 from parakin.mechanisms.stewart66 import DIETMAIER_LENGTHS, Stewart66
+from parakin.timing import one_thread
 
 __all__ = [
     "assemblies_data",
@@ -257,7 +257,7 @@ def timing_data(config: dict | None = None) -> pd.DataFrame:
     rows = []
     single = []
     m.fk_all(q[0])  # warm-up: the compiled kernel loaded
-    with _one_thread():
+    with one_thread():
         for i in range(min(n, 20)):
             t0 = time.perf_counter()
             r1 = m.fk_all(q[i], return_info=True)
@@ -314,22 +314,6 @@ def timing_data(config: dict | None = None) -> pd.DataFrame:
     df = pd.DataFrame(rows)
     df["x_newton_time"] = df["per_input_s"] / (wall_n / n)
     return df
-
-
-@contextlib.contextmanager
-def _one_thread():
-    """numba's thread count set to 1 inside the block (the compiled fk_all's blocks), restored."""
-    try:
-        import numba
-    except ImportError:  # the numpy path: one thread anyway
-        yield
-        return
-    threads = numba.get_num_threads()
-    numba.set_num_threads(1)
-    try:
-        yield
-    finally:
-        numba.set_num_threads(threads)
 
 
 def _count_distinct(m: Stewart66, x: np.ndarray) -> int:
