@@ -1,37 +1,47 @@
-"""The Snakemake pipeline end to end on the quick config: it runs, and two runs give
-byte-identical tables and figures (seeds from config, deterministic output): the first with every
-job in a process of its own, the second with the single-threaded jobs run by the job server (the
-pipeline's default, parakin.launch), so the server is shown to change no output."""
+"""The Snakemake pipeline end to end on the quick config: it runs once, leaves no process behind,
+and a small set of targets run again in a fresh copy gives the same bytes (seeds from config,
+deterministic output: the trained network's weights and the GA's runs included)."""
 
-import contextlib
 import filecmp
 import json
 import os
-import re
 import shutil
-import signal
 import subprocess
 import sys
+import uuid
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from parakin import launch
 from parakin.io import is_timing_column
 from parakin.pipeline import artefacts
 
 ROOT = Path(__file__).resolve().parents[1]
+#: what a job of the pipeline inherits, so that any process it leaves behind can be found
+MARKER = "PARAKIN_TEST_RUN"
+#: the targets run a second time: the network's training (chaotic, seeded), a table that uses
+#: the trained network, the 30 GA runs and a closed-form table
+AGAIN = (
+    "zhao2017_3p4s:train",
+    "zhao2017_3p4s:table2",
+    "zhao2017_3p4s:ga_runs",
+    "zhao2017_3p4s:table1",
+)
 
 
-def run_pipeline(workdir: Path, server: str = "") -> Path:
-    """The quick pipeline in a copy of the workflow in ``workdir``; ``server``: the job server's
-    socket (``PARAKIN_SERVER``), empty for none."""
+def _copy_workflow(workdir: Path) -> None:
     for item in ("Snakefile", "workflow", "config"):
         src = ROOT / item
         (shutil.copytree if src.is_dir() else shutil.copy)(src, workdir / item)
     shutil.copytree(ROOT / "data" / "reference", workdir / "data" / "reference")
+
+
+def run_pipeline(workdir: Path, marker: str, targets: tuple[str, ...] = ()) -> Path:
+    """The quick pipeline (or only ``targets``) in a copy of the workflow in ``workdir``; every
+    job inherits ``MARKER=marker``."""
+    _copy_workflow(workdir)
     res = subprocess.run(
         [
             sys.executable,
@@ -42,9 +52,10 @@ def run_pipeline(workdir: Path, server: str = "") -> Path:
             "--configfile",
             "config/quick.yaml",
             "-q",
+            *targets,
         ],
         cwd=workdir,
-        env={**os.environ, launch.ENV: server},
+        env={**os.environ, MARKER: marker},
         capture_output=True,
         text=True,
         timeout=900,
@@ -53,25 +64,59 @@ def run_pipeline(workdir: Path, server: str = "") -> Path:
     return workdir / "build" / "quick" / "figures"
 
 
-@pytest.fixture(scope="module")
-def served(tmp_path_factory):
-    """The job server's socket for the second run; afterwards its log (one line per job)."""
-    socket = tmp_path_factory.mktemp("server") / "s.sock"
-    yield socket
-    log = socket.with_suffix(".log")
-    if log.exists() and (m := re.search(r"parakin server (\d+):", log.read_text())):
-        with contextlib.suppress(ProcessLookupError):
-            os.kill(int(m.group(1)), signal.SIGTERM)
+def _marked_processes(marker: str) -> list[str]:
+    """The command lines of the live processes whose environment holds ``MARKER=marker``."""
+    found = []
+    needle = f"{MARKER}={marker}".encode()
+    for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit():
+            continue
+        try:
+            if needle in (proc / "environ").read_bytes().split(b"\0"):
+                found.append((proc / "cmdline").read_bytes().replace(b"\0", b" ").decode())
+        except OSError:  # gone, or not ours to read
+            continue
+    return found
 
 
 @pytest.fixture(scope="module")
-def two_runs(tmp_path_factory, served):
-    alone = run_pipeline(tmp_path_factory.mktemp("run1"))
-    return alone, run_pipeline(tmp_path_factory.mktemp("run2"), server=str(served))
+def quick_run(tmp_path_factory):
+    """The whole quick pipeline once: (figures folder, the marker its jobs inherited)."""
+    marker = uuid.uuid4().hex
+    return run_pipeline(tmp_path_factory.mktemp("run1"), marker), marker
 
 
-def test_pipeline_writes_table1_and_report(two_runs):
-    figures, _ = two_runs
+@pytest.fixture(scope="module")
+def two_runs(quick_run, tmp_path_factory):
+    """The quick run's figures, and those of :data:`AGAIN` run alone in a fresh copy."""
+    config = _quick_config()
+    found = artefacts(config["studies"])
+    targets = tuple(
+        path
+        for k in AGAIN
+        for path in found[k].output_paths(config["figures_dir"], config["generated_dir"])
+    )
+    again = run_pipeline(tmp_path_factory.mktemp("run2"), uuid.uuid4().hex, targets)
+    return quick_run[0], again
+
+
+def _quick_config() -> dict:
+    from parakin.config import QUICK_CONFIG, load_run_config
+
+    return load_run_config([QUICK_CONFIG])
+
+
+def test_no_process_outlives_the_run(quick_run):
+    """No process of the pipeline's jobs is left once snakemake has returned (no server, no
+    background worker): none carries the marker the run's jobs inherited."""
+    if not Path("/proc/self/environ").exists():
+        pytest.skip("no /proc on this platform")
+    left = _marked_processes(quick_run[1])
+    assert not left, f"processes left behind by the quick run: {left}"
+
+
+def test_pipeline_writes_table1_and_report(quick_run):
+    figures, _ = quick_run
     for name in (
         "zhao2017_3p4s/table1.csv",
         "zhao2017_3p4s/table1.md",
@@ -113,38 +158,20 @@ def _same(a: Path, b: Path) -> bool:
 
 
 def test_two_runs_are_byte_identical(two_runs):
-    """Same config, same seeds -> the same bytes (timing columns aside), network weights included."""
+    """Same config, same seeds -> the same bytes (timing columns aside): every file the second,
+    smaller run made (its targets and their upstream, network weights included) equals the
+    whole run's."""
     a, b = two_runs
-    files = sorted(p.relative_to(a) for p in a.rglob("*") if p.is_file())
-    assert files == sorted(p.relative_to(b) for p in b.rglob("*") if p.is_file())
-    different = [str(f) for f in files if not _same(a / f, b / f)]
+    made = sorted(p.relative_to(b.parent) for p in b.parent.rglob("*") if p.is_file())
+    made = [f for f in made if f.parts[0] in ("figures", "generated")]
+    assert len(made) >= len(AGAIN)
+    different = [str(f) for f in made if not _same(a.parent / f, b.parent / f)]
     assert not different
-    gen_a, gen_b = a.parent / "generated", b.parent / "generated"
-    for f in sorted(p.relative_to(gen_a) for p in gen_a.rglob("*") if p.is_file()):
-        assert _same(gen_a / f, gen_b / f), f
 
 
-@pytest.mark.skipif(not launch.supported(), reason="no fork/pidfd on this platform")
-def test_second_run_went_through_the_job_server(two_runs, served):
-    """The byte-identity above compares served jobs with jobs run alone: the second run's
-    single-threaded artefact jobs went through the server (one line each in its log), but for
-    those that came before it listened, and none failed; the multi-threaded ones ran alone."""
-    log = served.with_suffix(".log").read_text()
-    done = dict(
-        ((s, n), code)
-        for s, n, code in re.findall(r"parakin reproduce (\S+) (\S+): exit (-?\d+)", log)
-    )
-    logs = two_runs[1].parent / "logs"
-    ran = [a for a in artefacts().values() if (logs / a.study / f"{a.name}.log").exists()]
-    single = {(a.study, a.name) for a in ran if a.threads == 1}
-    assert set(done) <= single
-    assert len(done) >= 0.8 * len(single), f"{len(done)} of {len(single)} jobs served"
-    assert set(done.values()) == {"0"}
-
-
-def test_quick_table1_agrees_with_committed(two_runs):
+def test_quick_table1_agrees_with_committed(quick_run):
     """Table 1 does not depend on the quick sizes: the committed full-config table agrees."""
-    quick = pd.read_csv(two_runs[0] / "zhao2017_3p4s" / "table1.csv", dtype={"paper": str})
+    quick = pd.read_csv(quick_run[0] / "zhao2017_3p4s" / "table1.csv", dtype={"paper": str})
     full = pd.read_csv(ROOT / "figures" / "zhao2017_3p4s" / "table1.csv", dtype={"paper": str})
     assert (quick["paper"] == full["paper"]).all()
     assert np.allclose(quick["stated"], full["stated"], atol=1e-15)
@@ -163,9 +190,9 @@ def test_snakemake_lint_is_clean():
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
 
 
-def test_report_has_every_figure_with_its_caption(two_runs):
+def test_report_has_every_figure_with_its_caption(quick_run):
     """`snakemake --report` on the finished quick run: every figure and table marked, captioned."""
-    workdir = two_runs[0].parents[2]
+    workdir = quick_run[0].parents[2]
     res = subprocess.run(
         [
             sys.executable,

@@ -20,10 +20,6 @@ from parakin.config import DEFAULT_CONFIG, ROOT, load_config
 from parakin.errors import ConfigError
 from parakin.io import atomic_copy
 
-#: CPU seconds spent on this process's job before the process took it over: a served job's client
-#: command (set by :mod:`parakin.launch` in the server's forked job; 0 in a job of its own)
-startup_elsewhere = 0.0
-
 __all__ = [
     "studies",
     "known_studies",
@@ -105,8 +101,8 @@ def reproduce(
     else:
         items = [registry.find(found, study, name)]
     paths = []
-    # the process's CPU so far (interpreter, imports, config), and its client's when served
-    startup = time.process_time() + startup_elsewhere
+    # the process's CPU so far (interpreter, imports, config)
+    startup = time.process_time()
     for item in items:
         out = Path(outdir) if outdir else Path(config["figures_dir"]) / item.study_folder
         start = time.process_time()

@@ -7,18 +7,8 @@ import os
 import shlex
 import sys
 
-#: Every job's single-threaded `parakin` commands go to a job server, a warm process that forks
-#: one fresh copy of itself per job, so that the start-up (imports, numba) is paid once per server
-#: rather than once per job (src/parakin/launch.py; docs/kernels.md "Start-up"); the outputs are
-#: byte-identical either way (tests/test_pipeline.py). `PARAKIN_SERVER= snakemake ...` turns it off.
-#: Not inside a SLURM job (profiles/slurm): there each job is its own `srun` step, and SLURM stops
-#: a step's processes with it, so a server would never outlive the job that started it.
-#: (The prefix is formatted like a shell command: braces doubled.)
 CHECKOUT_SRC = Path(workflow.basedir) / "src"
-_prefix = (
-    "set -euo pipefail; "
-    'if [ -z "${{SLURM_JOB_ID-}}" ]; then export PARAKIN_SERVER=${{PARAKIN_SERVER-auto}}; fi; '
-)
+_prefix = "set -euo pipefail; "
 #: this checkout's own code comes first, here and in every job (shell prefix below), whatever
 #: parakin the Python environment has installed (a virtual environment shared between clones
 #: would otherwise run, and track, the other clone's src/); a copy of the workflow without src/

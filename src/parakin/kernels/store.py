@@ -302,24 +302,6 @@ def first_call(fn: Callable[..., Any], where: Path, *args: Any) -> Any:
         return fn(*args)
 
 
-def _one(x):
-    return x + 1.0
-
-
-def warm_numba() -> None:
-    """Start numba in this process (its import and the loading of its typing and lowering
-    registries, about 0.5-1 s) with a trivial function cached under ``<root>/numba``: what a
-    process pays once before its first compiled call; a server that forks its jobs pays it for
-    all of them (:mod:`parakin.launch`)."""
-    import numba
-
-    base = root()
-    if base is None:
-        return
-    with numba_cache(base / "numba"):  # the rest of numba's own caches
-        numba.njit(cache=True)(_one)(1.0)
-
-
 def _size(path: Path) -> int:
     return sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
 
