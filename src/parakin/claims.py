@@ -30,6 +30,15 @@ tolerance; an order of magnitude: whether the range reaches within half a decade
 met when the median run meets it (a typical run; the share of runs that meet it is shown). The
 paper reports one run: a number inside our runs' range is one our runs can give.
 
+One published number may be judged by several computations of ours, its *readings* (a region, a
+variant of a method, the stated or a fitted geometry). A favourable reading must not hide the
+others, so :func:`decide` gives the number the verdict of **one declared reading** where a claim
+declares itself (``declared``: why this reading, chosen before the comparison, is the one that
+judges the number, e.g. "the geometry the paper states"; at most one per number, and never one that
+rests on a fit or an assumption, ``basis``), else the verdict of **the weakest reading** (the last
+in :data:`VERDICTS`). Every reading is listed beside the verdict (``report.csv``'s ``readings``
+column), with its value, its own verdict and its evidence.
+
 A number that is one part of a result judged as a whole (a coordinate of a pose that must solve the
 paper's input as a whole) cannot agree on its own: ``whole_agrees=False`` makes it differ whatever
 its own value (a single coordinate within rounding of a row that is no solution is a coincidence).
@@ -69,6 +78,8 @@ __all__ = [
     "resolve",
     "reference_row",
     "row_verdicts",
+    "decide",
+    "readings_text",
     "ROLES",
     "run_summary",
     "CI_LEVEL",
@@ -86,7 +97,8 @@ NOT_COMPARABLE = "not comparable"
 INPUT = "input"
 #: a published result no artefact judges yet (the tests require none; it keeps the counts honest)
 NOT_JUDGED = "not judged yet"
-#: every verdict, strongest first: a reference row with several claims gets the strongest
+#: every verdict, strongest first; a published number judged by several readings gets its declared
+#: reading's verdict, else the weakest (the last in this order; :func:`decide`)
 VERDICTS = (
     REPRODUCED,
     WITHIN_ROUNDING,
@@ -235,7 +247,9 @@ class Claim:
     ours differs (without it a difference is "cause unknown"); ``comparable=False`` marks a number
     that cannot be compared (``reason`` says why). ``tol`` / ``kind`` / ``margin`` are set by
     :func:`resolve` from the reference CSV's ``tolerance`` cell, the one place a tolerance is declared;
-    paper code never passes them (``tests/test_report.py`` checks).
+    paper code never passes them (``tests/test_report.py`` checks). ``declared`` makes this claim
+    the one reading that judges its published number (see :func:`decide`; the text says why it was
+    chosen before the comparison, and a claim with a ``basis`` cannot declare itself).
     """
 
     paper: str
@@ -261,12 +275,20 @@ class Claim:
     spread: tuple[float, float] | None = None
     #: False: one part of a result judged as a whole that does not agree (see the module's notes)
     whole_agrees: bool | None = None
+    #: why this reading, and no other, judges the published number (chosen before the comparison:
+    #: e.g. "the geometry the paper states"); "" = one reading among others (:func:`decide`)
+    declared: str = ""
     outcome: str = field(
         init=False
     )  #: raw comparison: reproduced / within rounding / bound satisfied / differs
     verdict: str = field(init=False)
 
     def __post_init__(self) -> None:
+        if self.declared and self.basis:
+            raise ValueError(
+                f"{self.paper} {self.artefact}/{self.quantity}: a declared reading cannot rest on "
+                f"something fitted or assumed ({self.basis!r}): it is chosen before the comparison"
+            )
         outcome = judge(self.printed, self.ours, self.tol, self.kind, self.margin, self.spread)
         if self.whole_agrees is False:
             outcome = DIFFERS
@@ -380,28 +402,77 @@ def resolve(claim: Claim, ref: pd.DataFrame) -> Claim:
     return out
 
 
+#: how :func:`decide` chose the reading: the only one, the declared one, or the weakest of several
+DECIDED_BY = ("only reading", "declared reading", "weakest reading")
+
+
+def decide(readings: list[Claim]) -> tuple[Claim | None, str]:
+    """The reading whose verdict one published number gets, and how it was chosen
+    (:data:`DECIDED_BY`): the claim that declares itself (``declared``; more than one is an error),
+    else the weakest (the last in :data:`VERDICTS`; among equals the first given). A favourable
+    reading never hides an unfavourable one unless a reading was declared before the comparison."""
+    if not readings:
+        return None, ""
+    declared = [c for c in readings if c.declared]
+    if len(declared) > 1:
+        c = declared[0]
+        raise ValueError(
+            f"{c.paper} {c.artefact}/{c.quantity}: {len(declared)} readings declare themselves "
+            f"({', '.join(repr(d.variant) for d in declared)}); at most one may"
+        )
+    if declared:
+        return declared[0], DECIDED_BY[1]
+    weakest = max(
+        readings, key=lambda c: VERDICTS.index(c.verdict)
+    )  # max keeps the first of equals
+    return weakest, DECIDED_BY[0] if len(readings) == 1 else DECIDED_BY[2]
+
+
+def readings_text(readings: list[Claim], chosen: Claim | None, decided_by: str) -> str:
+    """Every reading of one published number, as the report's ``readings`` column states them:
+    how the verdict was chosen, then each reading's value, verdict and evidence ("" for a number
+    with one undeclared reading)."""
+    if chosen is None or decided_by == DECIDED_BY[0]:
+        return ""
+    if decided_by == DECIDED_BY[1]:
+        head = f"declared reading: {chosen.variant or 'ours'} ({chosen.declared})"
+    else:
+        head = f"the weakest of {len(readings)} readings decides: {chosen.variant or 'ours'}"
+    if len(readings) == 1:
+        return head
+    items = [
+        f"[{k}] {c.variant or 'ours'}: {_fmt(c.ours)} → {c.verdict}"
+        + (f" (evidence: {c.evidence})" if c.evidence else "")
+        for k, c in enumerate(readings, start=1)
+    ]
+    return f"{head}. All {len(readings)} readings: " + "; ".join(items)
+
+
 def row_verdicts(claims: list[Claim], ref: pd.DataFrame) -> pd.DataFrame:
-    """One row per reference row: its verdict (the strongest of its resolved claims, or its role's)
-    and the claim that decided it (``None`` for inputs and lost numbers without a claim)."""
+    """One row per reference row: its verdict (its role's, or that of the reading :func:`decide`
+    chooses among its resolved claims), the claim that decided it (``None`` for inputs and lost
+    numbers without a claim), how it was chosen (``decided_by``) and all its ``readings``."""
     by_row: dict[tuple[str, str], list[Claim]] = {}
     for c in claims:
         by_row.setdefault((c.artefact, c.quantity), []).append(c)
     rows = []
     for _, r in ref.iterrows():
         cs = by_row.get((r["artefact"], r["quantity"]), [])
-        best = min(cs, key=lambda c: VERDICTS.index(c.verdict)) if cs else None
+        chosen, decided_by = decide(cs)
         if r["role"] == "input":
             verdict = INPUT
-        elif r["role"] == "not comparable" and best is None:
+        elif r["role"] == "not comparable" and chosen is None:
             verdict = NOT_COMPARABLE
         else:
-            verdict = best.verdict if best is not None else NOT_JUDGED
+            verdict = chosen.verdict if chosen is not None else NOT_JUDGED
         rows.append(
             {
                 "artefact": r["artefact"],
                 "quantity": r["quantity"],
                 "verdict": verdict,
-                "claim": best,
+                "claim": chosen,
+                "decided_by": decided_by,
+                "readings": cs,
                 "ref": r,
             }
         )
@@ -415,10 +486,32 @@ def _fmt(x: float) -> str:
 
 
 def _paper_cell(c: Claim) -> str:
-    return {"upper": "≤ ", "lower": "≥ ", "order": "~"}.get(c.kind, "") + c.printed
+    """The published number exactly as printed (transcribed in data/reference): how it is compared
+    (a bound of ours or the paper's, an order of magnitude) is the ``tolerance``, never the cell."""
+    return c.printed
+
+
+def _decides(claims: list[Claim]) -> list[str]:
+    """Per claim: whether it is the reading that decides its published number's verdict
+    (:func:`decide`) where that number has several readings or a declared one, else ""."""
+    by_row: dict[tuple[str, str], list[Claim]] = {}
+    for c in claims:
+        by_row.setdefault((c.artefact, c.quantity), []).append(c)
+    out = []
+    for c in claims:
+        readings = by_row[(c.artefact, c.quantity)]
+        chosen, how = decide(readings)
+        if how == DECIDED_BY[0]:
+            out.append("")
+        else:
+            word = "declared" if how == DECIDED_BY[1] else "weakest"
+            out.append(f"decides ({word})" if chosen is c else f"one of {len(readings)}")
+    return out
 
 
 def claims_table(claims: list[Claim]) -> pd.DataFrame:
+    """Every claim (every reading of every published number) with its own verdict; ``reading``
+    says which of a number's readings decides its verdict (:func:`decide`)."""
     return pd.DataFrame(
         {
             "artefact": [c.artefact for c in claims],
@@ -428,7 +521,9 @@ def claims_table(claims: list[Claim]) -> pd.DataFrame:
             "ours": [_fmt(c.ours) for c in claims],
             "difference": [_fmt(c.diff) for c in claims],
             "unit": [c.unit for c in claims],
+            "tolerance": [c.tolerance for c in claims],
             "verdict": [c.verdict for c in claims],
+            "reading": _decides(claims),
             "reason": [
                 (
                     "; ".join(

@@ -23,6 +23,7 @@ from parakin.claims import (
     _paper_cell,
     claims_table,
     load_reference,
+    readings_text,
     resolve,
     row_verdicts,
 )
@@ -66,24 +67,36 @@ REPORT_COLUMNS = [
     "verdict",
     "reason",
     "evidence",
+    "readings",
 ]
 
-VERDICT_TEXT = """Verdicts (one per published number; a number with several computations gets the strongest):
+VERDICT_TEXT = """Verdicts (one per published number):
 
 - **reproduced**: an independent computation agrees within the tolerance declared in `data/reference/` (the
   `tolerance` column, written before the comparison), or within half a decade of a stated order of magnitude;
 - **reproduced within rounding**: within half a unit of the last printed digit;
-- **bound satisfied**: the paper states a bound and ours meets it;
+- **bound satisfied**: the paper states a bound (or a statement of it is encoded as one, the reference note
+  says how) and ours meets it;
 - **consistent after fitting or assuming**: agreement that rests on something fitted to the same numbers or
   assumed (named in the reason); never counted as reproduced;
 - **differs — cause shown**: an artefact or test shows why (named under evidence);
 - **differs — cause unknown**: nothing we have shows why;
-- **not comparable**: lost in the extraction, qualitative, or another machine's clock (the reason says which);
+- **not comparable**: lost in the extraction, qualitative, not identifiable, or another machine's clock (the
+  reason says which);
 - **input**: a set-up value the paper gives, not a result;
 - **not judged yet**: a published result no artefact judges (should be none).
 
 Every row of `data/reference/<paper>.csv` has exactly one verdict, listed in `report.csv` beside this file
-(paper value, ours, difference, tolerance, reason, evidence). Nothing here is typed in by hand.
+(paper value, ours, difference, tolerance, reason, evidence, readings). Nothing here is typed in by hand. The
+paper value is the number as the paper prints it; how it is compared (a bound, an order of magnitude, a
+tolerance) is the `tolerance` column.
+
+**One verdict from several readings.** Where several computations of ours judge one published number (a region,
+a variant of a method, the stated and a fitted geometry: its *readings*), the number gets the verdict of the one
+reading declared for it before the comparison (the row says which and why; never a reading that rests on a fit
+or an assumption), and otherwise the verdict of the **weakest** reading, so that a favourable reading cannot
+hide the others. The `readings` column of `report.csv` lists every reading with its value, its own verdict and
+its evidence, and the tables below show each reading as a line of its own (`reading`: which one decides).
 
 A number a chaotic computation produces (the GA, the PSO runs, a network's training) is judged on independent
 runs, never on one: ours is the median of the runs (at least 30 seeds; 10 trainings per region), shown with its
@@ -123,7 +136,7 @@ def report_rows(key: str, ref: pd.DataFrame, claims: list[Claim], figdir: Path) 
     files = _evidence_files(key, figdir)
     rows = []
     for _, r in row_verdicts(claims, ref).iterrows():
-        c, ref_row = r["claim"], r["ref"]
+        c, ref_row, readings = r["claim"], r["ref"], r["readings"]
         base = {
             "paper": key,
             "artefact": r["artefact"],
@@ -142,13 +155,20 @@ def report_rows(key: str, ref: pd.DataFrame, claims: list[Claim], figdir: Path) 
                     "difference": "",
                     "reason": ref_row["note"],
                     "evidence": "",
+                    "readings": "",
                 }
             )
             continue
         reason = "; ".join(
             x for x in (f"fitted/assumed: {c.basis}" if c.basis else "", c.reason) if x
         )
-        evidence = c.evidence or files.get(c.artefact, "")
+        # the deciding reading's evidence, else another reading's (listed under readings), else
+        # the file of ours named after the artefact
+        evidence = (
+            c.evidence
+            or next((x.evidence for x in readings if x.evidence), "")
+            or files.get(c.artefact, "")
+        )
         rows.append(
             {
                 **base,
@@ -158,6 +178,7 @@ def report_rows(key: str, ref: pd.DataFrame, claims: list[Claim], figdir: Path) 
                 "difference": _fmt(c.diff),
                 "reason": reason,
                 "evidence": evidence,
+                "readings": readings_text(readings, c, r["decided_by"]),
             }
         )
     return pd.DataFrame(rows, columns=REPORT_COLUMNS)
