@@ -4,8 +4,10 @@ A mechanism declares its kernel module (``Mechanism.kernels``) and its parameter
 (``Mechanism.kernel_params()``); :meth:`~parakin.mechanisms.base.Mechanism.kernel` returns the
 :class:`Kernel` of an instance. The module holds five functions for **one** pose
 (``residual(p, x, q, out)``, ``jacobian(p, x, q, out)``, ``ik(p, x, out) -> ok``,
-``in_domain(p, x) -> ok``, ``on_assembly(p, x, q) -> ok``), written once, elementwise and
-branch-free in the names of :mod:`parakin.kernels._math`. The same functions serve three paths
+``in_domain(p, x) -> ok``, ``on_assembly(p, x, q) -> ok``, and optionally
+``joint_period(p, k)``: 2 pi for a revolute joint, whose errors are then taken modulo a turn),
+written once, elementwise and branch-free in the names of :mod:`parakin.kernels._math`; its
+parameter vector may be named (``PARAMS``, a :class:`parakin.kernels._math.Layout`). The same functions serve three paths
 (docs/kernels.md):
 
 * :func:`evaluate`: the batched numpy API (the module as imported, the batch on the trailing
@@ -33,6 +35,7 @@ import importlib.util
 import os
 import sys
 import threading
+import time
 import types
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -54,6 +57,7 @@ __all__ = [
     "evaluate",
     "interpreted",
     "kernel_of",
+    "load_seconds",
     "torch_kernel",
     "use_interpreted",
     "use_parallel",
@@ -335,6 +339,17 @@ _GROUPS = {
 }
 
 
+#: seconds this process spent in first calls of compiled entries (loading them from the cache or
+#: compiling them), what :func:`load_seconds` reports
+_LOAD_SECONDS = [0.0]
+
+
+def load_seconds() -> float:
+    """Seconds this process has spent loading or compiling compiled entries (each entry's first
+    call): a solve's share of its wall time is the difference before and after it."""
+    return _LOAD_SECONDS[0]
+
+
 class _Entry:
     """A compiled entry that loads (or compiles) itself on its first call, through
     :func:`parakin.kernels.store.first_call` (an unreadable cache entry is rebuilt); after that
@@ -346,7 +361,11 @@ class _Entry:
     def __call__(self, *args: Any) -> Any:
         if self.ready:
             return self.fn(*args)
-        out = _store.first_call(self.fn, self.where, *args)
+        start = time.perf_counter()
+        try:
+            out = _store.first_call(self.fn, self.where, *args)
+        finally:
+            _LOAD_SECONDS[0] += time.perf_counter() - start
         self.ready = True
         return out
 
@@ -365,6 +384,8 @@ def entries_of(module: types.ModuleType, group: str) -> types.SimpleNamespace:
     kern = compiled(module)
     glob = dict(vars(entries))
     glob.update(zip(("RES", "JAC", "IK", "DOM", "ASM"), (getattr(kern, f) for f in FUNCTIONS)))
+    # the joints' periods: a kernel with angle joints declares joint_period(p, k)
+    glob["PER"] = getattr(kern, "joint_period", drivers.no_period)
     glob["ROW"] = getattr(drivers, row) if row else None
     if row:  # a method's single call verifies its answer with the kernel's one check
         glob["check"] = entries_of(module, "verify").check.fn

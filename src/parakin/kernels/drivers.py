@@ -5,7 +5,8 @@ manner of QuantEcon's ``optimize.root_finding`` (``newton(res, jac, p, q, x0, op
 
 The kernels (``numba.njit`` functions of one pose, see :func:`parakin.kernels.compiled`):
 ``res(p, x, q, out)`` the residual, ``jac(p, x, q, out)`` its Jacobian, ``ik(p, x, out) -> ok``,
-``dom(p, x) -> ok`` and ``asm(p, x, q) -> ok``. ``p`` is the mechanism's parameter vector, ``q``
+``dom(p, x) -> ok``, ``asm(p, x, q) -> ok`` and ``per(p, k)``, the period of joint ``k`` (2 pi for
+an angle, whose errors are taken modulo a turn; :func:`no_period` for a kernel without angles). ``p`` is the mechanism's parameter vector, ``q``
 the joints (``m`` values), ``x`` the pose (``n``); ``m`` and ``n`` are read from the arrays.
 
 Numba specialises a loop on the kernels it is given (they are compiled into it, as if written
@@ -28,7 +29,16 @@ from numba import njit
 
 from parakin.kernels.methods import VECTOR
 
-__all__ = ["bfgs", "broyden", "dogleg", "lm", "newton", "pso_iterations", "verify"]
+__all__ = [
+    "bfgs",
+    "broyden",
+    "dogleg",
+    "lm",
+    "newton",
+    "no_period",
+    "pso_iterations",
+    "verify",
+]
 
 _O = dict(error_model="numpy", nogil=True)
 #: the loops that take kernels: inlined into their callers (numba's IR inlining), so that a
@@ -598,9 +608,25 @@ def dogleg(res, jac, p, q, x0, opts, x, info):
 
 
 # ---------------------------------------------------------------------------- verification
+@njit(**_O)
+def no_period(p, k):
+    """The joint period of a kernel that declares none: 0, no joint is an angle."""
+    return 0.0
+
+
+@njit(**_O)
+def _joint_gap(d, period):
+    """``|d|``, or for a joint of ``period`` > 0 (an angle: 2 pi) the distance to the nearest
+    multiple of the period: 3.56 rad and -2.72 rad are the same crank angle."""
+    if period > 0.0:
+        d = d - period * math.floor(d / period + 0.5)
+    return abs(d)
+
+
 @njit(**_TAKES_KERNELS)
-def verify(ik, dom, asm, p, q, x, flags):
-    """flags[0] = in domain, flags[1] = on assembly; returns max |ik(x) - q| (inf outside)."""
+def verify(ik, dom, asm, per, p, q, x, flags):
+    """flags[0] = in domain, flags[1] = on assembly; returns max |ik(x) - q| (inf outside), each
+    joint's difference taken modulo its period ``per(p, k)`` (0: none)."""
     flags[0] = 0
     flags[1] = 0
     if not (finite(x) and dom(p, x)):
@@ -613,7 +639,7 @@ def verify(ik, dom, asm, p, q, x, flags):
         return math.inf
     err = 0.0
     for k in range(m):
-        v = abs(out[k] - q[k])
+        v = _joint_gap(out[k] - q[k], per(p, k))
         if v != v:
             return math.inf
         if v > err:

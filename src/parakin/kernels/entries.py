@@ -1,7 +1,8 @@
 """The entry points of the compiled solvers: what Python calls, one set per kernel and method.
 
 Each function below calls a loop of :mod:`parakin.kernels.drivers` with the kernel's functions
-``RES``, ``JAC``, ``IK``, ``DOM``, ``ASM`` and the method's loop ``ROW``. Those six names are
+``RES``, ``JAC``, ``IK``, ``DOM``, ``ASM``, ``PER`` (the joints' periods) and the method's loop
+``ROW``. Those names are
 bound by :func:`parakin.kernels.entries_of` when it compiles a copy of these functions for one
 kernel and one method (the way :func:`parakin.kernels._math.rebind` binds the math names of a
 kernel), with numba's on-disk cache in a directory named by the hash of every source that went
@@ -20,7 +21,7 @@ from numba import prange
 from parakin.kernels.drivers import finite, pso_iterations, verify
 from parakin.kernels.methods import BAD_INPUT
 
-RES = JAC = IK = DOM = ASM = ROW = None  # bound per kernel and method (parakin.kernels)
+RES = JAC = IK = DOM = ASM = PER = ROW = None  # bound per kernel and method (parakin.kernels)
 
 
 def row(p, q, x0, opts, x, info):
@@ -31,7 +32,7 @@ def row(p, q, x0, opts, x, info):
 
 def check(p, q, x, flags):
     """The verification of one pose: ``flags`` = in domain, on assembly; returns the joint error."""
-    return verify(IK, DOM, ASM, p, q, x, flags)
+    return verify(IK, DOM, ASM, PER, p, q, x, flags)
 
 
 def one(p, q, x0, opts, x, info, out):

@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from parakin.errors import ShapeError, SingularityError, UnreachableError
+from parakin.errors import ParakinError, ShapeError, SingularityError, UnreachableError
 from parakin.kernels import Kernel, evaluate
 
 if TYPE_CHECKING:  # the types of the optional dynamics hooks (parakin.dynamics imports this module)
@@ -50,6 +50,8 @@ TorchResidual = Callable[[Any, Any], Any]
 
 __all__ = [
     "REGISTRY",
+    "Assemblies",
+    "Assembly",
     "Mechanism",
     "Skeleton",
     "TorchResidual",
@@ -116,6 +118,50 @@ class Skeleton:
     segments: list[tuple[str, Array]]
     polygons: list[tuple[str, Array]]
     frames: dict[str, tuple[Array, Array]]
+
+
+@dataclasses.dataclass(frozen=True)
+class Assembly:
+    """One real forward solution of a joint vector: the pose, what kind of assembly it is (the
+    mechanism's words, :meth:`Mechanism.assembly_label`) and whether it is the working one (what
+    the mechanism's ``fk`` returns)."""
+
+    x: Array
+    label: str
+    working: bool
+
+
+@dataclasses.dataclass(frozen=True)
+class Assemblies:
+    """Every real assembly of each input of a batch (:meth:`Mechanism.assemblies`).
+
+    ``solutions[i]``: the assemblies of input ``i``; ``complete[i]``: True where the method
+    guarantees that every real assembly was found (a certificate, or an exact closed form), False
+    where it knows it may have missed some (a degenerate input, an uncertified path); ``None``
+    (the whole field) where the method gives no guarantee either way."""
+
+    solutions: list[list[Assembly]]
+    complete: NDArray[np.bool_] | None
+
+    @property
+    def n_found(self) -> list[int]:
+        """How many real assemblies each input has."""
+        return [len(rows) for rows in self.solutions]
+
+
+def wrap_angles(values: ArrayLike, units: tuple[str, ...]) -> Array:
+    """``values (..., k)`` with every coordinate whose unit is ``rad`` wrapped into ``(-pi, pi]``
+    (the same angle, counted in the first turn); entries already there, and every other
+    coordinate, are returned bit for bit."""
+    a = np.array(values, dtype=float)
+    rad = [k for k, u in enumerate(units) if u == "rad"]
+    if rad and a.size:
+        v = a[..., rad]
+        outside = (np.abs(v) > np.pi) | (v == -np.pi)
+        if np.any(outside):
+            turned = v - 2 * np.pi * np.ceil((v - np.pi) / (2 * np.pi))
+            a[..., rad] = np.where(outside, turned, v)
+    return a
 
 
 def as_batch(values: ArrayLike, size: int, what: str) -> Array:
@@ -329,8 +375,14 @@ class Mechanism(ABC):
 
     def joint_error(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """``max_k |ik(pose)_k - joints_k|`` per row (joint units): how far ``pose`` is from being an
-        answer for ``joints``. Raises where :meth:`ik` does (callers isolate such rows)."""
-        return np.max(np.abs(self.ik(pose) - np.asarray(joints, dtype=float)), axis=-1, initial=0.0)
+        answer for ``joints``; a revolute joint's (unit ``rad``) error is taken modulo a turn, so
+        3.56 rad and -2.72 rad are the same crank angle. Raises where :meth:`ik` does (callers
+        isolate such rows)."""
+        d = self.ik(pose) - np.asarray(joints, dtype=float)
+        rad = np.array([u == "rad" for u in self.joint_units])
+        if rad.any():
+            d = np.where(rad, (d + np.pi) % (2 * np.pi) - np.pi, d)
+        return np.max(np.abs(d), axis=-1, initial=0.0)
 
     def check_joints(self, joints: ArrayLike) -> None:
         """Raise UnreachableError where ``joints`` cannot be assembled in the working mode.
@@ -346,6 +398,67 @@ class Mechanism(ABC):
 
     #: Closed-form forward kinematics, where one exists (``None`` otherwise).
     fk: Any = None
+
+    # ------------------------------------------------------------------ every assembly
+    def real_solutions(self, joints: ArrayLike) -> tuple[Array, NDArray[np.bool_] | None]:
+        """Every real forward solution of ``joints (N, m)`` as poses ``(N, k, n)``, NaN-padded, and
+        per input whether the method guarantees that none is missing (``None``: no guarantee
+        either way). Default: the mechanism's ``fk_all``, without a guarantee; a mechanism whose
+        method certifies its answer (or solves exactly) overrides this. Raises ValueError for a
+        mechanism without an all-solutions method."""
+        fk_all = getattr(self, "fk_all", None)
+        if fk_all is None:
+            raise ValueError(f"{self.name} has no all-solutions method (fk_all)")
+        return np.asarray(fk_all(joints), dtype=float), None
+
+    def assembly_label(self, pose: ArrayLike, joints: ArrayLike) -> str:
+        """A few words that say which assembly ``pose`` is among the solutions of ``joints`` (e.g.
+        "above the base"); "" by default (the mechanism tells its assemblies apart no further)."""
+        return ""
+
+    def assemblies(self, joints: ArrayLike) -> Assemblies:
+        """Every real assembly of each joint vector ``(N, m)`` (SI), labelled
+        (:meth:`assembly_label`), with the working one marked: the solution that ``fk`` returns
+        (the mechanism's own assembly, nearest home), where ``fk`` has one for that input."""
+        q = np.atleast_2d(as_batch(joints, self.n_joints, "joints"))
+        with np.errstate(all="ignore"):
+            sols, complete = self.real_solutions(q)
+        working = np.full((len(q), self.n_pose), np.nan)
+        if self.fk is not None:
+            try:
+                with np.errstate(all="ignore"):
+                    working[:] = self.fk(q)
+            except (
+                ParakinError,
+                ArithmeticError,
+            ):  # an input without one: the others still have it
+                for i in range(len(q)):
+                    try:
+                        with np.errstate(all="ignore"):
+                            working[i] = self.fk(q[i])
+                    except (ParakinError, ArithmeticError):
+                        pass
+        out = []
+        for i in range(len(q)):
+            rows = []
+            for x in sols[i]:
+                if not np.all(np.isfinite(x)):
+                    continue
+                near = (
+                    bool(np.all(np.isfinite(working[i])))
+                    and float(np.max(np.abs(self.pose_difference(x, working[i])))) < 1e-7
+                )
+                if near:  # the working one must also be an answer on this instance's IK
+                    try:
+                        near = float(self.joint_error(x, q[i])) < 1e-6
+                    except (ParakinError, ArithmeticError):
+                        near = False
+                label = self.assembly_label(x, q[i])
+                if near:
+                    label = ", ".join(filter(None, [label, "working (what fk returns)"]))
+                rows.append(Assembly(np.asarray(x, dtype=float), label, near))
+            out.append(rows)
+        return Assemblies(out, None if complete is None else np.asarray(complete, dtype=bool))
 
     def kernel(self) -> Kernel | None:
         """This mechanism's kernels (:mod:`parakin.kernels`): the module :attr:`kernels` with
@@ -365,6 +478,9 @@ class Mechanism(ABC):
                 f"{type(self).__name__} declares no kernels: it must define ik and residual"
             )
         params = np.ascontiguousarray(self.kernel_params(), dtype=float)
+        layout = getattr(self.kernels, "PARAMS", None)
+        if layout is not None:  # named parameters: the length is checked once, here
+            layout.check(params)
         return Kernel(
             self.kernels, params, self.n_pose, self.n_joints, np.asarray(self.home(), float)
         )

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from parakin import kernels
 from parakin.errors import ShapeError
 from parakin.mechanisms.base import Array, Mechanism
 from parakin.solvers import compiled
@@ -188,12 +189,16 @@ def solve_fk(
             f"unknown FK method {method!r}; known: {', '.join(sorted(METHODS))}"
         ) from None
     start = time.perf_counter()
+    loading = kernels.load_seconds()
     _check_settings(tol, maxiter, joint_tol)
     if fn is _COMPILED.get(method) and "callback" not in options:  # one pose, compiled: one call
         one = compiled.solve_one(
             mech, method, joints, x0, tol, int(maxiter), options, joint_tol, start
         )
         if one is not None:
+            _wrap(one.x, mech.pose_units)  # the call's own work array: wrapped in place
+            if kernels.load_seconds() != loading:  # the first call: it loaded (or compiled)
+                one = dataclasses.replace(one, startup=kernels.load_seconds() - loading)
             return one.bind(mech)
     batch, flat_q, flat_x = flatten_problem(mech, joints, x0, tol, maxiter)
     jtol = default_joint_tol(tol, options) if joint_tol is None else float(joint_tol)
@@ -218,9 +223,38 @@ def solve_fk(
         result = verify(mech, flat_q, result, jtol, int(maxiter))
         if bad.any():
             result = _mark_bad_rows(mech, result, bad, int(maxiter))
+    x = result.x.copy() if _wrap(result.x, mech.pose_units, dry=True) else result.x
+    _wrap(x, mech.pose_units)
     return dataclasses.replace(
-        result.reshape(batch), wall_time=time.perf_counter() - start, method=method
+        result.reshape(batch),
+        x=x.reshape(*batch, x.shape[-1]),
+        wall_time=time.perf_counter() - start,
+        method=method,
+        startup=kernels.load_seconds() - loading,
     ).bind(mech)  # FKResult.conditioning: computed when asked
+
+
+def _wrap(x: Array, units: tuple[str, ...], dry: bool = False) -> bool:
+    """Wrap the angle coordinates (unit ``rad``) of the poses ``x (..., n)`` into ``(-pi, pi]`` in
+    place: a solver may converge a turn or many away (the same pose; the IK is periodic), but an
+    answer names the angle once. Entries already there keep their bits. Returns whether any entry
+    was (``dry``: would be) outside."""
+    rad = [k for k, u in enumerate(units) if u == "rad"]
+    if not rad:
+        return False
+    if x.ndim == 1:  # the single-call path: a few Python comparisons, no array temporaries
+        out = [k for k in rad if not -math.pi < x[k] <= math.pi and math.isfinite(x[k])]
+        if not dry:
+            for k in out:
+                x[k] -= 2 * math.pi * math.ceil((x[k] - math.pi) / (2 * math.pi))
+        return bool(out)
+    v = x[..., rad]
+    outside = np.isfinite(v) & ~((v > -math.pi) & (v <= math.pi))
+    if not outside.any():
+        return False
+    if not dry:
+        x[..., rad] = np.where(outside, v - 2 * math.pi * np.ceil((v - math.pi) / (2 * math.pi)), v)
+    return True
 
 
 def _nothing(mech: Mechanism, joints: Array, x0: Array, method: str) -> FKResult:

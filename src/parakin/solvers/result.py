@@ -206,6 +206,10 @@ class FKResult:
     #: ``max_k |ik(x)_k - joints_k|`` per pose (inf where x is outside the IK's domain); set by
     #: :func:`parakin.solvers.solve_fk` (None from a method called directly)
     joint_error: Array | None = None
+    #: seconds of ``wall_time`` spent loading or compiling compiled code (the first call of a
+    #: compiled solver in a process: seconds to a minute on an empty kernel cache); the rest is
+    #: the solve. Set by :func:`parakin.solvers.solve_fk`
+    startup: float = 0.0
 
     @property
     def shape(self) -> tuple[int, ...]:

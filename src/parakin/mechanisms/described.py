@@ -1,0 +1,1270 @@
+"""A mechanism is a file: any leg-driven parallel mechanism described in YAML or JSON.
+
+:func:`from_file` reads a description such as::
+
+    name: delta
+    platform: translational        # spatial (x y z + 3 angles) | translational (x y z) | planar (x y phi)
+    home: [0.0, 0.0, -0.9]         # the default start of numeric FK (a reachable, regular pose)
+    legs:
+      - type: crank-rod            # length | slider-rod | crank-rod
+        base: [0.2, 0.0, 0.0]      # base anchor: leg base, slider origin or crank centre
+        axis: [0.0, 1.0, 0.0]      # crank axis or slider direction (not for length legs)
+        zero: [1.0, 0.0, 0.0]      # crank's zero-angle direction (crank-rod)
+        crank: 0.25                # crank radius (crank-rod)
+        rod: 0.6                   # rod length (slider-rod, crank-rod)
+        platform: [0.05, 0.0, 0.0] # anchor in the platform frame
+        branch: 1                  # which of the leg's two IK solutions (slider-rod, crank-rod)
+        limits: [-1.0, 2.0]        # optional joint limits
+
+and returns a :class:`Described` mechanism: closed-form IK on each leg's branch, the analytic
+Jacobians, every FK solver compiled through the one generic kernel :mod:`parakin.kernels.legs`
+(the leg types and their numbers are its parameters: no code per mechanism), all real assemblies
+(:meth:`Described.fk_all`: exact for translational and planar platforms, by the certified 6-6
+homotopy of :class:`parakin.mechanisms.stewart66.Stewart66` for spatial ones), the near-singular
+flag of the solvers, drawings (:meth:`Described.skeleton`) and, where the file declares masses,
+dynamics. docs/mechanism_file.md is the user's guide: schema, conventions, branches, limits.
+
+Joints: a length leg's length (m), a slider's position along its unit axis from the base anchor
+(m), a crank's angle right-handed about its axis from ``zero`` (rad, in ``(-pi, pi]``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from dataclasses import dataclass
+from functools import cached_property
+from types import ModuleType
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from parakin.geometry import euler_zyx
+from parakin.kernels import Kernel, evaluate
+from parakin.kernels import legs as kernels
+from parakin.mechanisms.base import (
+    Array,
+    Mechanism,
+    Skeleton,
+    as_batch,
+    raise_first,
+    wrap_angles,
+)
+
+if TYPE_CHECKING:  # the dynamics are imported where they are used: a solve does not need them
+    from parakin.dynamics.jet import Jet
+    from parakin.dynamics.model import Bodies, MassModel, RigidBody
+
+__all__ = [
+    "LEG_TYPES",
+    "PLATFORMS",
+    "Described",
+    "DescriptionError",
+    "Leg",
+    "from_dict",
+    "from_file",
+]
+
+#: platform type -> (pose names, SI units): what the pose of each platform type is
+PLATFORMS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "spatial": (("x", "y", "z", "alpha", "beta", "gamma"), ("m", "m", "m", "rad", "rad", "rad")),
+    "translational": (("x", "y", "z"), ("m", "m", "m")),
+    "planar": (("x", "y", "phi"), ("m", "m", "rad")),
+}
+#: leg type -> (fields it requires, fields it may have besides ``type``, ``limits``, ``name``)
+LEG_TYPES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "length": (("base", "platform"), ()),
+    "slider-rod": (("base", "axis", "rod", "platform"), ("branch",)),
+    "crank-rod": (("base", "axis", "zero", "crank", "rod", "platform"), ("branch",)),
+}
+#: the default branch of each leg type with two: -1 for both. A slider at ``b - sqrt(...)``: behind
+#: the foot of its anchor along the axis, its rod leaning forward along the guide (the 3-P(4S)'s
+#: working mode). A crank at ``phi - acos(...)``: turned back (about its axis) from the anchor's
+#: direction; for a Delta whose positive angles turn the cranks down from the outward horizontal
+#: (Williams' convention) this is the knee out
+DEFAULT_BRANCH = {"slider-rod": -1, "crank-rod": -1}
+#: the kernel's code of each leg and platform type
+_LEG_CODE = {
+    "length": kernels.LENGTH,
+    "slider-rod": kernels.SLIDER_ROD,
+    "crank-rod": kernels.CRANK_ROD,
+}
+_PLATFORM_CODE = {
+    "spatial": kernels.SPATIAL,
+    "translational": kernels.TRANSLATIONAL,
+    "planar": kernels.PLANAR,
+}
+#: the largest description file read (bytes); its YAML is bounded as a config's
+#: (:func:`parakin.config.check_bounds`: values, depth, self-reference)
+MAX_FILE_BYTES = 1 << 20
+#: largest magnitude of a length in a description (m): far beyond any real mechanism
+LENGTH_LIMIT = 1e6
+#: the body kinds each leg type moves (their masses under ``masses``)
+_BODY_KINDS = {
+    "length": ("cylinder", "piston"),
+    "slider-rod": ("slider", "rod"),
+    "crank-rod": ("crank", "rod"),
+}
+#: a slider's default inertia: a cube of this side (m); it only translates, so its inertia
+#: never enters the dynamics
+_SLIDER_SIDE = 0.05
+#: Newton steps that polish each root of the planar polynomial on the closure equations
+_POLISH = 8
+
+
+class DescriptionError(ValueError):
+    """A description that cannot be read: one line naming the file, the field and what is wrong."""
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One leg of a described mechanism (SI units). ``axis`` and ``zero`` are unit vectors
+    (``zero`` perpendicular to ``axis``); ``branch`` is +1 or -1 (0 for a length leg, which has
+    one); ``limits`` the joint's ``(lower, upper)`` or None."""
+
+    type: str
+    base: tuple[float, float, float]
+    platform: tuple[float, float, float]
+    axis: tuple[float, float, float] | None = None
+    zero: tuple[float, float, float] | None = None
+    crank: float | None = None
+    rod: float | None = None
+    branch: int = 0
+    limits: tuple[float, float] | None = None
+    name: str = ""
+
+    @property
+    def joint_unit(self) -> str:
+        return "rad" if self.type == "crank-rod" else "m"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The leg as a description writes it (only the fields it has)."""
+        out: dict[str, Any] = {"type": self.type}
+        for key in ("name", "base", "axis", "zero", "crank", "rod", "platform", "branch", "limits"):
+            value = getattr(self, key)
+            if value is None or (key == "branch" and self.type == "length") or value == "":
+                continue
+            out[key] = list(value) if isinstance(value, tuple) else value
+        return out
+
+
+# ---------------------------------------------------------------------------- reading
+def from_file(path: str | os.PathLike) -> Described:
+    """The mechanism described in the YAML or JSON file ``path`` (see the module docstring and
+    docs/mechanism_file.md). A malformed file raises :class:`DescriptionError`: one line that
+    names the file and the field. The file is read within bounds: at most
+    :data:`MAX_FILE_BYTES`, and its YAML (``yaml.safe_load``: no tags, no code) expanded within
+    the bounds of :func:`parakin.config.check_bounds` (aliases counted, not expanded)."""
+    import yaml
+
+    from parakin.config import check_bounds
+    from parakin.errors import ConfigError
+    from parakin.io import read_text
+
+    where = os.fspath(path)
+    try:
+        size = os.stat(where).st_size
+    except OSError as exc:
+        raise DescriptionError(f"{where}: cannot read the file ({exc.strerror or exc})") from None
+    if size > MAX_FILE_BYTES:
+        raise DescriptionError(f"{where}: {size} bytes, more than the limit {MAX_FILE_BYTES}")
+    try:
+        data = yaml.safe_load(read_text(where, "mechanism file"))
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        at = f" (line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""
+        what = getattr(exc, "problem", None) or "not valid YAML or JSON"
+        raise DescriptionError(f"{where}: not valid YAML or JSON{at}: {what}") from None
+    except RecursionError:
+        raise DescriptionError(f"{where}: nested too deeply") from None
+    except ValueError as exc:  # not UTF-8 (read_text names the file)
+        raise DescriptionError(str(exc)) from None
+    try:
+        check_bounds(data, where)
+    except ConfigError as exc:
+        raise DescriptionError(str(exc)) from None
+    return from_dict(data, where)
+
+
+def from_dict(data: Any, source: str = "description") -> Described:
+    """The mechanism described by the mapping ``data`` (what :func:`from_file` reads); errors name
+    ``source`` and the field."""
+    if not isinstance(data, dict):
+        raise DescriptionError(
+            f"{source}: expected a mapping with name, platform and legs, got {type(data).__name__}"
+        )
+    known = {"name", "platform", "legs", "home", "bounds", "masses", "description"}
+    _no_unknown(data, known, source, "")
+    name = data.get("name")
+    if not isinstance(name, str) or not name.strip():
+        raise DescriptionError(f"{source}: name: expected a non-empty text, got {name!r:.60}")
+    platform = data.get("platform")
+    if platform not in PLATFORMS:
+        raise DescriptionError(
+            f"{source}: platform: expected one of {', '.join(PLATFORMS)}, got {platform!r:.60}"
+        )
+    n_pose = len(PLATFORMS[platform][0])
+    legs = data.get("legs")
+    if not isinstance(legs, list):
+        raise DescriptionError(f"{source}: legs: expected a list of legs, got {legs!r:.60}")
+    if len(legs) != n_pose:
+        raise DescriptionError(
+            f"{source}: legs: a {platform} platform ({n_pose} pose coordinates) needs "
+            f"{n_pose} legs, got {len(legs)}"
+        )
+    parsed = tuple(_leg(leg, f"{source}: legs[{i}]") for i, leg in enumerate(legs))
+    units = PLATFORMS[platform][1]
+    home = None
+    if data.get("home") is not None:
+        home = tuple(_numbers(data["home"], n_pose, f"{source}: home", units))
+    bounds = None
+    if data.get("bounds") is not None:
+        bounds = _bounds(data["bounds"], n_pose, units, f"{source}: bounds")
+    masses = None
+    if data.get("masses") is not None:
+        masses = _masses(data["masses"], parsed, f"{source}: masses")
+    text = data.get("description", "")
+    if not isinstance(text, str):
+        raise DescriptionError(f"{source}: description: expected a text, got {text!r:.60}")
+    try:
+        return Described(
+            name=name.strip(),
+            platform=platform,
+            legs=parsed,
+            home_pose=home,
+            bounds=bounds,
+            masses=masses,
+            description=text,
+            source=source,
+        )
+    except DescriptionError:
+        raise
+    except ValueError as exc:
+        raise DescriptionError(f"{source}: {exc}") from None
+
+
+def _no_unknown(data: dict, known: set[str], source: str, prefix: str) -> None:
+    unknown = sorted(str(k) for k in set(data) - known)
+    if unknown:
+        raise DescriptionError(
+            f"{source}: {prefix}{unknown[0]}: unknown field (known: {', '.join(sorted(known))})"
+        )
+
+
+def _number(value: Any, where: str, unit: str = "m") -> float:
+    """A finite number, or a quantity text with a unit (``35deg``, ``120mm``) converted to SI."""
+    from parakin.units import parse_quantity
+
+    if isinstance(value, bool) or value is None:
+        raise DescriptionError(f"{where}: expected a number, got {value!r:.60}")
+    try:
+        v = parse_quantity(value) if isinstance(value, str) else float(value)
+    except (TypeError, ValueError):
+        raise DescriptionError(f"{where}: expected a number ({unit}), got {value!r:.60}") from None
+    if not math.isfinite(v) or abs(v) > LENGTH_LIMIT:
+        raise DescriptionError(
+            f"{where}: {value!r:.60} must be a finite number of magnitude <= {LENGTH_LIMIT:g}"
+        )
+    return v
+
+
+def _numbers(
+    value: Any, size: int, where: str, units: tuple[str, ...] | None = None
+) -> list[float]:
+    if not isinstance(value, (list, tuple)) or len(value) != size:
+        raise DescriptionError(f"{where}: expected a list of {size} numbers, got {value!r:.60}")
+    units = units or ("m",) * size
+    return [_number(v, f"{where}[{k}]", units[k]) for k, v in enumerate(value)]
+
+
+def _point(value: Any, where: str) -> tuple[float, float, float]:
+    """A point of 3 coordinates (m); 2 are read as ``(x, y, 0)`` (planar mechanisms)."""
+    if isinstance(value, (list, tuple)) and len(value) == 2:
+        value = [*value, 0.0]
+    x, y, z = _numbers(value, 3, where)
+    return x, y, z
+
+
+def _direction(value: Any, where: str) -> Array:
+    v = np.array(_point(value, where))
+    norm = float(np.linalg.norm(v))
+    if not norm > 0:
+        raise DescriptionError(f"{where}: a direction must not be zero")
+    return v / norm
+
+
+def _positive(value: Any, where: str) -> float:
+    v = _number(value, where)
+    if not v > 0:
+        raise DescriptionError(f"{where}: expected a length > 0 (m), got {value!r:.60}")
+    return v
+
+
+def _leg(data: Any, where: str) -> Leg:
+    if not isinstance(data, dict):
+        raise DescriptionError(f"{where}: expected a mapping with a type, got {data!r:.60}")
+    kind = data.get("type")
+    if kind not in LEG_TYPES:
+        raise DescriptionError(
+            f"{where}.type: expected one of {', '.join(LEG_TYPES)}, got {kind!r:.60}"
+        )
+    required, optional = LEG_TYPES[kind]
+    _no_unknown(data, {"type", "limits", "name", *required, *optional}, where, ".")
+    for key in required:
+        if data.get(key) is None:
+            raise DescriptionError(
+                f"{where}.{key}: missing (a {kind} leg needs {', '.join(required)})"
+            )
+    fields: dict[str, Any] = {
+        "type": kind,
+        "base": _point(data["base"], f"{where}.base"),
+        "platform": _point(data["platform"], f"{where}.platform"),
+    }
+    if "axis" in required:
+        axis = _direction(data["axis"], f"{where}.axis")
+        fields["axis"] = tuple(axis.tolist())
+    if "zero" in required:
+        zero = _direction(data["zero"], f"{where}.zero")
+        cosine = float(zero @ axis)
+        if abs(cosine) > 1e-6:
+            raise DescriptionError(
+                f"{where}.zero: must be perpendicular to axis (they make "
+                f"{math.degrees(math.acos(max(-1.0, min(1.0, cosine)))):.6g} deg)"
+            )
+        zero = zero - cosine * axis  # exactly perpendicular: the angle is measured in the plane
+        fields["zero"] = tuple((zero / np.linalg.norm(zero)).tolist())
+    if "crank" in required:
+        fields["crank"] = _positive(data["crank"], f"{where}.crank")
+    if "rod" in required:
+        fields["rod"] = _positive(data["rod"], f"{where}.rod")
+    if "branch" in optional:
+        branch = data.get("branch", DEFAULT_BRANCH[kind])
+        if isinstance(branch, bool) or branch not in (1, -1):
+            raise DescriptionError(f"{where}.branch: expected +1 or -1, got {branch!r:.60}")
+        fields["branch"] = int(branch)
+    unit = "rad" if kind == "crank-rod" else "m"
+    if data.get("limits") is not None:
+        lo, hi = _numbers(data["limits"], 2, f"{where}.limits", (unit, unit))
+        if not lo < hi:
+            raise DescriptionError(f"{where}.limits: lower {lo:g} must be < upper {hi:g} ({unit})")
+        if kind == "crank-rod" and hi - lo >= 2 * math.pi:
+            raise DescriptionError(
+                f"{where}.limits: span {hi - lo:.6g} rad is a whole turn or more"
+            )
+        fields["limits"] = (lo, hi)
+    name = data.get("name", "")
+    if not isinstance(name, str):
+        raise DescriptionError(f"{where}.name: expected a text, got {name!r:.60}")
+    fields["name"] = name
+    return Leg(**fields)
+
+
+def _bounds(value: Any, n: int, units: tuple[str, ...], where: str) -> tuple[tuple, tuple]:
+    if isinstance(value, dict):
+        _no_unknown(value, {"lower", "upper"}, where, ".")
+        value = [value.get("lower"), value.get("upper")]
+    if not isinstance(value, (list, tuple)) or len(value) != 2:
+        raise DescriptionError(f"{where}: expected [lower, upper] (two lists of {n} numbers)")
+    lo = _numbers(value[0], n, f"{where}.lower", units)
+    hi = _numbers(value[1], n, f"{where}.upper", units)
+    for k in range(n):
+        if not lo[k] < hi[k]:
+            raise DescriptionError(
+                f"{where}: lower[{k}] = {lo[k]:g} must be < upper[{k}] = {hi[k]:g}"
+            )
+    return tuple(lo), tuple(hi)
+
+
+def _masses(value: Any, legs: tuple[Leg, ...], where: str) -> tuple:
+    """``((kind, mass, inertia or None, com or None), ..., ("gravity", g))`` from the ``masses``
+    mapping: each body kind a number (kg; default shape) or ``{mass, inertia, com}``."""
+    if not isinstance(value, dict):
+        raise DescriptionError(f"{where}: expected a mapping of body kinds to masses")
+    needed = ["platform"] + [k for leg in legs for k in _BODY_KINDS[leg.type]]
+    needed = list(dict.fromkeys(needed))
+    _no_unknown(value, {*needed, "gravity"}, where, ".")
+    out = []
+    for kind in needed:
+        body = value.get(kind)
+        at = f"{where}.{kind}"
+        if body is None:
+            raise DescriptionError(f"{at}: missing (this mechanism moves {', '.join(needed)})")
+        if not isinstance(body, dict):
+            body = {"mass": body}
+        _no_unknown(body, {"mass", "inertia", "com"}, at, ".")
+        mass = _number(body.get("mass"), f"{at}.mass", "kg")
+        if not mass > 0:
+            raise DescriptionError(f"{at}.mass: expected a mass > 0 (kg), got {mass:g}")
+        inertia = None
+        if body.get("inertia") is not None:
+            raw = body["inertia"]
+            if isinstance(raw, list) and len(raw) == 3 and all(isinstance(r, list) for r in raw):
+                inertia = tuple(
+                    tuple(_numbers(r, 3, f"{at}.inertia", ("kg m^2",) * 3)) for r in raw
+                )
+            else:
+                inertia = tuple(_numbers(raw, 3, f"{at}.inertia", ("kg m^2",) * 3))
+        com = None if body.get("com") is None else _point(body["com"], f"{at}.com")
+        out.append((kind, mass, inertia, com))
+    gravity = (0.0, 0.0, -9.81)
+    if value.get("gravity") is not None:
+        gravity = tuple(_numbers(value["gravity"], 3, f"{where}.gravity", ("m/s^2",) * 3))
+    return (*out, ("gravity", gravity))
+
+
+# ---------------------------------------------------------------------------- the mechanism
+@dataclass(frozen=True)
+class Described(Mechanism, register=False):
+    """A leg-driven parallel mechanism from its description (:func:`from_file`,
+    :func:`from_dict`). Not registered: a file names it (``--mechanism FILE`` on the command
+    line), so the registry, the solver atlas and the record never change with a file."""
+
+    name: str
+    platform: str
+    legs: tuple[Leg, ...]
+    home_pose: tuple[float, ...] | None = None
+    bounds: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+    masses: tuple | None = None
+    description: str = dataclasses.field(default="", compare=False)
+    source: str = dataclasses.field(default="", compare=False)
+
+    #: the one kernel of every described mechanism: the leg types are its parameters
+    kernels: ClassVar[ModuleType] = kernels
+    #: the units a paper would print (no paper: millimetres and degrees, the usual ones)
+    _PAPER = {"m": "mm", "rad": "deg"}
+
+    def __post_init__(self) -> None:
+        if self.platform not in PLATFORMS:
+            raise ValueError(f"platform {self.platform!r} is not one of {', '.join(PLATFORMS)}")
+        names, units = PLATFORMS[self.platform]
+        if len(self.legs) != len(names):
+            raise ValueError(f"legs: a {self.platform} platform needs {len(names)} legs")
+        set_ = object.__setattr__
+        set_(self, "pose_names", names)
+        set_(self, "pose_units", units)
+        joint_names = []
+        for i, leg in enumerate(self.legs):
+            label = leg.name or {"length": "l", "slider-rod": "s", "crank-rod": "theta"}[leg.type]
+            joint_names.append(label if leg.name else f"{label}{i + 1}")
+        if len(set(joint_names)) != len(joint_names):
+            raise ValueError(f"legs: joint names {joint_names} must differ (the legs' name fields)")
+        set_(self, "joint_names", tuple(joint_names))
+        set_(self, "joint_units", tuple(leg.joint_unit for leg in self.legs))
+        set_(self, "paper_pose_units", tuple(self._PAPER[u] for u in units))
+        set_(self, "paper_joint_units", tuple(self._PAPER[u] for u in self.joint_units))
+        home = self.home()
+        if not bool(self.in_domain(home)):
+            raise ValueError(
+                f"home: the pose {tuple(np.round(home, 6).tolist())} is outside the workspace "
+                "(some leg cannot reach its anchor, or a joint is beyond its limits): give a "
+                "reachable home pose"
+            )
+        cond = float(np.linalg.cond(self._jacobian_at(home)))
+        if not cond < 1e10:
+            raise ValueError(
+                f"home: the pose {tuple(np.round(home, 6).tolist())} is singular (condition "
+                f"number of d residual / d pose {cond:.3g}): give a regular home pose"
+            )
+        lo, hi = self.pose_bounds()
+        if not np.all((lo <= home) & (home <= hi)):
+            raise ValueError("bounds: the box must contain the home pose")
+
+    # ------------------------------------------------------------------ geometry as arrays
+    @cached_property
+    def base_points(self) -> Array:
+        """Base anchors (m, 3): leg bases, slider origins, crank centres."""
+        return np.array([leg.base for leg in self.legs], dtype=float)
+
+    @cached_property
+    def anchor_points(self) -> Array:
+        """Platform anchors (m, 3) in the platform frame."""
+        return np.array([leg.platform for leg in self.legs], dtype=float)
+
+    @cached_property
+    def _types(self) -> NDArray[np.str_]:
+        return np.array([leg.type for leg in self.legs])
+
+    @cached_property
+    def _axes(self) -> Array:
+        return np.array([leg.axis or (0.0, 0.0, 1.0) for leg in self.legs], dtype=float)
+
+    @cached_property
+    def _zeros(self) -> Array:
+        return np.array([leg.zero or (1.0, 0.0, 0.0) for leg in self.legs], dtype=float)
+
+    @cached_property
+    def _sides(self) -> Array:
+        return np.cross(self._axes, self._zeros)
+
+    @cached_property
+    def _cranks(self) -> Array:
+        return np.array([leg.crank or 0.0 for leg in self.legs], dtype=float)
+
+    @cached_property
+    def _rods(self) -> Array:
+        return np.array([leg.rod or 0.0 for leg in self.legs], dtype=float)
+
+    @cached_property
+    def size(self) -> float:
+        """Characteristic length (m): RMS distance of the base anchors from their centroid."""
+        b = self.base_points - self.base_points.mean(0)
+        return float(np.sqrt(np.mean(np.sum(b * b, -1)))) or 1.0
+
+    # ------------------------------------------------------------------ the kernel's parameters
+    def _params(self, home_sign: float) -> Array:
+        records = []
+        for leg in self.legs:
+            lo, hi = leg.limits or (0.0, 0.0)
+            axis = leg.axis or (0.0, 0.0, 0.0)
+            zero = leg.zero or (0.0, 0.0, 0.0)
+            records.append(
+                {
+                    "kind": _LEG_CODE[leg.type],
+                    "base": leg.base,
+                    "axis": axis,
+                    "zero": zero,
+                    "side": tuple(np.cross(axis, zero).tolist()),
+                    "crank": leg.crank or 0.0,
+                    "rod": leg.rod or 0.0,
+                    "anchor": leg.platform,
+                    "branch": float(leg.branch),
+                    "limited": 1.0 if leg.limits is not None else 0.0,
+                    "lower": lo,
+                    "upper": hi,
+                }
+            )
+        return kernels.PARAMS.pack(
+            records,
+            platform=_PLATFORM_CODE[self.platform],
+            legs=float(len(self.legs)),
+            home_sign=home_sign,
+        )
+
+    def _jacobian_at(self, pose: Array) -> Array:
+        """``d residual / d pose`` at ``pose`` with its own joints (no assembly sign needed)."""
+        k = Kernel(kernels, self._params(1.0), self.n_pose, self.n_joints)
+        q, _ = evaluate(k, "ik", pose)
+        return evaluate(k, "jacobian", pose, q)
+
+    def kernel_params(self) -> Array:
+        """The platform type, the number of legs, the sign of ``det(d residual / d pose)`` at home
+        (the working assembly of a translational or planar platform) and one record per leg
+        (:data:`parakin.kernels.legs.LEG`)."""
+        sign = 0.0
+        if self.platform != "spatial":
+            sign = float(np.sign(np.linalg.det(self._jacobian_at(self.home()))))
+        return self._params(sign)
+
+    # ------------------------------------------------------------------ what a mechanism declares
+    def home(self) -> Array:
+        """The declared ``home`` pose, else the origin pose (all zeros)."""
+        if self.home_pose is not None:
+            return np.array(self.home_pose, dtype=float)
+        return np.zeros(len(self.pose_names))
+
+    def pose_bounds(self) -> tuple[Array, Array]:
+        """The declared ``bounds``, else home plus or minus a fifth of :attr:`size` in position
+        and 20 deg in angle."""
+        if self.bounds is not None:
+            return np.array(self.bounds[0]), np.array(self.bounds[1])
+        half = np.array(
+            [np.deg2rad(20.0) if u == "rad" else 0.2 * self.size for u in self.pose_units]
+        )
+        return self.home() - half, self.home() + half
+
+    def parameters(self) -> dict[str, Any]:
+        """The description as plain data (what a file would hold; JSON-ready)."""
+        return self.to_dict()
+
+    def to_dict(self) -> dict[str, Any]:
+        """The description, in the schema :func:`from_dict` reads (SI units)."""
+        out: dict[str, Any] = {
+            "name": self.name,
+            "platform": self.platform,
+            "legs": [leg.to_dict() for leg in self.legs],
+        }
+        if self.home_pose is not None:
+            out["home"] = list(self.home_pose)
+        if self.bounds is not None:
+            out["bounds"] = {"lower": list(self.bounds[0]), "upper": list(self.bounds[1])}
+        if self.masses is not None:
+            masses: dict[str, Any] = {}
+            for entry in self.masses:
+                if entry[0] == "gravity":
+                    masses["gravity"] = list(entry[1])
+                    continue
+                kind, mass, inertia, com = entry
+                body: dict[str, Any] = {"mass": mass}
+                if inertia is not None:
+                    body["inertia"] = [list(r) if isinstance(r, tuple) else r for r in inertia]
+                if com is not None:
+                    body["com"] = list(com)
+                masses[kind] = body
+            out["masses"] = masses
+        if self.description:
+            out["description"] = self.description
+        return out
+
+    # ------------------------------------------------------------------ kinematics beyond the kernel
+    def platform_frame(self, pose: ArrayLike) -> tuple[Array, Array]:
+        """The platform's position ``t`` (..., 3) and rotation ``R`` (..., 3, 3)."""
+        x = as_batch(pose, self.n_pose, "pose")
+        zeros = np.zeros(x.shape[:-1])
+        if self.platform == "spatial":
+            return x[..., :3], euler_zyx(x[..., 3], x[..., 4], x[..., 5])
+        if self.platform == "planar":
+            t = np.stack([x[..., 0], x[..., 1], zeros], -1)
+            return t, euler_zyx(x[..., 2], zeros, zeros)
+        return x.copy(), np.broadcast_to(np.eye(3), (*x.shape[:-1], 3, 3)).copy()
+
+    def platform_world(self, pose: ArrayLike) -> Array:
+        """The platform anchors in the fixed frame (..., m, 3)."""
+        t, r = self.platform_frame(pose)
+        return t[..., None, :] + np.einsum("...ij,kj->...ki", r, self.anchor_points)
+
+    def spheres(self, joints: ArrayLike) -> tuple[Array, Array]:
+        """For joints (..., m): each leg's sphere, centre ``c(q)`` (..., m, 3) and radius
+        ``rho(q)`` (..., m): the platform anchor of leg ``i`` lies on sphere ``i``. A length leg's
+        is its base anchor and its length; a slider's the slider point and the rod; a crank's the
+        crank tip and the rod."""
+        q = as_batch(joints, self.n_joints, "joints")
+        qq = q[..., None]
+        t = self._types
+        slider, crank = (t == "slider-rod")[:, None], (t == "crank-rod")[:, None]
+        arm = np.cos(qq) * self._zeros + np.sin(qq) * self._sides
+        centre = self.base_points + np.where(
+            slider, qq * self._axes, np.where(crank, self._cranks[:, None] * arm, 0.0)
+        )
+        radius = np.where(t == "length", q, self._rods)
+        return centre, radius
+
+    def joint_rates(self, pose: ArrayLike, joints: ArrayLike) -> Array:
+        """``d c_i / d q_i`` (..., m, 3): how each joint moves its sphere's centre (zero for a length
+        leg, whose joint is the radius)."""
+        q = as_batch(joints, self.n_joints, "joints")[..., None]
+        t = self._types
+        turn = -np.sin(q) * self._zeros + np.cos(q) * self._sides
+        return np.where(
+            (t == "slider-rod")[:, None],
+            self._axes,
+            np.where((t == "crank-rod")[:, None], self._cranks[:, None] * turn, 0.0),
+        )
+
+    def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike) -> Array:
+        """``d residual / d joints``, diagonal: ``-1`` for a length leg, ``-v . dc/dq / L`` for a rod
+        leg (``v`` from the sphere's centre to the anchor)."""
+        x = as_batch(pose, self.n_pose, "pose")
+        q = as_batch(joints, self.n_joints, "joints")
+        centre, _ = self.spheres(q)
+        v = self.platform_world(x) - centre
+        rate = np.einsum("...ij,...ij->...i", v, self.joint_rates(x, q))
+        diag = np.where(
+            self._types == "length", -1.0, -rate / np.where(self._rods > 0, self._rods, 1.0)
+        )
+        return diag[..., None] * np.eye(self.n_joints)
+
+    # ------------------------------------------------------------------ which joints can assemble
+    def check_joints(self, joints: ArrayLike) -> None:
+        """Raise UnreachableError where ``joints`` cannot be assembled: a joint beyond its limits,
+        a leg length not > 0, two legs whose spheres cannot hold their anchors at the anchors'
+        fixed distance (a necessary condition for every platform type), and, for a translational
+        or planar platform (where every assembly is found exactly), no real assembly at all."""
+        q = np.atleast_2d(as_batch(joints, self.n_joints, "joints"))
+        batch = q.shape[:-1]
+        for i, leg in enumerate(self.legs):
+            name, unit = self.joint_names[i], leg.joint_unit
+            if leg.type == "length":
+                raise_first(
+                    ~(q[..., i] > 0),
+                    batch,
+                    lambda idx, i=i, name=name: (
+                        f"joint {name} = {q[idx][i]:g} m must be > 0 (a leg length)"
+                    ),
+                )
+            if leg.limits is None:
+                continue
+            lo, hi = leg.limits
+            value = q[..., i]
+            if unit == "rad":
+                gap = value - lo
+                inside = gap - 2 * np.pi * np.floor(gap / (2 * np.pi)) <= hi - lo
+            else:
+                inside = (lo <= value) & (value <= hi)
+            raise_first(
+                ~inside,
+                batch,
+                lambda idx, i=i, name=name, lo=lo, hi=hi, unit=unit: (
+                    f"joint {name} = {q[idx][i]:.6g} {unit} is outside its limits "
+                    f"[{lo:g}, {hi:g}] {unit} (legs[{i}].limits)"
+                ),
+            )
+        self._check_pairs(q)
+        if self.platform != "spatial":
+            with np.errstate(all="ignore"):
+                sols, _ = self.real_solutions(q)
+            none = ~np.any(np.all(np.isfinite(sols), axis=-1), axis=-1)
+            raise_first(
+                none,
+                batch,
+                lambda idx: (
+                    f"joints {tuple(np.round(q[idx], 6).tolist())} cannot be assembled: "
+                    f"no real assembly of the {self.platform} platform exists"
+                ),
+            )
+
+    def _check_pairs(self, q: Array) -> None:
+        """A rigid platform holds every two anchors a fixed distance apart: for each pair of legs,
+        some points of their spheres must lie that far apart (for a translational platform, whose
+        position lies on every sphere moved back by its anchor: those moved spheres must meet)."""
+        centre, radius = self.spheres(q)
+        r = np.abs(radius)
+        a = self.anchor_points
+        slack = 1e-9 * max(1.0, self.size)
+        for i in range(self.n_joints):
+            for j in range(i + 1, self.n_joints):
+                ri, rj = r[..., i], r[..., j]
+                if self.platform == "translational":
+                    gap = np.linalg.norm(
+                        (centre[..., i, :] - a[i]) - (centre[..., j, :] - a[j]), axis=-1
+                    )
+                    bad = (gap > ri + rj + slack) | (gap < np.abs(ri - rj) - slack)
+
+                    def message(idx, i=i, j=j, gap=gap, ri=ri, rj=rj) -> str:
+                        return (
+                            f"joints {tuple(np.round(q[idx], 6).tolist())} cannot be assembled: "
+                            f"legs {i + 1} and {j + 1} put the platform on spheres of radii "
+                            f"{float(ri[idx]):.6g} and {float(rj[idx]):.6g} m whose centres are "
+                            f"{float(gap[idx]):.6g} m apart: they do not meet"
+                        )
+                else:
+                    gap = np.linalg.norm(centre[..., i, :] - centre[..., j, :], axis=-1)
+                    lo = np.maximum(0.0, np.maximum(gap - ri - rj, np.abs(ri - rj) - gap))
+                    hi = gap + ri + rj
+                    held = float(np.linalg.norm(a[i] - a[j]))
+                    bad = (held < lo - slack) | (held > hi + slack)
+
+                    def message(idx, i=i, j=j, lo=lo, hi=hi, held=held) -> str:
+                        return (
+                            f"joints {tuple(np.round(q[idx], 6).tolist())} cannot be assembled: "
+                            f"legs {i + 1} and {j + 1} hold their anchors {float(lo[idx]):.6g} to "
+                            f"{float(hi[idx]):.6g} m apart, the platform holds them {held:.6g} m "
+                            "apart"
+                        )
+
+                raise_first(bad, q.shape[:-1], message)
+
+    # ------------------------------------------------------------------ every assembly
+    def fk_all(self, joints: ArrayLike) -> Array:
+        """Every real assembly of ``joints`` (..., m) as poses (..., k, n), NaN-padded: the two
+        points of a translational platform's three-sphere intersection, the up to six roots of a
+        planar platform's polynomial, the certified solutions of a spatial platform's 6-6
+        homotopy. Assemblies with a leg on its other branch are included
+        (:meth:`assembly_label` says which)."""
+        q = as_batch(joints, self.n_joints, "joints")
+        sols, _ = self.real_solutions(q.reshape(-1, self.n_joints))
+        return sols.reshape(*q.shape[:-1], *sols.shape[1:])
+
+    def real_solutions(self, joints: ArrayLike) -> tuple[Array, NDArray[np.bool_]]:
+        """:meth:`fk_all` of flat joints (N, m), and per input whether the method guarantees that
+        every real assembly was found: the closed forms unless degenerate (collinear sphere
+        centres; a root of the planar polynomial where its linear solve is singular), the 6-6
+        homotopy's certificate."""
+        q = np.atleast_2d(as_batch(joints, self.n_joints, "joints"))
+        if self.platform == "translational":
+            return self._translational(q)
+        if self.platform == "planar":
+            return self._planar(q)
+        return self._spatial(q)
+
+    def _translational(self, q: Array) -> tuple[Array, NDArray[np.bool_]]:
+        """Three spheres (centres ``c_i - a_i``, radii ``rho_i``) meet in the platform's position:
+        subtracting the first from the others leaves a line, which meets the first in two points."""
+        centre, radius = self.spheres(q)
+        s = centre - self.anchor_points  # (N, 3, 3)
+        rel = s[:, 1:] - s[:, :1]  # (N, 2, 3), positions relative to the first centre
+        rhs = 0.5 * (np.einsum("nij,nij->ni", rel, rel) - radius[:, 1:] ** 2 + radius[:, :1] ** 2)
+        u = np.cross(rel[:, 0], rel[:, 1])
+        uu = np.einsum("ni,ni->n", u, u)
+        scale = np.einsum("nij,nij->n", rel, rel)
+        regular = uu > 1e-20 * scale**2
+        gram = rel @ np.swapaxes(rel, -1, -2)
+        with np.errstate(all="ignore"):
+            gram = np.where(regular[:, None, None], gram, np.eye(2))
+            p0 = np.einsum("nij,ni->nj", rel, np.linalg.solve(gram, rhs[..., None])[..., 0])
+            half_b = np.einsum("ni,ni->n", u, p0)
+            disc = half_b**2 - uu * (np.einsum("ni,ni->n", p0, p0) - radius[:, 0] ** 2)
+            root = np.sqrt(disc)
+            t = np.stack([(-half_b + root) / uu, (-half_b - root) / uu], -1)
+            points = s[:, None, 0] + p0[:, None] + t[..., None] * u[:, None]
+        ok = regular & (disc >= 0)
+        points = np.where(ok[:, None, None], points, np.nan)
+        # a tangent contact is one assembly, not two
+        same = np.all(np.abs(points[:, 0] - points[:, 1]) <= 1e-12 * max(1.0, self.size), -1)
+        points[same, 1] = np.nan
+        return points, regular
+
+    def _planar(self, q: Array) -> tuple[Array, NDArray[np.bool_]]:
+        """The planar platform's assemblies. With ``g_i(phi) = R(phi) a_i - c_i`` (in the plane),
+        subtracting leg 1's circle from legs 2 and 3 gives ``M(phi) (x, y) = e(phi) / 2``;
+        substituting ``(x, y) = adj(M) e / 2 det(M)`` into leg 1 leaves
+        ``F(phi) = |N|^2 / 4 + D N . g_1 + D^2 (|g_1|^2 - r_1^2) = 0`` (``N = adj(M) e``,
+        ``D = det M``), a trigonometric polynomial of degree at most 4 in ``phi`` (the classical
+        sextic of the 3-RPR: its top degree cancels). Its coefficients come exactly from 16
+        samples (an FFT), its roots on the unit circle ``z = e^(i phi)`` are the assemblies, each
+        polished by Newton on the closure equations."""
+        n = len(q)
+        centre, radius = self.spheres(q)
+        a = self.anchor_points
+        eff = radius**2 - (a[:, 2] - centre[..., 2]) ** 2  # (N, 3): circle radii squared, in plane
+        samples = 16
+        phi = 2 * np.pi * np.arange(samples) / samples
+        c, s = np.cos(phi), np.sin(phi)
+        ra = np.stack(
+            [
+                c[:, None] * a[:, 0] - s[:, None] * a[:, 1],
+                s[:, None] * a[:, 0] + c[:, None] * a[:, 1],
+            ],
+            -1,
+        )
+        g = ra[None] - centre[:, None, :, :2]  # (N, S, 3, 2)
+        coef, det_at = self._planar_poly(g, eff)
+        scale = np.max(np.abs(coef), axis=-1)
+        out = np.full((n, 8, 3), np.nan)
+        complete = np.ones(n, dtype=bool)
+        for i in range(n):
+            if not scale[i] > 0 or not np.all(eff[i] >= 0):
+                complete[i] = bool(scale[i] > 0)  # a leg too short for the plane: no assembly
+                continue
+            cf = coef[i]
+            keep = np.flatnonzero(np.abs(cf) > 1e-11 * scale[i])
+            cf = cf[keep[0] : keep[-1] + 1]
+            roots = np.roots(cf[::-1]) if len(cf) > 1 else np.zeros(0)
+            on_circle = roots[np.abs(np.abs(roots) - 1.0) < 1e-3]
+            angles = np.angle(on_circle)
+            if not len(angles):
+                continue
+            gi = (
+                np.stack(
+                    [
+                        np.cos(angles)[:, None] * a[:, 0] - np.sin(angles)[:, None] * a[:, 1],
+                        np.sin(angles)[:, None] * a[:, 0] + np.cos(angles)[:, None] * a[:, 1],
+                    ],
+                    -1,
+                )
+                - centre[i, :, :2]
+            )
+            m = gi[:, 1:] - gi[:, :1]  # (k, 2, 2)
+            e = (eff[i, 1:] - eff[i, :1]) - (
+                np.sum(gi[:, 1:] ** 2, -1) - np.sum(gi[:, :1] ** 2, -1)
+            )
+            det = m[:, 0, 0] * m[:, 1, 1] - m[:, 0, 1] * m[:, 1, 0]
+            big = np.max(np.abs(m), axis=(1, 2)) ** 2
+            if np.any(np.abs(det) <= 1e-9 * big):
+                complete[i] = False  # the linear solve is singular at a root: (x, y) not unique
+            with np.errstate(all="ignore"):
+                xy = np.stack(
+                    [
+                        m[:, 1, 1] * e[:, 0] - m[:, 0, 1] * e[:, 1],
+                        -m[:, 1, 0] * e[:, 0] + m[:, 0, 0] * e[:, 1],
+                    ],
+                    -1,
+                ) / (2 * det[:, None])
+            poses = np.concatenate([xy, angles[:, None]], -1)
+            poses = self._polish(poses, q[i])
+            found = self._distinct(poses)
+            if len(found) < len(angles) and not self._roots_merge(on_circle):
+                complete[i] = False  # a root did not polish into an assembly of its own
+            out[i, : len(found)] = found[:8]
+        return out, complete & np.isfinite(scale)
+
+    @staticmethod
+    def _roots_merge(roots: NDArray[np.complex128]) -> bool:
+        """Whether two roots sit close together (a double root: one assembly, not two)."""
+        d = np.abs(roots[:, None] - roots[None])
+        np.fill_diagonal(d, np.inf)
+        return bool(np.any(d < 1e-4))
+
+    @staticmethod
+    def _planar_poly(g: Array, eff: Array) -> tuple[Array, Array]:
+        """Coefficients ``(N, 9)`` of ``z^4 F(phi)`` in ascending powers of ``z = e^(i phi)`` from the
+        samples ``g (N, S, 3, 2)``, and ``det M`` at the samples."""
+        m = g[:, :, 1:] - g[:, :, :1]  # rows g_2 - g_1, g_3 - g_1
+        gg = np.sum(g * g, -1)  # (N, S, 3)
+        e = (eff[:, None, 1:] - eff[:, None, :1]) - (gg[..., 1:] - gg[..., :1])
+        det = m[..., 0, 0] * m[..., 1, 1] - m[..., 0, 1] * m[..., 1, 0]
+        n0 = m[..., 1, 1] * e[..., 0] - m[..., 0, 1] * e[..., 1]
+        n1 = -m[..., 1, 0] * e[..., 0] + m[..., 0, 0] * e[..., 1]
+        f = 0.25 * (n0 * n0 + n1 * n1) + det * (n0 * g[..., 0, 0] + n1 * g[..., 0, 1])
+        f = f + det**2 * (gg[..., 0] - eff[:, None, 0])
+        samples = f.shape[-1]
+        spectrum = np.fft.fft(f, axis=-1) / samples  # F = sum_k f_k e^(i k phi), k = -4..4
+        coef = np.concatenate([spectrum[:, -4:], spectrum[:, :5]], axis=-1)  # k = -4 .. 4
+        return coef, det
+
+    def _polish(self, poses: Array, q: Array) -> Array:
+        """Newton on the closure equations from each candidate pose (rows that do not converge to
+        a residual within ``1e-9 size`` become NaN)."""
+        x = poses.copy()
+        qq = np.broadcast_to(q, (len(x), self.n_joints))
+        with np.errstate(all="ignore"):
+            for _ in range(_POLISH):
+                fin = np.all(np.isfinite(x), -1)
+                if not fin.any():
+                    break
+                xf = np.where(fin[:, None], x, self.home())
+                r = self.residual(xf, qq)
+                jac = self.jacobian_pose(xf, qq)
+                det = np.linalg.det(jac)
+                ok = fin & np.isfinite(det) & (np.abs(det) > 0)
+                step = np.linalg.solve(
+                    np.where(ok[:, None, None], jac, np.eye(self.n_pose)), r[..., None]
+                )[..., 0]
+                x = np.where(ok[:, None], x - step, x)
+            fin = np.all(np.isfinite(x), -1)
+            res = np.full(len(x), np.inf)
+            if fin.any():
+                res[fin] = np.max(np.abs(self.residual(x[fin], qq[fin])), -1)
+        x[~(res <= 1e-9 * max(1.0, self.size))] = np.nan
+        return wrap_angles(x, self.pose_units)
+
+    def _distinct(self, poses: Array) -> Array:
+        """The finite rows of ``poses``, each once (angles compared modulo a turn)."""
+        out: list[Array] = []
+        for x in poses:
+            if not np.all(np.isfinite(x)):
+                continue
+            if any(
+                np.max(np.abs(self.pose_difference(x, y))) < 1e-7 * max(1.0, self.size) for y in out
+            ):
+                continue
+            out.append(x)
+        return np.array(out).reshape(-1, self.n_pose)
+
+    def _spatial(self, q: Array) -> tuple[Array, NDArray[np.bool_]]:
+        """Six spheres hold six anchors: a 6-6 Gough-Stewart platform with base points the
+        spheres' centres and leg lengths their radii, solved by
+        :meth:`parakin.mechanisms.stewart66.Stewart66.fk_all` (certified parameter homotopy).
+        Length legs keep their centres, so one platform solves every input; a rod leg's centre
+        moves with its joint, so each input is a platform of its own (its start system first)."""
+        from parakin.mechanisms.stewart66 import Stewart66
+
+        n = len(q)
+        centre, radius = self.spheres(q)
+        out = np.full((n, 40, 6), np.nan)
+        complete = np.zeros(n, dtype=bool)
+        platform = [tuple(p) for p in self.anchor_points.tolist()]
+        fixed = bool(np.all(self._types == "length"))
+        groups = [np.arange(n)] if fixed else [np.array([i]) for i in range(n)]
+        for rows in groups:
+            geometry = (
+                self._hexapod
+                if fixed
+                else Stewart66(
+                    base=[tuple(b) for b in centre[rows[0]].tolist()],
+                    platform=platform,
+                    allow_coincident=True,
+                )
+            )
+            info = geometry.fk_all(radius[rows], return_info=True)
+            poses = info.poses  # (k, 40, 6): alpha, beta, gamma, X, Y, Z
+            out[rows] = np.concatenate([poses[..., 3:], poses[..., :3]], -1)
+            complete[rows] = info.complete
+        return out, complete
+
+    @cached_property
+    def _hexapod(self):
+        """The 6-6 platform of a spatial mechanism of length legs (its start system is made once,
+        on its first :meth:`fk_all`)."""
+        from parakin.mechanisms.stewart66 import Stewart66
+
+        return Stewart66(
+            base=[tuple(b) for b in self.base_points.tolist()],
+            platform=[tuple(p) for p in self.anchor_points.tolist()],
+            allow_coincident=True,
+        )
+
+    def fk(self, joints: ArrayLike, near: ArrayLike | None = None) -> Array:
+        """The working assembly (..., n): the assembly on every leg's declared branch, on home's
+        side of the singularity locus (translational and planar platforms), nearest ``near``
+        (default :meth:`home`; distance in units of the pose box, angles modulo a turn). Raises
+        UnreachableError where an input has none."""
+        q = as_batch(joints, self.n_joints, "joints")
+        flat = q.reshape(-1, self.n_joints)
+        sols, _ = self.real_solutions(flat)
+        good = self._working(sols, flat)
+        ref = (
+            self.home()
+            if near is None
+            else as_batch(near, self.n_pose, "near").reshape(-1, self.n_pose)
+        )
+        lo, hi = self.pose_bounds()
+        with np.errstate(invalid="ignore"):
+            d = self.pose_difference(sols, np.asarray(ref)[..., None, :]) / (hi - lo)
+            dist = np.where(good, np.sqrt(np.sum(d * d, -1)), np.inf)
+        raise_first(
+            ~np.any(good, -1),
+            (len(flat),),
+            lambda idx: (
+                f"joints {tuple(np.round(flat[idx], 6).tolist())} have no assembly on the legs' "
+                "branches and the working assembly mode (fk_all lists every assembly)"
+            ),
+        )
+        best = np.argmin(dist, -1)
+        pose = np.take_along_axis(sols, best[:, None, None], 1)[:, 0]
+        return pose.reshape(*q.shape[:-1], self.n_pose)
+
+    def _working(self, sols: Array, q: Array) -> NDArray[np.bool_]:
+        """Which solutions (N, k, n) are on every leg's branch and the working assembly mode."""
+        fin = np.all(np.isfinite(sols), -1)
+        good = np.zeros(fin.shape, dtype=bool)
+        if fin.any():
+            qq = np.broadcast_to(q[:, None], (*sols.shape[:2], self.n_joints))[fin]
+            x = sols[fin]
+            with np.errstate(all="ignore"):
+                ok = self.in_domain(x)
+                err = np.full(len(x), np.inf)
+                if ok.any():
+                    err[ok] = self.joint_error(x[ok], qq[ok])
+                good[fin] = ok & (err <= 1e-7 * max(1.0, self.size)) & self.on_assembly(x, qq)
+        return good
+
+    def assembly_label(self, pose: ArrayLike, joints: ArrayLike) -> str:
+        """Which assembly mode (translational and planar: the sign of ``det(d residual / d pose)``
+        against home's) and which legs, if any, sit on their other branch."""
+        x = as_batch(pose, self.n_pose, "pose")
+        q = as_batch(joints, self.n_joints, "joints")
+        parts = []
+        if self.platform != "spatial":
+            same = bool(self.on_assembly(x, q))
+            parts.append("home's assembly mode" if same else "the other assembly mode")
+        ok = bool(self.in_domain(x))
+        if ok:
+            mine = self.ik(x)
+            gap = mine - q
+            rad = np.array([u == "rad" for u in self.joint_units])
+            gap = np.where(rad, (gap + np.pi) % (2 * np.pi) - np.pi, gap)
+            other = [
+                self.joint_names[i]
+                for i in range(self.n_joints)
+                if abs(gap[i]) > 1e-6 * max(1.0, self.size)
+            ]
+        else:
+            other = list(self.joint_names)
+        if other:
+            parts.append(f"other branch of {', '.join(other)}")
+        else:
+            parts.append("legs on their branches")
+        return ", ".join(parts)
+
+    # ------------------------------------------------------------------ drawing
+    def skeleton(self, pose: ArrayLike) -> Skeleton:
+        """Base and platform outlines, each leg (actuated part and rod) and both frames."""
+        x = as_batch(pose, self.n_pose, "pose")
+        if x.ndim != 1:
+            raise ValueError(f"skeleton() draws one pose, got a batch of shape {x.shape[:-1]}")
+        q = self.ik(x)  # an unreachable pose is an error, not a drawing
+        top = self.platform_world(x)
+        centre, _ = self.spheres(q)
+        points = {f"B_{i + 1}": self.base_points[i] for i in range(self.n_joints)}
+        points |= {f"P_{i + 1}": top[i] for i in range(self.n_joints)}
+        segments: list[tuple[str, Array]] = []
+        for i, leg in enumerate(self.legs):
+            b = self.base_points[i]
+            if leg.type == "length":
+                segments.append(("actuator", np.stack([b, top[i]])))
+                continue
+            points[f"C_{i + 1}"] = centre[i]
+            if leg.type == "slider-rod":
+                u = self._axes[i]
+                lo = min(0.0, float(q[i])) - 0.1 * self.size
+                hi = max(0.0, float(q[i])) + 0.1 * self.size
+                segments.append(("rail", np.stack([b + lo * u, b + hi * u])))
+            segments.append(("actuator", np.stack([b, centre[i]])))
+            segments.append(("passive", np.stack([centre[i], top[i]])))
+        t, r = self.platform_frame(x)
+        return Skeleton(
+            points=points,
+            segments=segments,
+            polygons=[("base", self.base_points.copy()), ("platform", top.copy())],
+            frames={"O": (np.zeros(3), np.eye(3)), "P": (t, r)},
+        )
+
+    # ------------------------------------------------------------------ dynamics
+    def mass_model(self) -> MassModel | None:
+        """The declared ``masses`` (None without: no dynamics). A body given by its mass alone
+        gets a default shape: the platform a thin disc through its anchors (radius their RMS
+        distance from their centroid, centred there), a crank a solid rod of its radius along its
+        arm, a rod a solid rod of the mean rod length (radius 1/40 of it), the centre of mass at
+        mid-length, a slider a cube of 5 cm, a length leg's cylinder and piston solid rods of half
+        the mean leg length at home (:func:`parakin.dynamics.model.hexapod_masses`)."""
+        if self.masses is None:
+            return None
+        from parakin.dynamics.model import MassModel, RigidBody
+
+        bodies: dict[str, RigidBody] = {}
+        gravity = (0.0, 0.0, -9.81)
+        for entry in self.masses:
+            if entry[0] == "gravity":
+                gravity = entry[1]
+                continue
+            kind, mass, inertia, com = entry
+            body = self._default_body(kind, mass)
+            if inertia is not None or com is not None:
+                body = RigidBody(
+                    mass,
+                    inertia if inertia is not None else body.inertia,
+                    com if com is not None else body.com,
+                )
+            bodies[kind] = body
+        return MassModel(
+            bodies, gravity, note=f"{self.name}: masses of {self.source or 'the description'}"
+        )
+
+    def _default_body(self, kind: str, mass: float) -> RigidBody:
+        from parakin.dynamics.model import RigidBody, hexapod_masses
+
+        if kind == "platform":
+            p = self.anchor_points
+            centroid = p.mean(axis=0)
+            radius = float(np.sqrt(np.mean(np.sum((p - centroid) ** 2, axis=-1)))) or 0.01
+            return RigidBody.disc(mass, radius, centroid)
+        if kind == "crank":
+            r = float(np.mean(self._cranks[self._types == "crank-rod"]))
+            return RigidBody.rod(mass, r, r / 20, r / 2)
+        if kind == "rod":
+            length = float(np.mean(self._rods[self._types != "length"]))
+            return RigidBody.rod(mass, length, length / 40, length / 2)
+        if kind == "slider":
+            return RigidBody(mass, (mass * _SLIDER_SIDE**2 / 6,) * 3)
+        leg = float(np.mean(self.ik(self.home())[self._types == "length"]))
+        model = hexapod_masses(self.anchor_points, leg, 1.0, mass, mass)
+        return model.body(kind)
+
+    def bodies(self, pose: Jet) -> Bodies:
+        """The platform (a free body; translational: it keeps its orientation) and each leg's
+        bodies: a length leg's cylinder and piston (S-P-S, :func:`parakin.dynamics.model.strut`),
+        a slider sliding on its guide, a crank turning about its axis (frame: x its axis, z along
+        its arm), and the rods of both, S-S links to the platform (:func:`rods`). The joints are
+        the IK's, on each leg's branch, as jets."""
+        import parakin.dynamics.jet as dj
+        from parakin.dynamics.model import Bodies, BodyGroup, frame_with_z, rods, strut
+
+        batch = pose.shape[:-1]
+        if self.platform == "spatial":
+            origin = pose[..., :3]
+            rotation = dj.euler_zyx(pose[..., 3], pose[..., 4], pose[..., 5])
+        elif self.platform == "planar":
+            origin = dj.stack([pose[..., 0], pose[..., 1], 0.0 * pose[..., 0]])
+            rotation = dj.rotations([pose[..., 2]], "z")
+        else:
+            origin = pose
+            rotation = dj.constant_like(np.broadcast_to(np.eye(3), (*batch, 3, 3)), pose)
+        tops = origin[..., None, :] + dj.matvec(rotation[..., None, :, :], self.anchor_points)
+        groups = [
+            BodyGroup(
+                "platform",
+                ("platform",),
+                ("world",),
+                "free",
+                origin[..., None, :],
+                rotation=rotation[..., None, :, :],
+            )  # fmt: skip
+        ]
+        closures = []
+        joints: list[Any] = [None] * self.n_joints
+        actuators = [""] * self.n_joints
+        types = self._types
+        length = np.flatnonzero(types == "length")
+        if length.size:
+            labels = [str(i + 1) for i in length]
+            (cyl, pis), closure, lengths = strut(
+                self.base_points[length], tops[..., length, :], ("platform",) * len(length),
+                labels=labels,
+            )  # fmt: skip
+            groups += [cyl, pis]
+            closures.append(closure)
+            for j, i in enumerate(length):
+                joints[i], actuators[i] = lengths[..., j], pis.names[j]
+        bottoms, bottom_bodies, rod_legs = [], [], []
+        slider = np.flatnonzero(types == "slider-rod")
+        if slider.size:
+            points = []
+            for i in slider:
+                u, rod, br = self._axes[i], self._rods[i], self.legs[i].branch
+                w = tops[..., i, :] - self.base_points[i]
+                b = dj.dot(w, u)
+                q = b + br * dj.sqrt(rod * rod - (dj.dot(w, w) - b * b))
+                point = q[..., None] * u + self.base_points[i]
+                points.append(point)
+                joints[i], actuators[i] = q, f"slider{i + 1}"
+                bottoms.append(point)
+                bottom_bodies.append(f"slider{i + 1}")
+                rod_legs.append(i)
+            frames = frame_with_z(self._axes[slider])
+            groups.append(
+                BodyGroup(
+                    "slider",
+                    tuple(f"slider{i + 1}" for i in slider),
+                    ("world",) * len(slider),
+                    "slide",
+                    dj.stack(points, axis=-2),
+                    rotation=dj.constant_like(
+                        np.broadcast_to(frames, (*batch, *frames.shape)), pose
+                    ),
+                    joint_axis=np.broadcast_to(self._axes[slider], (*batch, len(slider), 3)),
+                )
+            )
+        crank = np.flatnonzero(types == "crank-rod")
+        if crank.size:
+            frames, tips = [], []
+            for i in crank:
+                r, rod, br = self._cranks[i], self._rods[i], self.legs[i].branch
+                z, s, axis = self._zeros[i], self._sides[i], self._axes[i]
+                w = tops[..., i, :] - self.base_points[i]
+                wu, wv = dj.dot(w, z), dj.dot(w, s)
+                big_k = (dj.dot(w, w) + (r * r - rod * rod)) * (1.0 / (2.0 * r))
+                root = dj.sqrt(wu * wu + wv * wv - big_k * big_k)
+                inv = 1.0 / (wu * wu + wv * wv)
+                cos_q = (wu * big_k - br * (wv * root)) * inv
+                sin_q = (wv * big_k + br * (wu * root)) * inv
+                arm = cos_q[..., None] * z + sin_q[..., None] * s
+                tip = r * arm + self.base_points[i]
+                # the angle's jet: its value by atan2, its rates from d(theta) = cos d(sin) - sin d(cos)
+                c0, s0 = cos_q.value, sin_q.value
+                joints[i] = (c0 * sin_q - s0 * cos_q) + np.arctan2(s0, c0)
+                actuators[i] = f"crank{i + 1}"
+                axis_jet = dj.constant_like(np.broadcast_to(axis, (*batch, 3)), pose)
+                frames.append(dj.stack([axis_jet, dj.cross(arm, axis), arm], axis=-1))
+                tips.append(tip)
+                bottoms.append(tip)
+                bottom_bodies.append(f"crank{i + 1}")
+                rod_legs.append(i)
+            base = dj.constant_like(
+                np.broadcast_to(self.base_points[crank], (*batch, len(crank), 3)), pose
+            )
+            groups.append(
+                BodyGroup(
+                    "crank",
+                    tuple(f"crank{i + 1}" for i in crank),
+                    ("world",) * len(crank),
+                    "hinge",
+                    base,
+                    rotation=dj.stack(frames, axis=-3),
+                    joint_axis=np.broadcast_to(self._axes[crank], (*batch, len(crank), 3)),
+                )
+            )
+        if rod_legs:
+            order = np.argsort(rod_legs, kind="stable")
+            rod_group, closure = rods(
+                "rod",
+                dj.stack([bottoms[k] for k in order], axis=-2),
+                tops[..., sorted(rod_legs), :],
+                [bottom_bodies[k] for k in order],
+                ("platform",) * len(rod_legs),
+                [str(i + 1) for i in sorted(rod_legs)],
+            )
+            groups.append(rod_group)
+            closures.append(closure)
+        return Bodies(tuple(groups), dj.stack(joints, axis=-1), tuple(actuators), tuple(closures))
