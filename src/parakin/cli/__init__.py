@@ -22,7 +22,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from parakin.cli import bench, dynamics, kernel_cache, kinematics, pipeline
+from parakin.cli import bench, dynamics, kernel_cache, kinematics, pipeline, workspace
 from parakin.cli.common import EXIT_BAD_INPUT, _Parser, parameters_of
 from parakin.errors import ParakinError
 
@@ -103,6 +103,7 @@ def build_parser() -> argparse.ArgumentParser:
         pipeline.add_report,
         dynamics.add_dynamics,
         kernel_cache.add_kernels,
+        workspace.add_workspace,
     ):
         add(sub)
     # the usage as argparse writes it; then the command list is ours, in the epilog

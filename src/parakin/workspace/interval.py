@@ -435,7 +435,73 @@ def _maximum(a, b) -> Node:
     return Node(val, cv, grad, ctx)
 
 
-_NAMES = {"sqrt": _sqrt, "sin": _sin, "cos": _cos, "where": _where, "maximum": _maximum}
+def _iatan2(y: Interval, x: Interval) -> Interval:
+    """atan2 over boxes: the corners' extreme angles where the box misses the origin and the
+    branch cut (x < 0, y = 0); else ``[-pi, pi]``."""
+    ang = np.stack([np.arctan2(y.lo, x.lo), np.arctan2(y.lo, x.hi),
+                    np.arctan2(y.hi, x.lo), np.arctan2(y.hi, x.hi)])  # fmt: skip
+    cut = (x.lo <= 0) & (y.lo <= 0) & (y.hi >= 0)
+    lo = np.where(cut, -math.pi, _down(ang.min(axis=0)))
+    hi = np.where(cut, math.pi, _up(ang.max(axis=0)))
+    none = np.isnan(x.lo) | np.isnan(y.lo)
+    return Interval(np.where(none, np.nan, np.maximum(lo, -math.pi)),
+                    np.where(none, np.nan, np.minimum(hi, math.pi)))  # fmt: skip
+
+
+def _atan2(y, x) -> Node:
+    nodes = [v for v in (y, x) if isinstance(v, Node)]
+    if not nodes:
+        return math.atan2(y, x)
+    ctx = nodes[0].ctx
+    y, x = _node(ctx, y), _node(ctx, x)
+    val = _iatan2(y.val, x.val)
+    cv = _iatan2(y.cv, x.cv)
+    if y.d is None and x.d is None:
+        return Node(val, cv, None, ctx)
+    r2 = x.val * x.val + y.val * y.val
+    dy, dx = x.val / r2, -y.val / r2  # d atan2 / dy, d atan2 / dx (unbounded at the origin)
+    zero = Interval(0.0)
+    grad = []
+    # across the branch cut the angle jumps by 2 pi: no gradient bound there
+    cut = (x.val.lo <= 0) & (y.val.lo <= 0) & (y.val.hi >= 0)
+    for k in range(len(ctx.half)):
+        g = (y.d[k] if y.d else zero) * dy + (x.d[k] if x.d else zero) * dx
+        grad.append(Interval(np.where(cut, -np.inf, g.lo), np.where(cut, np.inf, g.hi)))
+    return Node(val, cv, grad, ctx)
+
+
+def _floor(a) -> Node:
+    if not isinstance(a, Node):
+        return float(math.floor(a)) if math.isfinite(a) else a
+    val = Interval(np.floor(a.val.lo), np.floor(a.val.hi))
+    cv = Interval(np.floor(a.cv.lo), np.floor(a.cv.hi))
+    if a.d is None:
+        return Node(val, cv, None, a.ctx)
+    jump = val.lo != val.hi  # a step inside the box: no gradient bound; else flat
+    grad = [Interval(np.where(jump, -np.inf, 0.0), np.where(jump, np.inf, 0.0)) for _ in a.d]
+    return Node(val, cv, grad, a.ctx)
+
+
+def _unsupported(name: str):
+    def fail(*_args):
+        raise TypeError(
+            f"{name} has no interval version here: the kernel is not interval-evaluable"
+        )
+
+    return fail
+
+
+_NAMES = {
+    "sqrt": _sqrt,
+    "sin": _sin,
+    "cos": _cos,
+    "atan2": _atan2,
+    "floor": _floor,
+    "where": _where,
+    "maximum": _maximum,
+    "acos": _unsupported("acos"),
+    "asin": _unsupported("asin"),
+}
 
 
 class _Context:
@@ -517,8 +583,13 @@ def classify_boxes(region: Region, lo: np.ndarray, hi: np.ndarray) -> tuple[np.n
 def certify(region: Region, *, levels: int = 8, max_boxes: int = 400_000) -> Bounds | None:
     """Inner and outer bounds on the constant-orientation workspace's volume (IK existence and
     joint limits) by bisecting the region's box ``levels`` times (fewer where the undecided boxes'
-    children would pass ``max_boxes``); None for a mechanism without a kernel."""
+    children would pass ``max_boxes``); None for a mechanism without a kernel, or whose kernel's
+    ``ik`` uses a function without an interval version here (``acos``, ``asin``)."""
     if region.mech.kernel() is None:
+        return None
+    try:
+        classify_boxes(region, region.lo[None], region.hi[None])
+    except TypeError:
         return None
     if not (isinstance(levels, (int, np.integer)) and 0 <= levels <= 30):
         raise ValueError(f"levels = {levels!r} must be an integer in [0, 30]")

@@ -7,8 +7,8 @@ Generic: only the :class:`~parakin.mechanisms.base.Mechanism` protocol is used. 
 hooks a mechanism may offer are read when present (proposed additions to the protocol):
 
 * ``joint_limits() -> (lo, hi)``: the actuated joints' limits (``-inf``/``inf`` where none);
-  until a mechanism declares it, a ``stroke_limits`` field (symmetric ``|q_k| <= s_k``, the
-  2-UPS's eq 19) is read as one;
+  until a mechanism declares it, a described mechanism's legs' ``limits`` and a ``stroke_limits``
+  field (symmetric ``|q_k| <= s_k``, the 2-UPS's eq 19) are read as one;
 * ``leg_segments(pose) -> (..., n_legs, 2, 3)`` (see :mod:`parakin.workspace.legs`).
 """
 
@@ -47,6 +47,11 @@ def declared_joint_limits(mech: Mechanism) -> tuple[Array, Array] | None:
     if callable(hook):
         lo, hi = (np.broadcast_to(np.asarray(v, dtype=float), (mech.n_joints,)) for v in hook())
         return lo.copy(), hi.copy()
+    legs = getattr(mech, "legs", None)
+    if isinstance(legs, (tuple, list)) and len(legs) == mech.n_joints:
+        if all(hasattr(leg, "limits") for leg in legs):  # a described mechanism's legs
+            lim = [leg.limits or (-np.inf, np.inf) for leg in legs]
+            return np.array([a for a, _ in lim], float), np.array([b for _, b in lim], float)
     stroke = getattr(mech, "stroke_limits", None)
     if stroke is not None:
         s = np.broadcast_to(np.asarray(stroke, dtype=float), (mech.n_joints,))
@@ -195,6 +200,7 @@ def make_region(
     joint_limits: tuple[ArrayLike, ArrayLike] | None = None,
     stroke: float | None = None,
     orientation_box: tuple[ArrayLike, ArrayLike] | None = None,
+    orientation_fraction: float = 1.0,
     cond_max: float = DEFAULT_COND_MAX,
     clearance: float | None = None,
 ) -> Region:
@@ -206,7 +212,8 @@ def make_region(
     ``joint_limits``: ``(lo, hi)`` (scalars or ``n_joints`` values; default the mechanism's,
     :func:`declared_joint_limits`); without either, ``stroke`` (default :data:`DEFAULT_STROKE`,
     0 for none) assumes home +- ``stroke`` x the mean |home joint value|; ``orientation_box``:
-    over the other coordinates (default their ``pose_bounds()``); ``cond_max`` >= 1;
+    over the other coordinates (default: the given values +- ``orientation_fraction`` x half the
+    width of their ``pose_bounds()``, within those bounds); ``cond_max`` >= 1;
     ``clearance`` >= 0 or None. Bad values raise a ValueError that names the value and the limit.
     """
     n = mech.n_pose
@@ -230,7 +237,11 @@ def make_region(
         raise ValueError(f"box of {names[ax[k]]}: [{lo[k]:g}, {hi[k]:g}] must have low < high")
     others = [k for k in range(n) if k not in ax]
     if orientation_box is None:
-        olo, ohi = blo[others].copy(), bhi[others].copy()
+        if not (np.isfinite(orientation_fraction) and 0 <= orientation_fraction <= 1):
+            raise ValueError(f"orientation_fraction = {orientation_fraction!r} must lie in [0, 1]")
+        half = orientation_fraction * 0.5 * (bhi[others] - blo[others])
+        olo = np.maximum(given[others] - half, blo[others])
+        ohi = np.minimum(given[others] + half, bhi[others])
     else:
         olo, ohi = (
             np.broadcast_to(np.asarray(b, dtype=float), (len(others),)) for b in orientation_box
@@ -272,15 +283,20 @@ def _joint_limits(
             )
         return lo, hi, "given"
     declared = declared_joint_limits(mech)
+    if declared is not None and not np.any(np.isfinite(declared[0]) | np.isfinite(declared[1])):
+        declared = None  # declared as "no limits" (a described mechanism's legs without any)
     if declared is not None and stroke is None:
         return declared[0], declared[1], "declared by the mechanism"
     f = DEFAULT_STROKE if stroke is None else float(stroke)
     if not (np.isfinite(f) and 0 <= f <= 10):
         raise ValueError(f"stroke = {stroke!r} must be a fraction in [0, 10]")
-    if f == 0:
-        return np.full(m, -np.inf), np.full(m, np.inf), "none"
+    # a stroke is a length's: a revolute joint (unit rad) keeps its full turn
+    linear = np.array([u != "rad" for u in mech.joint_units])
+    if f == 0 or not linear.any():
+        why = "none" if f == 0 else "none (revolute joints turn freely)"
+        return np.full(m, -np.inf), np.full(m, np.inf), why
     q0 = np.asarray(mech.ik(mech.home()), dtype=float)
-    scale = float(np.mean(np.abs(q0)))
+    scale = float(np.mean(np.abs(q0[linear])))
     if not scale > 0:
         raise ValueError(
             f"{mech.name}: the home joint values are all 0, so a stroke relative to them means "
@@ -288,4 +304,8 @@ def _joint_limits(
         )
     half = f * scale
     how = "assumed" if stroke is None else "given"
-    return q0 - half, q0 + half, f"{how}: home +- {f:g} x mean |home joint| = {half:.6g}"
+    units = {u for u, lin in zip(mech.joint_units, linear) if lin}
+    unit = f" {units.pop()}" if len(units) == 1 and "1" not in units else ""
+    lo = np.where(linear, q0 - half, -np.inf)
+    hi = np.where(linear, q0 + half, np.inf)
+    return lo, hi, f"{how}: home +- {f:g} x mean |home joint| = +- {half:.4g}{unit}"

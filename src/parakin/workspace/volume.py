@@ -18,7 +18,7 @@ from parakin.progress import Progress
 from parakin.workspace.classify import classify
 from parakin.workspace.region import Region
 
-__all__ = ["KINDS", "Estimate", "fit_box", "grid_points", "volumes"]
+__all__ = ["KINDS", "Estimate", "fit_box", "grid_points", "orientation_set", "reachable", "volumes"]
 
 #: the workspaces measured, in the order reported
 KINDS = ("constant", "dexterous", "reachable")
@@ -72,28 +72,17 @@ def volumes(
         raise ValueError(f"n = {n!r} points must be an integer >= 1")
     if not (isinstance(orientations, (int, np.integer)) and orientations >= 0):
         raise ValueError(f"orientations = {orientations!r} must be an integer >= 0")
-    orient_rng = rng.spawn(1)[0]
+    orient = orientation_set(region, orientations, rng.spawn(1)[0])
     hits = dict.fromkeys(KINDS, 0)
     show = n >= PROGRESS_MIN if progress is None else progress
     bar = Progress(f"workspace of {region.mech.name}", n, "poses") if show else None
-    others = region.others
     for start in range(0, n, CHUNK):
         c = min(CHUNK, n - start)
         pts = rng.uniform(region.lo, region.hi, size=(c, region.dim))
         cls = classify(region, pts, cond=cond, compiled=compiled)
         hits["constant"] += int(np.count_nonzero(cls.member))
         hits["dexterous"] += int(np.count_nonzero(cls.dexterous))
-        reach = cls.member.copy()
-        if others and orientations:
-            for _ in range(orientations):
-                o = orient_rng.uniform(region.orient_lo, region.orient_hi, size=(c, len(others)))
-                todo = ~reach
-                if not np.any(todo):
-                    continue
-                more = classify(
-                    region, pts[todo], orientation=o[todo], cond=False, compiled=compiled
-                )
-                reach[todo] = more.member
+        reach = reachable(region, pts, orient, cls.member, compiled=compiled)
         hits["reachable"] += int(np.count_nonzero(reach))
         if bar is not None:
             bar.tick(c)
@@ -103,22 +92,42 @@ def volumes(
     return out
 
 
+def orientation_set(region: Region, k: int, rng: np.random.Generator) -> np.ndarray:
+    """``k`` orientations ``(k, n_others)`` spread over the region's orientation box: a scrambled
+    Halton sequence seeded from ``rng`` (empty where the region holds no other coordinate)."""
+    n = len(region.others)
+    if not n or k <= 0:
+        return np.zeros((0, n))
+    from scipy.stats import qmc
+
+    u = qmc.Halton(d=n, scramble=True, seed=rng).random(k)
+    return region.orient_lo + u * (region.orient_hi - region.orient_lo)
+
+
+def reachable(
+    region: Region,
+    pts: np.ndarray,
+    orientations: np.ndarray,
+    member: np.ndarray | None = None,
+    *,
+    compiled: bool | None = None,
+) -> np.ndarray:
+    """Whether each point is in the constant-orientation workspace at its given orientation
+    (``member``, computed if not given) or at one of ``orientations`` (:func:`orientation_set`)."""
+    inside = (classify(region, pts, cond=False).member if member is None else member).copy()
+    for o in orientations:
+        todo = ~inside
+        if not np.any(todo):
+            break
+        inside[todo] = classify(region, pts[todo], orientation=o[None], cond=False,
+                                compiled=compiled).member  # fmt: skip
+    return inside
+
+
 def grid_points(lo: np.ndarray, hi: np.ndarray, n: int) -> np.ndarray:
     """``n`` points per axis from ``lo`` to ``hi``, ends included: ``(n^d, d)``."""
     axes = [np.linspace(a, b, n) for a, b in zip(lo, hi)]
     return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(lo))
-
-
-def _members(region: Region, pts: np.ndarray, orientations: int, rng) -> np.ndarray:
-    """Constant-orientation membership, or reachable with ``orientations`` extra tries."""
-    inside = classify(region, pts, cond=False).member
-    if region.others and orientations:
-        for _ in range(orientations):
-            o = rng.uniform(region.orient_lo, region.orient_hi, size=(len(pts), len(region.others)))
-            todo = ~inside
-            if np.any(todo):
-                inside[todo] = classify(region, pts[todo], orientation=o[todo], cond=False).member
-    return inside
 
 
 def fit_box(
@@ -138,6 +147,7 @@ def fit_box(
     if not (isinstance(grid, (int, np.integer)) and grid >= 3):
         raise ValueError(f"grid = {grid!r} must be an integer >= 3")
     rng = np.random.default_rng(0) if rng is None else rng
+    orient = orientation_set(region, orientations, rng)
     lo, hi = region.lo.copy(), region.hi.copy()
     # an angle spans at most one turn about its given value: a workspace that reaches both ends
     # of that turn holds every angle, and its measure along that axis is exact
@@ -151,7 +161,7 @@ def fit_box(
     shrunk = False
     for step in range(rounds + 1):
         pts = grid_points(lo, hi, grid)
-        inside = _members(region.replace(lo=lo, hi=hi), pts, orientations, rng)
+        inside = reachable(region, pts, orient)
         if not np.any(inside):
             raise ValueError(
                 f"no point of the box {lo.tolist()}..{hi.tolist()} ({grid} per axis) is in the "
