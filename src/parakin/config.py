@@ -1,9 +1,11 @@
 """Pipeline configuration: YAML files merged in order and validated against config/schema.yaml.
 
-Loading is bounded before anything walks the tree: a config file is at most
+Loading is bounded before anything walks the tree, by the loader every YAML/JSON input of parakin
+shares (:func:`parakin.io.load_data`): a config file is a regular file of at most
 :data:`MAX_CONFIG_BYTES`, UTF-8, and its YAML expands (every alias repeated where it points) to at
-most :data:`MAX_CONFIG_VALUES` values nested at most :data:`MAX_CONFIG_DEPTH` deep, counted
-without expanding anything; a file that breaks a bound is one ConfigError line, at once.
+most :data:`MAX_CONFIG_VALUES` values nested at most :data:`MAX_CONFIG_DEPTH` deep, counted on the
+parser's events without expanding or building anything; a file that breaks a bound is one
+ConfigError line, at once.
 :func:`load_run_config` merges overlays onto ``config/config.yaml`` the way Snakemake merges
 ``--configfile`` onto the Snakefile's ``configfile:`` (what ``parakin reproduce|check|report
 --config`` and the pipeline all do).
@@ -22,8 +24,8 @@ from typing import Any
 
 import yaml
 
+from parakin import io as _io
 from parakin.errors import ConfigError
-from parakin.io import read_text
 
 __all__ = [
     "load_config",
@@ -53,44 +55,21 @@ DEFAULT_CONFIG = ROOT / "config" / "config.yaml"
 QUICK_CONFIG = ROOT / "config" / "quick.yaml"
 
 
-#: largest config file (the full config is about 15 kB)
-MAX_CONFIG_BYTES = 1 << 20
+#: largest config file (the full config is about 15 kB): the bound of every YAML/JSON input
+MAX_CONFIG_BYTES = _io.MAX_DATA_BYTES
 #: most values a config may expand to (the full config holds about 300): YAML aliases repeat a
 #: node wherever they point, so 700 bytes of nested aliases expand to ~10^11 values
-MAX_CONFIG_VALUES = 100_000
+MAX_CONFIG_VALUES = _io.MAX_DATA_VALUES
 #: deepest nesting of a config (the full config nests 5 deep)
-MAX_CONFIG_DEPTH = 64
+MAX_CONFIG_DEPTH = _io.MAX_DATA_DEPTH
 
 
 def check_bounds(config: Any, where: str = "config") -> None:
     """Raise ConfigError where ``config`` expands to more than :data:`MAX_CONFIG_VALUES` values,
-    nests deeper than :data:`MAX_CONFIG_DEPTH` or refers to itself. Each shared node (an alias
-    target) is counted once and multiplied, so a bomb is measured without being expanded."""
-    size = _expanded_size(config, {}, set(), 0, where)
-    if size > MAX_CONFIG_VALUES:
-        raise ConfigError(
-            f"{where} expands to {size:.3g} values, more than the limit {MAX_CONFIG_VALUES} "
-            "(YAML aliases that repeat aliases?)"
-        )
-
-
-def _expanded_size(
-    node: Any, memo: dict[int, int], active: set[int], depth: int, where: str
-) -> int:
-    if not isinstance(node, (dict, list)):
-        return 1
-    key = id(node)
-    if key in memo:
-        return memo[key]
-    if key in active:
-        raise ConfigError(f"{where} refers to itself (a recursive YAML alias)")
-    if depth >= MAX_CONFIG_DEPTH:
-        raise ConfigError(f"{where} nests deeper than the limit {MAX_CONFIG_DEPTH}")
-    active.add(key)
-    children = node.values() if isinstance(node, dict) else node
-    memo[key] = 1 + sum(_expanded_size(c, memo, active, depth + 1, where) for c in children)
-    active.discard(key)
-    return memo[key]
+    nests deeper than :data:`MAX_CONFIG_DEPTH` or refers to itself (:func:`parakin.io.check_data`:
+    each shared node, an alias target, counted once and multiplied, so a bomb is measured
+    without being expanded)."""
+    _io.check_data(config, where, error=ConfigError)
 
 
 def merge(base: dict, override: dict) -> dict:
@@ -274,31 +253,14 @@ def load_run_config(overlays: Iterable[str | Path] = ()) -> dict[str, Any]:
 
 
 def _load_yaml(path: Path) -> dict[str, Any]:
-    """One config file's mapping, read within the bounds (size, UTF-8, expansion)."""
-    name = repr(str(path))
-    if not path.is_file():
-        raise ConfigError(f"config file {name} does not exist")
-    if path.stat().st_size > MAX_CONFIG_BYTES:
-        raise ConfigError(
-            f"config file {name} is {path.stat().st_size} bytes, more than the limit "
-            f"{MAX_CONFIG_BYTES}"
-        )
-    try:
-        loaded = _yaml(read_text(path, "config file")) or {}
-    except ValueError as exc:  # not UTF-8 (read_text names the file)
-        raise ConfigError(str(exc)) from None
-    except yaml.YAMLError as exc:  # e.g. a tab in the indentation: where, in one line
-        mark = getattr(exc, "problem_mark", None)
-        where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""
-        what = getattr(exc, "problem", None) or "not valid YAML"
-        raise ConfigError(f"config file {name} is not valid YAML{where}: {_short(what)}") from None
-    except RecursionError:
-        raise ConfigError(
-            f"config file {name} nests deeper than the limit {MAX_CONFIG_DEPTH}"
-        ) from None
-    check_bounds(loaded, f"config file {name}")
+    """One config file's mapping, read within the bounds (a regular file, size, UTF-8, depth,
+    aliases, expansion: :func:`parakin.io.load_data`)."""
+    name = f"config file {str(path)!r}"
+    loaded = _io.load_data(path, name, error=ConfigError)
+    if loaded is None:
+        return {}
     if not isinstance(loaded, dict):
-        raise ConfigError(f"config file {name} must hold a mapping, got {type(loaded).__name__}")
+        raise ConfigError(f"{name} must hold a mapping, got {type(loaded).__name__}")
     return loaded
 
 

@@ -21,3 +21,8 @@ class ConfigError(ParakinError, ValueError):
 
 class ShapeError(ParakinError, ValueError):
     """An array has the wrong trailing dimension for the mechanism."""
+
+
+class InputError(ParakinError, ValueError):
+    """An input (a file, a ``--param`` value) breaks a bound or is malformed: names the input and
+    the limit (:func:`parakin.io.load_data`)."""

@@ -1,15 +1,25 @@
-"""Atomic, deterministic output: a pipeline interrupted mid-write never leaves a half file behind.
+"""Atomic, deterministic output, and bounded input: a pipeline interrupted mid-write never leaves a
+half file behind, and no input file makes a command read, parse or walk without end.
 
 Every file parakin writes (the pipeline's tables and figures, the CLI's ``--output``, the record)
 goes through :func:`atomic_writer`: the content is written to a fresh temporary file in the
-destination folder (``tempfile.mkstemp``: a unique name, created exclusively, so a planted symlink
-is never followed and concurrent writers never share it), flushed to disk, then ``os.replace``-d
-over the target. The rename is atomic on POSIX: readers see either the old file or the complete
-new one, and of several concurrent writers of one file each succeeds and the last rename wins. A
-target that is a symlink is replaced by the new file; what it pointed to is left alone. Errors
-name the user's path, never the temporary one.
+destination folder (a random name created exclusively, ``O_EXCL | O_NOFOLLOW``: a planted name or
+symlink is never followed and concurrent writers never share one), flushed to disk, then
+``os.replace``-d over the target. The rename is atomic on POSIX: readers see either the old file
+or the complete new one, and of several concurrent writers of one file each succeeds and the last
+rename wins. A target that is a symlink is replaced by the new file; what it pointed to is left
+alone. The new file has the mode of the file it replaces, else the mode the umask gives a new
+file (``0666 & ~umask``): a private file stays private. Errors name the user's path, never the
+temporary one.
 
-:func:`read_text` is the matching reader: UTF-8 text, or a one-line error naming the file.
+:func:`read_text` is the matching reader: UTF-8 text of a regular file, at most a given size, or
+a one-line error naming the file. :func:`load_data` and :func:`parse_data` read YAML or JSON
+(configs, ``--param`` and ``--geometry`` values, mechanism description files) within one set of
+bounds, all checked on the parser's events before anything is built: at most
+:data:`MAX_DATA_BYTES`, nested at most :data:`MAX_DATA_DEPTH` deep, at most
+:data:`MAX_DATA_ALIASES` aliases, and at most :data:`MAX_DATA_VALUES` values once every alias is
+expanded (counted, never expanded); a file that breaks one is one line, at once (a 1 MiB file is
+read and checked in well under a second).
 """
 
 from __future__ import annotations
@@ -17,14 +27,16 @@ from __future__ import annotations
 import csv
 import errno
 import io
+import json
 import math
 import os
 import re
 import shutil
-import tempfile
+import stat
+import uuid
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -37,6 +49,9 @@ __all__ = [
     "atomic_write_bytes",
     "atomic_write_text",
     "atomic_writer",
+    "check_data",
+    "load_data",
+    "parse_data",
     "read_rows",
     "read_text",
     "row_format",
@@ -69,26 +84,25 @@ def atomic_writer(path: str | os.PathLike, write: Callable[[Path], None]) -> Pat
     """Call ``write(tmp_path)`` for a fresh temporary path beside ``path``, then rename it onto ``path``.
 
     The temporary file keeps ``path``'s suffix (matplotlib and pandas pick the format from it).
-    On any exception the temporary file is removed and ``path`` is left untouched; an OSError of
-    the write names ``path`` (not the temporary file).
+    The result has the permission bits of the regular file it replaces, else those the umask
+    gives a new file. On any exception the temporary file is removed and ``path`` is left
+    untouched; an OSError of the write names ``path`` (not the temporary file).
     """
     path = Path(path)
     try:
         if path.parent.exists() and not path.parent.is_dir():
             raise NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR), str(path.parent))
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, name = tempfile.mkstemp(
-            prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent
-        )
+        tmp = _fresh(path)
     except OSError as exc:
         raise _naming(exc, path) from None
-    os.close(fd)
-    tmp = Path(name)
     try:
         write(tmp)
         with open(tmp, "rb+") as fh:
             os.fsync(fh.fileno())
-        os.chmod(tmp, 0o644)
+            mode = _kept_mode(path)
+            if mode is not None:
+                os.fchmod(fh.fileno(), mode)
         os.replace(tmp, path)
     except BaseException as exc:
         tmp.unlink(missing_ok=True)
@@ -96,6 +110,30 @@ def atomic_writer(path: str | os.PathLike, write: Callable[[Path], None]) -> Pat
             raise _naming(exc, path) from None
         raise
     return path
+
+
+def _fresh(path: Path) -> Path:
+    """A new empty file beside ``path`` (``.<stem>.<random>.tmp<suffix>``), created exclusively
+    and never through a symlink, with mode ``0666`` less the umask (the kernel applies it)."""
+    for _ in range(100):
+        tmp = path.parent / f".{path.stem}.{uuid.uuid4().hex[:12]}.tmp{path.suffix}"
+        try:
+            flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0)
+            os.close(os.open(tmp, flags, 0o666))
+        except FileExistsError:  # 48 random bits taken: try another
+            continue
+        return tmp
+    raise FileExistsError(errno.EEXIST, "no free temporary name", str(path.parent))
+
+
+def _kept_mode(path: Path) -> int | None:
+    """The permission bits of the regular file at ``path`` (not followed: a symlink there is
+    replaced, and what it points to says nothing), or None where there is none."""
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return None
+    return stat.S_IMODE(st.st_mode) & 0o777 if stat.S_ISREG(st.st_mode) else None
 
 
 def _naming(exc: OSError, path: Path) -> OSError:
@@ -115,18 +153,227 @@ def atomic_copy(source: str | os.PathLike, path: str | os.PathLike) -> Path:
     return atomic_writer(path, lambda tmp: shutil.copyfile(source, tmp))
 
 
-def read_text(path: str | os.PathLike, what: str = "") -> str:
-    """The UTF-8 text of ``path`` (a leading byte-order mark dropped), or a one-line ValueError
-    that names the file and the first byte that is not UTF-8 (a binary or UTF-16 file)."""
-    data = Path(path).read_bytes()
+#: largest text file :func:`read_text` reads unless told otherwise (a CSV of 10^7 rows)
+MAX_TEXT_BYTES = 1 << 30
+
+
+def read_bytes(
+    path: str | os.PathLike, where: str, limit: int, error: type[Exception] = ValueError
+) -> bytes:
+    """The bytes of the regular file ``path``, at most ``limit`` of them; else ``error`` naming
+    ``where``: a missing file, a device, FIFO or directory (``/dev/zero`` would never end, a FIFO
+    never open), a file too large. Opened without blocking, so a FIFO is refused, not waited on."""
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
+    try:
+        fd = os.open(path, flags)
+    except FileNotFoundError:
+        raise error(f"{where} does not exist") from None
+    except OSError as exc:
+        raise error(f"{where} cannot be read ({exc.strerror or type(exc).__name__})") from None
+    with os.fdopen(fd, "rb") as fh:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            kind = "a directory" if stat.S_ISDIR(st.st_mode) else "a device, FIFO or socket"
+            raise error(f"{where} is not a regular file ({kind})")
+        if st.st_size > limit:
+            raise error(f"{where} is {st.st_size} bytes, more than the limit {limit}")
+        data = fh.read(limit + 1)
+    if len(data) > limit:  # grew while being read
+        raise error(f"{where} is more than {limit} bytes, the limit")
+    return data
+
+
+def read_text(path: str | os.PathLike, what: str = "", limit: int = MAX_TEXT_BYTES) -> str:
+    """The UTF-8 text of the regular file ``path`` (a leading byte-order mark dropped, at most
+    ``limit`` bytes), or a one-line ValueError that names the file: missing, not a regular file,
+    too large, or the first byte that is not UTF-8 (a binary or UTF-16 file)."""
+    where = f"{what} {path}" if what else str(path)
+    data = read_bytes(path, where, limit)
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        where = f"{what} {path}" if what else str(path)
         raise ValueError(
             f"{where}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}; "
             "a binary file, or text in another encoding such as UTF-16?)"
         ) from None
+
+
+# ------------------------------------------------------------------ bounded YAML / JSON
+#: largest YAML/JSON input (the full config is about 15 kB)
+MAX_DATA_BYTES = 1 << 20
+#: most values an input may expand to (the full config holds about 300): YAML aliases repeat a
+#: node wherever they point, so 700 bytes of nested aliases expand to ~10^11 values
+MAX_DATA_VALUES = 100_000
+#: deepest nesting (the full config nests 5 deep; numpy takes at most 32 axes)
+MAX_DATA_DEPTH = 64
+#: most aliases in one input (configs and mechanism files use none or a few)
+MAX_DATA_ALIASES = 1000
+
+
+def load_data(
+    path: str | os.PathLike, what: str = "", *, error: type[Exception] | None = None
+) -> Any:
+    """The YAML or JSON document in file ``path``, read and parsed within the bounds of
+    :func:`parse_data` (the file at most :data:`MAX_DATA_BYTES`, a regular file, UTF-8).
+
+    ``what`` names the input in every message (default: the path), e.g. ``"--geometry g.yaml"``
+    or ``"config file 'c.yaml'"``; ``error`` is the exception raised (default
+    :class:`parakin.errors.InputError`, a ValueError), always one line."""
+    from parakin.errors import InputError
+
+    error = error or InputError
+    where = what or str(path)
+    data = read_bytes(path, where, MAX_DATA_BYTES, error)
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise error(
+            f"{where}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start})"
+        ) from None
+    return parse_data(text, where, error=error)
+
+
+def parse_data(text: str, what: str, *, error: type[Exception] | None = None) -> Any:
+    """The YAML (or JSON) document ``text``, checked before anything is built: at most
+    :data:`MAX_DATA_BYTES` (UTF-8), nested at most :data:`MAX_DATA_DEPTH` deep, at most
+    :data:`MAX_DATA_ALIASES` aliases and :data:`MAX_DATA_VALUES` values with every alias expanded
+    (counted on libyaml's events, nothing expanded), no alias to a node that contains it. Only
+    plain data is built (``yaml.safe_load``: no Python objects). Anything else is one ``error``
+    line (default :class:`parakin.errors.InputError`) naming ``what`` and the limit or the line
+    and column of a syntax error."""
+    from parakin.errors import InputError
+
+    error = error or InputError
+    if len(text) > MAX_DATA_BYTES and len(text.encode("utf-8")) > MAX_DATA_BYTES:
+        raise error(
+            f"{what} is {len(text.encode('utf-8'))} bytes, more than the limit {MAX_DATA_BYTES}"
+        )
+    import yaml
+
+    if text.lstrip()[:1] in ("{", "["):  # JSON first: it allows tabs YAML refuses
+        try:
+            data = json.loads(text)
+        except (ValueError, RecursionError):
+            pass  # not JSON (or deeper than json's recursion): YAML's flow style, or an error
+        else:
+            check_data(data, what, error=error)
+            return data
+    try:
+        _scan(text, what, error)
+        return yaml.load(text, Loader=_loader())
+    except error:
+        raise
+    except yaml.YAMLError as exc:  # e.g. a tab in the indentation: where, in one line
+        mark = getattr(exc, "problem_mark", None)
+        where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""
+        problem = getattr(exc, "problem", None) or "not valid YAML"
+        raise error(f"{what} is not valid YAML{where}: {_short(problem)}") from None
+    except (ValueError, OverflowError) as exc:  # e.g. an integer of 10^5 digits
+        raise error(f"{what}: {_short(_one_line(exc))}") from None
+
+
+def _short(text: str, limit: int = 80) -> str:
+    text = " ".join(str(text).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _loader() -> Any:
+    import yaml
+
+    return getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml: 5-10x faster, same result
+
+
+def _scan(text: str, what: str, error: type[Exception]) -> None:
+    """Depth, aliases and expanded size of YAML ``text`` from the parser's events, one pass,
+    nothing built: each anchored node's expanded size and depth are kept, and an alias adds them
+    where it stands. libyaml's parser keeps its own stack (no recursion), so a file nested 10^5
+    deep is measured, not overflowed (its composer would crash the process)."""
+    import yaml
+    from yaml import events as ev
+
+    stack: list[list] = []  # per open collection: [expanded size, depth below, anchor]
+    anchors: dict[str, tuple[int, int] | None] = {}  # None: still open
+    total, aliases = 0, 0
+
+    def at(event: Any) -> str:
+        m = event.start_mark
+        return f" (line {m.line + 1}, column {m.column + 1})" if m is not None else ""
+
+    def add(size: int, depth: int) -> None:
+        nonlocal total
+        if stack:
+            stack[-1][0] += size
+            stack[-1][1] = max(stack[-1][1], depth)
+        else:
+            total += size
+
+    for event in yaml.parse(text, Loader=_loader()):
+        if isinstance(event, ev.CollectionStartEvent):
+            if len(stack) >= MAX_DATA_DEPTH:
+                raise error(f"{what} nests deeper than the limit {MAX_DATA_DEPTH}{at(event)}")
+            if event.anchor is not None:
+                anchors[event.anchor] = None
+            stack.append([1, 0, event.anchor])
+        elif isinstance(event, ev.CollectionEndEvent):
+            size, depth, anchor = stack.pop()
+            if anchor is not None:
+                anchors[anchor] = (size, depth + 1)
+            add(size, depth + 1)
+        elif isinstance(event, ev.ScalarEvent):
+            if event.anchor is not None:
+                anchors[event.anchor] = (1, 0)
+            add(1, 0)
+        elif isinstance(event, ev.AliasEvent):
+            aliases += 1
+            if aliases > MAX_DATA_ALIASES:
+                raise error(f"{what} holds more than {MAX_DATA_ALIASES} YAML aliases, the limit")
+            if event.anchor in anchors and anchors[event.anchor] is None:
+                raise error(f"{what} refers to itself (a recursive YAML alias){at(event)}")
+            size, depth = anchors.get(event.anchor) or (1, 0)  # undefined: the loader says so
+            if len(stack) + depth > MAX_DATA_DEPTH:
+                raise error(f"{what} nests deeper than the limit {MAX_DATA_DEPTH}{at(event)}")
+            add(size, depth)
+    if total > MAX_DATA_VALUES:
+        raise error(
+            f"{what} expands to {total:.3g} values, more than the limit {MAX_DATA_VALUES} "
+            "(YAML aliases that repeat aliases?)"
+        )
+
+
+def check_data(data: Any, what: str, *, error: type[Exception] | None = None) -> None:
+    """Raise ``error`` (default :class:`parakin.errors.InputError`) where the loaded ``data``
+    expands to more than :data:`MAX_DATA_VALUES` values, nests deeper than
+    :data:`MAX_DATA_DEPTH` or refers to itself: the bounds of :func:`parse_data` on data that came
+    another way (JSON on the command line, a config Snakemake loaded). Each shared node is counted
+    once and multiplied, so a bomb is measured without being expanded."""
+    from parakin.errors import InputError
+
+    error = error or InputError
+    size = _expanded_size(data, {}, set(), 0, what, error)
+    if size > MAX_DATA_VALUES:
+        raise error(
+            f"{what} expands to {size:.3g} values, more than the limit {MAX_DATA_VALUES} "
+            "(YAML aliases that repeat aliases?)"
+        )
+
+
+def _expanded_size(
+    node: Any, memo: dict[int, int], active: set[int], depth: int, what: str, error: type
+) -> int:
+    if not isinstance(node, (dict, list)):
+        return 1
+    key = id(node)
+    if key in memo:
+        return memo[key]
+    if key in active:
+        raise error(f"{what} refers to itself (a recursive YAML alias)")
+    if depth >= MAX_DATA_DEPTH:
+        raise error(f"{what} nests deeper than the limit {MAX_DATA_DEPTH}")
+    active.add(key)
+    children = node.values() if isinstance(node, dict) else node
+    memo[key] = 1 + sum(_expanded_size(c, memo, active, depth + 1, what, error) for c in children)
+    active.discard(key)
+    return memo[key]
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> Path:

@@ -116,11 +116,20 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: the exit status of a command stopped by Ctrl-C (128 + SIGINT, what a shell reports)
+EXIT_INTERRUPTED = 130
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    args = None
     try:
+        args = build_parser().parse_args(argv)
         with np.errstate(all="ignore"):  # non-finite results are checked, not warned about
             return contextvars.copy_context().run(args.func, args)  # settings stay in the command
+    except KeyboardInterrupt:  # Ctrl-C: one line, no traceback (files are written atomically)
+        command = getattr(args, "command", None)
+        print(f"parakin{' ' + command if command else ''}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except (
         ParakinError,
         ValueError,
@@ -147,4 +156,3 @@ def _one_line(exc: BaseException) -> str:
     else:
         message = str(exc) or type(exc).__name__
     return " ".join(message.split())
-

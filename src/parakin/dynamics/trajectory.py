@@ -143,30 +143,60 @@ class Sampled:
         return x, v, a
 
 
+#: largest trajectory file (about 10^6 samples of a six-coordinate pose)
+MAX_TRAJECTORY_BYTES = 1 << 27
+
+
 def read_trajectory(path: str | Path, mech: Mechanism) -> Sampled:
     """A :class:`Sampled` trajectory from a CSV with a column ``t`` (s) and one column per pose
     coordinate (``mech.pose_names``, SI units), optionally ``d_<name>`` rates and ``dd_<name>``
-    accelerations; one-line errors name a missing column or a bad time axis."""
+    accelerations. Read within bounds (a regular UTF-8 file of at most
+    :data:`MAX_TRAJECTORY_BYTES`); every error is one ValueError line that names the file: not a
+    CSV, a missing column, a value that is not a finite number, a bad time axis."""
+    import io
+
     import pandas as pd
 
-    frame = pd.read_csv(path)
+    from parakin.io import read_text
+
+    where = f"trajectory {path}"
+    text = read_text(path, "trajectory", limit=MAX_TRAJECTORY_BYTES)
+    try:
+        frame = pd.read_csv(io.StringIO(text))
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, ValueError) as exc:
+        raise ValueError(f"{where}: not a CSV table ({' '.join(str(exc).split())[:120]})") from None
     names = list(mech.pose_names)
     missing = [c for c in ["t", *names] if c not in frame.columns]
     if missing:
         raise ValueError(
-            f"{path}: missing column(s) {missing}; a {mech.name} trajectory needs t, {', '.join(names)}"
+            f"{where}: missing column(s) {missing}; a {mech.name} trajectory needs t, "
+            f"{', '.join(names)}"
         )
-    t = frame["t"].to_numpy(float)
+
+    def numbers(cols: list[str]) -> Array:
+        """The columns ``cols`` as floats (k, len(cols)), every value finite, or a ValueError
+        naming the file, the line and the column."""
+        values = frame[cols].apply(pd.to_numeric, errors="coerce").to_numpy(float)
+        bad = ~np.isfinite(values)
+        if bad.any():
+            row, col = (int(v) for v in np.argwhere(bad)[0])
+            raise ValueError(
+                f"{where}, line {row + 2}: {cols[col]} = {frame[cols[col]].iloc[row]!r} is not "
+                "a finite number"
+            )
+        return values
+
+    t = numbers(["t"])[:, 0]
     if len(t) < 4 or not np.all(np.diff(t) > 0):
-        raise ValueError(f"{path}: column t must hold at least 4 strictly increasing times")
+        raise ValueError(f"{where}: column t must hold at least 4 strictly increasing times")
 
     def columns(prefix: str) -> Array | None:
         cols = [prefix + n for n in names]
         if all(c in frame.columns for c in cols):
-            return as_batch(frame[cols].to_numpy(float), len(names), prefix + "pose")
+            return as_batch(numbers(cols), len(names), prefix + "pose")
         return None
 
-    pose = as_batch(frame[names].to_numpy(float), len(names), "pose")
+    pose = as_batch(numbers(names), len(names), "pose")
     return Sampled(t, pose, columns("d_"), columns("dd_"))
 
 
