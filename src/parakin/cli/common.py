@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from parakin import kernels, mechanisms
-from parakin.io import read_rows, read_text
+from parakin.io import read_rows
 from parakin.units import TO_SI, parse_quantity, to_si
 
 EXIT_BAD_INPUT = 2
@@ -113,18 +113,17 @@ def parameters_of(cls) -> dict[str, object]:
 def _parameter(where: str, value, default):
     """``value`` (a number, a quantity such as ``35deg``, or a nested list of them) checked against
     the parameter's default: the same shape, finite, at most :data:`PARAM_LIMIT` in magnitude (SI)
-    and whole where the default is an integer; arrays as nested tuples (mechanisms are hashable)."""
+    and whole where the default is an integer; arrays as nested tuples (mechanisms are hashable).
+    A YAML ``true``/``false`` is refused, not read as 1/0."""
     shape = _numeric_shape(default)
+    want = "one number" if not shape else f"an array of shape {shape}"
     try:
-        a = np.vectorize(lambda v: parse_quantity(v) if isinstance(v, str) else float(v))(
-            np.asarray(value, dtype=object)
-        ).astype(float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(
-            f"{where}: {value!r:.60} is not a number or an array of numbers ({exc})"
-        ) from None
+        a = np.asarray(_numbers(value, len(shape), where, want), dtype=float)
+    except ValueError as exc:
+        if str(exc).startswith(where):
+            raise
+        raise ValueError(f"{where}: expected {want}, got a ragged list") from None
     if a.shape != shape:
-        want = "one number" if not shape else f"an array of shape {shape}"
         raise ValueError(f"{where}: expected {want}, got shape {a.shape}")
     if not np.all(np.isfinite(a) & (np.abs(a) <= PARAM_LIMIT)):
         raise ValueError(
@@ -137,38 +136,60 @@ def _parameter(where: str, value, default):
     return float(a) if not shape else _nested_tuple(a)
 
 
+def _numbers(value, ndim: int, where: str, want: str):
+    """``value`` as nested lists of floats exactly ``ndim`` deep (a list nested deeper is refused
+    at once, never handed to numpy, which takes at most 32 axes): numbers, or quantities as text
+    (``35deg``); a boolean, ``None``, a mapping or a date is refused, naming the value."""
+    if isinstance(value, (list, tuple)):
+        if ndim == 0:
+            raise ValueError(f"{where}: expected {want}, got a list nested deeper")
+        return [_numbers(v, ndim - 1, where, want) for v in value]
+    if ndim > 0:
+        raise ValueError(f"{where}: expected {want}, got {_short_repr(value)}")
+    if isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{where}: {value!r} is a boolean (YAML true/false), not a number")
+    if isinstance(value, str):
+        try:
+            return parse_quantity(value)
+        except ValueError as exc:
+            raise ValueError(f"{where}: {_short_repr(value)} is not a number ({exc})") from None
+    if isinstance(value, (int, float, np.integer, np.floating)):
+        try:
+            return float(value)
+        except OverflowError:
+            raise ValueError(f"{where}: {_short_repr(value)} is too large a number") from None
+    raise ValueError(f"{where}: {_short_repr(value)} is not a number or an array of numbers")
+
+
+def _short_repr(value, limit: int = 60) -> str:
+    text = " ".join(repr(value).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 def _nested_tuple(a: np.ndarray):
     return tuple(_nested_tuple(v) for v in a) if a.ndim else float(a)
 
 
 def _param_text(text: str, default):
     """The value of ``--param NAME=TEXT``: a number or quantity, or for an array parameter a
-    YAML/JSON list (``[[0, 0, 0], [1, 0, 0], ...]``)."""
+    YAML/JSON list (``[[0, 0, 0], [1, 0, 0], ...]``), read within the bounds of every YAML/JSON
+    input (size, depth, aliases, expansion: :func:`parakin.io.parse_data`)."""
     if not _numeric_shape(default):
         return text
-    import yaml  # here, not at the top: a solve on the command line does not need it
+    from parakin.io import parse_data
 
-    try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError:
-        raise ValueError(f"{text!r:.60} is not a YAML/JSON list") from None
+    return parse_data(text, f"--param value {_short_repr(text, 40)}")
 
 
 def _geometry(path: str) -> dict:
-    """The parameters in ``--geometry FILE`` (YAML or JSON, the names of the Python API)."""
-    import yaml
+    """The parameters in ``--geometry FILE`` (YAML or JSON, the names of the Python API), read
+    within the bounds of every YAML/JSON input (:func:`parakin.io.load_data`: a regular file,
+    size, depth, aliases, expansion)."""
+    from parakin.io import load_data
 
-    from parakin.config import check_bounds
-
-    try:
-        data = yaml.safe_load(read_text(path, "--geometry"))
-    except yaml.YAMLError as exc:
-        raise ValueError(
-            f"--geometry {path}: not YAML or JSON ({' '.join(str(exc).split())})"
-        ) from None
+    data = load_data(path, f"--geometry {path}")
     if not isinstance(data, dict):
         raise ValueError(f"--geometry {path}: expected a mapping of parameter names to values")
-    check_bounds(data, f"--geometry {path}")
     return data
 
 
@@ -224,8 +245,25 @@ def _angles(values: np.ndarray, names, units, option: str) -> np.ndarray:
 
 
 def _dumps(obj) -> str:
-    """Strict JSON (no NaN or Infinity)."""
-    return json.dumps(obj, allow_nan=False)
+    """Strict JSON: a number that is not finite (NaN, inf) is written ``null`` (JSON has no
+    NaN); the command's own fields say why (e.g. ``dynamics``' ``singular`` flag)."""
+    try:
+        return json.dumps(obj, allow_nan=False)
+    except ValueError:  # a NaN or an infinity somewhere: the slow path
+        return json.dumps(_json_safe(obj), allow_nan=False)
+
+
+def _json_safe(obj):
+    """``obj`` with every non-finite float replaced by None (numpy scalars and arrays too)."""
+    if isinstance(obj, dict):
+        return {k: _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_json_safe(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _json_safe(obj.tolist())
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if math.isfinite(obj) else None
+    return obj
 
 
 def _print_json(mech, fields: dict) -> None:
