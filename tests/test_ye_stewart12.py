@@ -81,9 +81,14 @@ def test_claims_and_summary(outputs):
         "stays within",
     }
     assert (readings["broyden"] >= readings.loc["first within", "broyden"]).all()
-    # C6 from the paper's own Table 5 means (164.1 / 210.9 = 77.8 %), not from a clock of ours
-    assert float(table.loc["time_fraction", "ours"]) == pytest.approx(100 * 164.1 / 210.9)
-    assert table.loc["time_fraction", "verdict"] == "reproduced within rounding"
+    # C6 (issue 45): ours is our own measured ratio, and a ratio of clock readings of the paper's
+    # machine is not comparable with it; the paper checked against its own Table 5 reproduces
+    # nothing, so 164.1 / 210.9 = 77.8 % is only named in the reason
+    t5 = pd.read_csv(outputs / "table5.csv").iloc[-1]
+    measured = 100 * t5["broyden_time_ms"] / t5["nr_time_ms"]
+    assert float(table.loc["time_fraction", "ours"]) == pytest.approx(measured, rel=1e-5)
+    assert table.loc["time_fraction", "verdict"] == "not comparable"
+    assert "77.8 %" in table.loc["time_fraction", "reason"]
     # what rests on an assumed P or on the assumed passive sets is never more than consistent
     for q in ("best_R.realtime_robust", "odd_even_ratio.nr", "odd_even_ratio.broyden"):
         assert "P = (max - min)/mean" in table.loc[q, "reason"], q

@@ -163,6 +163,15 @@ def draw_table3_consistency(frame: pd.DataFrame, path: Path) -> Path:
     return save_figure(fig, path)
 
 
+#: the base side, as a fraction of the sweep's smallest, at which a mismatch that falls to b -> 0
+#: is evaluated as its limit
+TINY_B = 1e-3
+
+
+def _rows_at(per_row: pd.DataFrame, end: str) -> str:
+    return ", ".join(str(int(r)) for r in per_row[per_row["minimum_at_sweep_end"] == end]["row"])
+
+
 @artefact(
     "table3_consistency",
     outputs=[
@@ -198,6 +207,18 @@ def table3_consistency(config: dict, outdir: Path) -> list[Path]:
     )
     per_b["rows_within_rounding"] = (exc[:, 1:] <= 0).sum(axis=1)
     best = np.argmin(mis, axis=0)
+    # where a row's smallest mismatch lies at an end of the sweep, the sweep does not hold its
+    # minimum: at the upper end it must be widened; at the lower one the mismatch may fall all the
+    # way to b -> 0 (a base shrunk to a point), whose limit is then the true minimum over b > 0
+    # (computed at b = lo * TINY_B; "b -> 0" only where it is no larger than at the sweep's end,
+    # else the minimum lies below the sweep's first step: "lower", the sweep must be refined)
+    limit = table3_mismatch(config, np.array([lo * TINY_B]))["mismatch"][0]
+    first = mis[0]
+    end = np.where(
+        best == 0,
+        np.where(limit <= first, "b -> 0", "lower"),
+        np.where(best == len(bs) - 1, "upper", ""),
+    )
     per_row = pd.DataFrame(
         {
             "row": rows,
@@ -205,9 +226,12 @@ def table3_consistency(config: dict, outdir: Path) -> list[Path]:
             "at_b": bs[best],
             "rounding_allowance_there": allow[best, np.arange(len(rows))],
             "within_rounding_for_some_b": (exc <= 0).any(axis=0),
+            "minimum_at_sweep_end": end,
+            "limit_b_to_0": np.where(end == "b -> 0", limit, np.nan),
         }
     ).iloc[1:]
     whole = int(np.argmin(per_b["largest_mismatch"]))
+    at_end = per_row[per_row["minimum_at_sweep_end"] != ""]
     notes = (
         f"b swept over [{lo:g}, {hi:g}] in {int(n)} steps (platform side a = 1, the layout of docs/li2017_stewart36.md#s1). "
         "Row 1 defines the input (its own leg lengths, no reconstruction needed); a row is an assembly of that "
@@ -219,6 +243,24 @@ def table3_consistency(config: dict, outdir: Path) -> list[Path]:
             "; the table contradicts itself for every b."
             if not per_row["within_rounding_for_some_b"].any()
             else "."
+        )
+        + (
+            f" Rows whose mismatch falls all the way to b -> 0 (a base shrunk to a point, no Stewart "
+            f"platform): {_rows_at(at_end, 'b -> 0')}; their minimum over b > 0 is that limit "
+            f"(limit_b_to_0, computed at b = {lo * TINY_B:g}), below the value at the sweep's smallest b "
+            f"by at most {np.nanmax(at_end['min_mismatch'] - at_end['limit_b_to_0']):.2g}."
+            if (end[1:] == "b -> 0").any()
+            else ""
+        )
+        + (
+            f" Rows whose minimum lies below the sweep's first step (refine it): {_rows_at(at_end, 'lower')}."
+            if (end[1:] == "lower").any()
+            else ""
+        )
+        + (
+            f" Rows whose minimum lies at the upper end (widen the sweep): {_rows_at(at_end, 'upper')}."
+            if (end[1:] == "upper").any()
+            else ""
         )
         + " Per b: extra_table3_consistency.csv."
     )
@@ -742,6 +784,15 @@ def _table3_row_claims(
                 )
                 continue
             w = whole.loc[row]
+            lowest = (
+                f"{w['min_mismatch']:.3g} (at b = {w['at_b']:g}; printing allows "
+                f"{w['rounding_allowance_there']:.2g} there)"
+                if str(w.get("minimum_at_sweep_end", "")) != "b -> 0"
+                else f"{float(w['limit_b_to_0']):.3g} (its mismatch falls all the way to b -> 0, a "
+                f"base shrunk to a point: that limit is its minimum over b > 0; "
+                f"{w['min_mismatch']:.3g} at the sweep's smallest b = {w['at_b']:g}, where printing "
+                f"allows {w['rounding_allowance_there']:.2g})"
+            )
             out.append(
                 claim(
                     variant=f"nearest certified above-base solution over the b sweep (b = {near['b']:g}, "
@@ -749,8 +800,7 @@ def _table3_row_claims(
                     whole_agrees=bool(w["within_rounding_for_some_b"]),
                     evidence=f"{KEY}/extra_table3_rows.md",
                     reason=f"judged as a whole, row {row} must have row 1's six leg lengths: for every b of "
-                    f"the fine sweep a leg is off by at least {w['min_mismatch']:.3g} (at b = {w['at_b']:g}; "
-                    f"printing allows {w['rounding_allowance_there']:.2g} there); under the reconstructed "
+                    f"the fine sweep a leg is off by at least {lowest}; under the reconstructed "
                     f"input F (eq. 4) >= {float(r[fcols[j]]):.2g}, a leg off by {leg:.3g}; no "
                     "layout/Euler reading tried makes the 19 rows solutions of one input "
                     f"(docs/li2017_stewart36.md#s4.2){note}",

@@ -722,6 +722,28 @@ def fk_benchmark(config: dict, outdir: Path) -> list[Path]:
 
 
 # ---------------------------------------------------------------------------------- failures
+#: the library's BFGS (Gauss-Newton start, analytic gradient) in extra_qn_failures
+BFGS_LIBRARY = "BFGS from home, Gauss-Newton start (the library's)"
+#: the textbook BFGS variants set up beside it (:mod:`.bfgs_variants`): label -> (start, gradient)
+BFGS_VARIANTS = {
+    "BFGS from home, identity start": ("identity", "analytic"),
+    "BFGS from home, identity start, central-difference gradient": ("identity", "central"),
+    "BFGS from home, identity start, forward-difference gradient": ("identity", "forward"),
+}
+#: the quasi-Newton rows of extra_qn_failures that are readings of conclusion (1)'s claim (the
+#: forward-difference BFGS is not: its failures are its gradient's accuracy floor, short_of_tol)
+QN_READINGS = (
+    BFGS_LIBRARY,
+    "BFGS from home, identity start",
+    "BFGS from home, identity start, central-difference gradient",
+    "Broyden from home",
+)
+#: the regions of extra_qn_failures that are readings (the height bands partition the whole workspace)
+QN_REGIONS = ("Table 1's box", "benchmark box", "whole workspace")
+#: a failure within this distance of the sampled pose stopped near it (short_of_tol): 100 times the
+#: success criterion, declared with issue 45 before the runs
+NEAR_TOL = 1e-6
+
 #: failures of a deterministic solver over seeded poses: a pose near a basin's edge may flip with
 #: the rounding of one step, so the failure rates are compared by the overlap of their 95 %
 #: (Clopper-Pearson) intervals; the sample counts exactly
@@ -794,6 +816,7 @@ def qn_failures(config: dict, outdir: Path) -> list[Path]:
     kind of failure (not converged, or converged to the other assembly of the same strokes)."""
     from parakin.nn import load_network
     from parakin.papers.failures import failure_table
+    from parakin.papers.zhao2017_3p4s.bfgs_variants import bfgs_variant
 
     cfg, bench = failure_settings(config), config[KEY]["bench"]
     mech, n = _mech(), int(cfg["samples"])
@@ -813,7 +836,11 @@ def qn_failures(config: dict, outdir: Path) -> list[Path]:
     eps = config[KEY]["fk"]["epsilon"]
     solvers = {
         "Broyden from home": {"method": "broyden"},
-        "quasi-Newton (BFGS) from home": {"method": "bfgs"},
+        BFGS_LIBRARY: {"method": "bfgs"},
+        **{
+            label: partial(bfgs_variant, mech, start=start, gradient=gradient)
+            for label, (start, gradient) in BFGS_VARIANTS.items()
+        },
         "Newton-Raphson from home": {"method": "newton"},
         "hybrid (network + Broyden)": {"method": "hybrid", "network": net, "eps": eps},
     }
@@ -825,6 +852,7 @@ def qn_failures(config: dict, outdir: Path) -> list[Path]:
         success_tol=bench["success_tol"],
         tol=bench["tol"],
         maxiter=bench["maxiter"],
+        near_tol=NEAR_TOL,
     )
     span = np.ptp(whole, axis=0)
     notes = (
@@ -836,7 +864,19 @@ def qn_failures(config: dict, outdir: Path) -> list[Path]:
         f"from the home pose {tuple(round(float(v), 3) for v in home)} m (the hybrid from its network's guess; the "
         f"network was trained on the benchmark box only). Failure: not within {bench['success_tol']:g} m of "
         f"the sampled pose; not_converged: the solver gave up; another_assembly: converged to another pose "
-        "with the same strokes. Rates with exact (Clopper-Pearson) 95 % intervals."
+        f"with the same strokes; short_of_tol: failures within {NEAR_TOL:g} m of the sampled pose (stopped "
+        "near it, short of the accuracy: a stopping rule or an inexact gradient, not another basin). "
+        "Rates with exact (Clopper-Pearson) 95 % intervals. BFGS in four variants, every other setting "
+        f"(line search, update, stop at a residual of {bench['tol']:g} m, at most {bench['maxiter']} "
+        "iterations, the answer check) the library's: its own start from the Gauss-Newton inverse "
+        "Hessian with the analytic gradient (its first step is a Newton step), and the textbook start "
+        "from the identity with the analytic gradient, a central-difference gradient (scipy's "
+        "'3-point') and a forward-difference one (scipy's default '2-point': its error of order "
+        "1e-8 m stalls it near the pose, which shows as short_of_tol, not as a dependence on the "
+        "start; it is not one of the verdict's readings). The paper does not say which quasi-Newton "
+        "it uses; the verdict (report row conclusion/quasi_newton.failure_rate_from_home) takes the "
+        "weakest of Broyden and the first three BFGS rows over Table 1's box, the benchmark box and "
+        "the whole workspace."
     )
     return write_table(
         tab,
@@ -1018,6 +1058,10 @@ def network_accuracy_claims(
             f"region (Table 1's box, converged by the rule: {span(paper_runs)}). {e3}{capped}"
         )
         reason = {OURS: text, paper.name: text}
+    # our box is the declared reading (issue 45): the region of the pipeline's network, chosen
+    # before the convergence study; Table 1's box is an assumed region that tests the cause, so
+    # where only it reaches the level, it shows the cause of ours differing
+    shown = f"{KEY}/extra_bp_convergence.md" if band(paper_runs) and not band(ours_runs) else ""
     return [
         Claim.from_runs(
             KEY,
@@ -1030,44 +1074,58 @@ def network_accuracy_claims(
             what="trainings",
             basis=basis,
             reason=reason[name],
+            declared=declared,
+            evidence=evidence,
         )
-        for name, where, basis in (
-            (OURS, "our workspace box", ""),
+        for name, where, basis, declared, evidence in (
+            (
+                OURS,
+                "our workspace box",
+                "",
+                "the region of the pipeline's own network (the benchmark box), chosen before this "
+                "study; the paper does not state its region",
+                shown,
+            ),
             (
                 paper.name,
                 "Table 1's box",
                 "the sampling region: the box of Table 1's poses (the paper does not state it)",
+                "",
+                "",
             ),
         )
     ]
 
 
 def hybrid_speed_claims(t: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
-    """Conclusion (1)'s "more efficient than quasi-Newton", judged twice from one run
+    """Conclusion (1)'s "more efficient than quasi-Newton", judged from one run
     (extra_hybrid_speed): on iterations (machine-independent) and on the time per solve (a ratio of
-    two computations timed in the same run, the hybrid taken apart). No cause of the time ratio is
-    counted as shown: taking the hybrid apart shows where its time goes, but removing its overhead
-    does not make it faster, which is what a shown cause would have to give."""
+    two computations timed in the same run), the latter in two readings: the hybrid as the library
+    runs it (its reachability check of the strokes included) and like for like (the network's guess,
+    then Broyden stopped by the same rule, without the check). Taking the hybrid apart shows why the
+    first is far below the second (its check and call overhead: cause shown); why the like-for-like
+    ratio is below 1 is not shown (the paper's implementation and its costs are not given), and the
+    weakest reading decides (:func:`parakin.claims.decide`)."""
     h, b = t.loc["hybrid (network + Broyden)"], t.loc["Broyden from home"]
     parts, guess = t.loc[GUESS_THEN_BROYDEN], t.loc["network guess alone"]
     evidence = f"{KEY}/extra_hybrid_speed.md"
-    reason = (
-        f"cause unknown. Measured in one run: the hybrid {h['median_time_us']:.0f} µs per solve "
+    measured = (
+        f"measured in one run: the hybrid {h['median_time_us']:.0f} µs per solve "
         f"({h['median_nit']:g} iterations), Broyden from home {b['median_time_us']:.0f} µs "
-        f"({b['median_nit']:g} iterations); taken apart, the network's guess costs "
-        f"{guess['median_time_us']:.0f} µs and guess + Broyden without the hybrid's reachability check "
-        f"{parts['median_time_us']:.0f} µs: most of the hybrid's time is its check and call overhead, "
-        "but even without them the saved iterations do not make it faster than quasi-Newton from home "
-        "(an iteration of our compiled Broyden costs about as much as the network's guess; the paper's "
-        "implementation and its costs are not given)"
+        f"({b['median_nit']:g} iterations), the network's guess alone {guess['median_time_us']:.0f} µs, "
+        f"guess + Broyden without the hybrid's reachability check {parts['median_time_us']:.0f} µs "
+        f"({parts['median_nit']:g} iterations)"
     )
-    quantity = "hybrid.iteration_ratio_vs_quasi_newton"
+    # the time the guess saves the Broyden call: Broyden from home against the call after the guess
+    saved = b["median_time_us"] - (parts["median_time_us"] - guess["median_time_us"])
+    quantity = "hybrid.time_ratio_vs_quasi_newton"
+    printed = printed_value(ref, "conclusion", quantity)
     return [
         Claim(
             KEY,
             "conclusion",
-            quantity,
-            printed_value(ref, "conclusion", quantity),
+            "hybrid.iteration_ratio_vs_quasi_newton",
+            printed_value(ref, "conclusion", "hybrid.iteration_ratio_vs_quasi_newton"),
             float(b["median_nit"] / h["median_nit"]),
             "1",
             f"median iterations per solve: Broyden from home {b['median_nit']:g} / hybrid "
@@ -1079,43 +1137,81 @@ def hybrid_speed_claims(t: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
         Claim(
             KEY,
             "conclusion",
-            "hybrid.time_ratio_vs_quasi_newton",
-            printed_value(ref, "conclusion", "hybrid.time_ratio_vs_quasi_newton"),
+            quantity,
+            printed,
             float(b["median_time_us"] / h["median_time_us"]),
             "1",
-            "median time per solve, Broyden from home / hybrid, timed in turns in one run",
-            reason=reason,
+            "median time per solve, Broyden from home / the hybrid as run (its reachability check "
+            "included), timed in turns in one run",
+            reason=f"{measured}: most of the hybrid's time is its reachability check and call "
+            "overhead, which the like-for-like reading leaves out",
+            evidence=evidence,
+        ),
+        Claim(
+            KEY,
+            "conclusion",
+            quantity,
+            printed,
+            float(b["median_time_us"] / parts["median_time_us"]),
+            "1",
+            "like for like: median time per solve, Broyden from home / the network's guess then "
+            "Broyden (no reachability check), timed in turns in one run",
+            reason=f"cause unknown. {measured}: even without the check the saved iterations do not "
+            f"make it faster than quasi-Newton from home (they save about {saved:.0f} µs of the "
+            f"Broyden call, the guess costs {guess['median_time_us']:.0f} µs; why an iteration of the "
+            "paper's implementation would cost more than its network's guess is not given)",
         ),
     ]
 
 
 def failure_claims(t: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
-    """Conclusion (1)'s "quasi-Newton is strongly affected by the initial value" per region of
-    extra_qn_failures: the larger failure rate of Broyden and BFGS from home against the encoded
-    bound (>= 0.1 % of reachable inputs)."""
+    """Conclusion (1)'s "quasi-Newton is strongly affected by the initial value" judged on
+    extra_qn_failures: each quasi-Newton variant (:data:`QN_READINGS`: Broyden and three BFGS) on
+    each region of :data:`QN_REGIONS` is one reading of the encoded bound (>= 0.1 % of reachable
+    inputs fail from home). The paper names neither the variant nor the region, so no reading is
+    declared and the weakest decides (:func:`parakin.claims.decide`); the height bands of the whole
+    workspace stay in the artefact. A reading that meets no bound differs with its cause shown
+    where another reading fails (the region or the variant, named in its reason)."""
     quantity = "quasi_newton.failure_rate_from_home"
-    qn = t[t["solver"].isin(["Broyden from home", "quasi-Newton (BFGS) from home"])]
+    qn = t[t["solver"].isin(QN_READINGS) & t["region"].isin(QN_REGIONS)]
+    printed = printed_value(ref, "conclusion", quantity)
+    worst = qn.loc[qn["failure_rate"].idxmax()] if len(qn) else None
     out = []
-    for region, g in qn.groupby("region", sort=False):
-        worst = g.loc[g["failure_rate"].idxmax()]
-        kinds = "; ".join(
-            f"{r.solver}: {r.failures}/{r.poses} ({r.not_converged} not converged, "
-            f"{r.another_assembly} on another assembly), 95 % CI [{r.rate_ci_low:.2g}, {r.rate_ci_high:.2g}]"
-            for r in g.itertuples()
-        )
-        out.append(
-            Claim(
-                KEY,
-                "conclusion",
-                quantity,
-                printed_value(ref, "conclusion", quantity),
-                float(worst["failure_rate"]),
-                "1",
-                f"largest failure rate of quasi-Newton from the home pose, {region}",
-                reason=kinds,
-                evidence=f"{KEY}/extra_qn_failures.md",
+    for solver in QN_READINGS:
+        for region in QN_REGIONS:
+            row = qn[(qn["solver"] == solver) & (qn["region"] == region)]
+            if not len(row):
+                continue
+            r = row.iloc[0]
+            here = qn[qn["region"] == region]
+            others = "; ".join(
+                f"{o.solver}: {o.failures}/{o.poses}"
+                for o in here.itertuples()
+                if o.solver != solver
             )
-        )
+            meets = r.failure_rate >= float(printed)
+            cause = (
+                ""
+                if meets or worst is None or worst.failure_rate < float(printed)
+                else f"; from home every such input converges to its own pose here, while "
+                f"{worst.solver} on {worst.region} fails on {worst.failure_rate:.1%}: the rate depends "
+                "on the region and on the variant, neither of which the paper gives"
+            )
+            out.append(
+                Claim(
+                    KEY,
+                    "conclusion",
+                    quantity,
+                    printed,
+                    float(r.failure_rate),
+                    "1",
+                    f"{solver}, {region}",
+                    reason=f"{r.failures}/{r.poses} fail ({r.not_converged} not converged, "
+                    f"{r.another_assembly} on another assembly), 95 % CI [{r.rate_ci_low:.2g}, "
+                    f"{r.rate_ci_high:.2g}]; the other variants here: {others}{cause}",
+                    evidence=f"{KEY}/extra_qn_failures.md" if meets or cause else "",
+                )
+            )
     return out
 
 
