@@ -20,6 +20,18 @@ def cmd_bench(args) -> int:
     from parakin.papers import PAPERS
     from parakin.studies import solver_atlas as extras
 
+    if args.mechanism_file is not None:  # a described mechanism: the solver atlas on it alone
+        if args.name or args.peers is not None or args.outdir is not None:
+            raise ValueError("--mechanism FILE runs the solver atlas on that mechanism alone: "
+                             "it takes no benchmark NAME, --peers or --outdir")  # fmt: skip
+        table = _atlas_of_file(args.mechanism_file, quick=args.quick)
+        if args.json:
+            print(table.to_json(orient="records"))
+        else:
+            from parakin.io import markdown_table
+
+            print(markdown_table(table[_ATLAS_COLUMNS], floatfmt=".3g"))
+        return 0
     if args.peers is not None:  # the 6-6 all-solutions FK against Bertini 2 / fkSGP (docs/peers.md)
         from parakin.mechanisms import stewart66_peers as peers
 
@@ -69,6 +81,44 @@ def cmd_bench(args) -> int:
     return 0
 
 
+#: the columns of the solver atlas that ``bench --mechanism FILE`` prints as text
+_ATLAS_COLUMNS = [
+    "scenario",
+    "solver",
+    "success_rate",
+    "wrong_assembly_rate",
+    "median_err",
+    "median_nit",
+    "median_latency_us",
+    "throughput_per_s",
+    "speedup_single",
+]
+
+
+def _atlas_of_file(path: str, *, quick: bool):
+    """The solver atlas (:func:`parakin.atlas.run_atlas`, every standard solver, its scenarios
+    and seeds) on the mechanism described in ``path``: ``quick`` 50 inputs per scenario, else 200."""
+    import zlib
+
+    import numpy as np
+
+    from parakin.atlas import AtlasCase, run_atlas, standard_solvers
+    from parakin.mechanisms import from_file
+
+    mech = from_file(path)
+    rows = 10 if quick else 40
+    case = AtlasCase(mech.name, mech, mech.pose_bounds(), standard_solvers(mech, pso_rows=rows))
+    return run_atlas(
+        [case],
+        lambda stream: np.random.default_rng(zlib.crc32(stream.encode())),  # one seed per stream
+        n=50 if quick else 200,
+        n_single=10 if quick else 30,
+        n_batch=1_000 if quick else 10_000,
+        repeats=1 if quick else 3,
+        progress=lambda s: print(f"parakin bench: {s} ...", file=sys.stderr),
+    )
+
+
 #: benchmark name -> (paper key, artefact); "atlas" (every solver x every mechanism) is extras'
 BENCHES = {
     "fk-3p4s": ("zhao2017_3p4s", "fk_benchmark"),
@@ -96,6 +146,14 @@ def add_bench(sub) -> None:
         help="figures folder (default: figures_dir of the config)",
     )
     p.add_argument("--json", action="store_true", help="print the tables as JSON records")
+    _text_option(
+        p,
+        "--mechanism",
+        dest="mechanism_file",
+        metavar="FILE",
+        help="the solver atlas (every solver, the atlas's scenarios) on the mechanism described "
+        "in FILE alone (YAML/JSON, docs/mechanism_file.md); --quick: 50 inputs per scenario",
+    )
     p.add_argument(
         "--peers",
         nargs="?",

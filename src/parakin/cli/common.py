@@ -193,9 +193,31 @@ def _geometry(path: str) -> dict:
     return data
 
 
-def _mechanism(name: str, params: Sequence[str], geometry: str | None = None):
+def _mechanism(
+    name: str | None,
+    params: Sequence[str],
+    geometry: str | None = None,
+    file: str | None = None,
+):
     """The mechanism ``name`` with the parameters of ``--geometry FILE``, then of each ``--param
-    NAME=VALUE`` (the declared parameters, :func:`parameters_of`)."""
+    NAME=VALUE`` (the declared parameters, :func:`parameters_of`); or the mechanism described in
+    ``--mechanism FILE`` (:func:`parakin.mechanisms.from_file`), which takes neither: its file
+    holds every number."""
+    if file is not None:
+        if name is not None:
+            raise ValueError(f"give a mechanism name ({name}) or --mechanism {file}, not both")
+        if params or geometry is not None:
+            raise ValueError(
+                f"--param and --geometry set a registered mechanism's parameters; --mechanism "
+                f"{file} holds its own (edit the file)"
+            )
+        return mechanisms.from_file(file)
+    if name is None:
+        raise ValueError(
+            "give a mechanism: a name (one of "
+            f"{', '.join(sorted(mechanisms.REGISTRY))}) or --mechanism FILE (a YAML/JSON "
+            "description, docs/mechanism_file.md)"
+        )
     cls = mechanisms.get(name)
     known = parameters_of(cls)
     given = {}
@@ -215,6 +237,12 @@ def _mechanism(name: str, params: Sequence[str], geometry: str | None = None):
         return cls(**values)
     except TypeError as exc:
         raise ValueError(f"{name}: {exc}") from None
+
+
+def mechanism_of(args):
+    """The mechanism the options of :func:`_mechanism_options` name (``MECH`` with ``--param`` /
+    ``--geometry``, or ``--mechanism FILE``): what every command that takes a mechanism calls."""
+    return _mechanism(args.mechanism, args.param, args.geometry, args.mechanism_file)
 
 
 def _finite(values: np.ndarray, what: str, inputs: np.ndarray) -> np.ndarray:
@@ -351,8 +379,23 @@ def _text_option(p, flag: str, **kwargs) -> None:
 
 
 def _mechanism_options(p) -> None:
-    """The mechanism and its geometry: ``MECH [--param NAME=VALUE]... [--geometry FILE]``."""
-    p.add_argument("mechanism", choices=sorted(mechanisms.REGISTRY), help="mechanism name")
+    """The mechanism and its geometry: ``MECH [--param NAME=VALUE]... [--geometry FILE]``, or
+    ``--mechanism FILE`` (a described mechanism); :func:`mechanism_of` reads them."""
+    p.add_argument(
+        "mechanism",
+        nargs="?",
+        default=None,
+        choices=sorted(mechanisms.REGISTRY),
+        help="mechanism name (or --mechanism FILE)",
+    )
+    _text_option(
+        p,
+        "--mechanism",
+        dest="mechanism_file",
+        metavar="FILE",
+        help="a mechanism described in a YAML or JSON file instead of a name: its platform and "
+        "legs (length, slider-rod, crank-rod), e.g. examples/delta.yaml (docs/mechanism_file.md)",
+    )
     p.add_argument(
         "--param",
         action="append",

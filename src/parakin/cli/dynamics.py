@@ -9,10 +9,10 @@ import numpy as np
 from parakin.cli.common import (
     _dumps,
     _fmt_vector,
-    _mechanism,
     _mechanism_options,
     _text_option,
     finite_float,
+    mechanism_of,
     nonempty,
 )
 from parakin.io import write_rows
@@ -63,7 +63,7 @@ def cmd_dynamics(args) -> int:
     from parakin import dynamics
     from parakin.dynamics.trajectory import read_trajectory
 
-    mech = _mechanism(args.mechanism, args.param, args.geometry)
+    mech = mechanism_of(args)
     if mech.mass_model() is None:
         raise ValueError(f"{mech.name} declares no masses (mass_model()): no dynamics")
     traj = read_trajectory(args.trajectory, mech)

@@ -1,4 +1,5 @@
-"""``parakin ik`` and ``parakin fk`` (one solver, or ``--all``: every real assembly)."""
+"""``parakin ik`` and ``parakin fk`` (one solver, or ``--all``: every real assembly), for a
+registered mechanism or one described in a file (``--mechanism FILE``)."""
 
 from __future__ import annotations
 
@@ -18,7 +19,6 @@ from parakin.cli.common import (
     _finite,
     _fmt_vector,
     _inputs,
-    _mechanism,
     _mechanism_args,
     _print_json,
     _text_option,
@@ -27,15 +27,15 @@ from parakin.cli.common import (
     _units_note,
     finite_float,
     iteration_count,
+    mechanism_of,
     nonnegative_float,
 )
-from parakin.errors import ParakinError
 from parakin.io import write_rows
 from parakin.units import from_si, to_si
 
 
 def cmd_ik(args) -> int:
-    mech = _mechanism(args.mechanism, args.param, args.geometry)
+    mech = mechanism_of(args)
     paper = args.units == "paper"
     pu, ju = _units(mech, "pose", paper), _units(mech, "joint", paper)
     given, pose = _inputs(args, mech, "pose", paper)
@@ -65,7 +65,7 @@ def cmd_ik(args) -> int:
 
 
 def cmd_fk(args) -> int:
-    mech = _mechanism(args.mechanism, args.param, args.geometry)
+    mech = mechanism_of(args)
     paper = args.units == "paper"
     pu, ju = _units(mech, "pose", paper), _units(mech, "joint", paper)
     given, joints = _inputs(args, mech, "joints", paper)
@@ -76,8 +76,10 @@ def cmd_fk(args) -> int:
             )
         return _fk_all(args, mech, given, joints, pu, ju)
     res = _solve(args, mech, joints, pu)
+    ok = np.atleast_1d(res.success)
     with np.errstate(all="ignore"):
-        pose = _finite(from_si(res.x, pu), "the solution in --units " + args.units, given)
+        pose = from_si(res.x, pu)
+        _finite(np.atleast_2d(pose)[ok], "the solution in --units " + args.units, given)
     near = res.success & res.near_singular
     if args.output is not None:
         _write_fk(args.output, mech, pu, pose, res, near)
@@ -89,18 +91,44 @@ def cmd_fk(args) -> int:
             **res.to_dict(),
             **_conditioning_fields(res, pu),
         }
-        out["x"] = pose.tolist()
+        # a failed row has no pose: its last iterate is kept apart, under its own name
+        rows = np.atleast_2d(pose)
+        answer = [x.tolist() if good else None for x, good in zip(rows, ok)]
+        last = [None if good else x.tolist() for x, good in zip(rows, ok)]
+        finite = lambda v: v if v is None else [c if np.isfinite(c) else None for c in v]  # noqa: E731
+        out["x"] = answer if np.ndim(res.success) else answer[0]
+        out["last_iterate"] = [finite(v) for v in last] if np.ndim(res.success) else finite(last[0])
+        out["startup_note"] = _startup_note(res)
         _print_json(mech, out)
     elif args.output is None:
-        for x in np.atleast_2d(pose):
-            print(_fmt_vector(mech.pose_names, x, pu))
+        for x, good, status in zip(np.atleast_2d(pose), ok, np.atleast_1d(res.status)):
+            if good:
+                print(_fmt_vector(mech.pose_names, x, pu))
+            elif ok.size > 1:  # a batch keeps one line per input, marked, without numbers
+                print(f"# not solved ({_status_name(status)})")
     if not np.all(res.success):
         print(f"parakin fk: error: {res.message} ({_why(res, args.tol)})", file=sys.stderr)
         return EXIT_NOT_CONVERGED
     if np.any(near):
         print(f"parakin fk: warning: {_near_warning(mech, res, near, pu)}", file=sys.stderr)
+    if res.startup > STARTUP_NOTE_S and not args.json:
+        print(f"parakin fk: note: {_startup_note(res)}", file=sys.stderr)
     _units_note(mech, "fk", paper)
     return 0
+
+
+#: a compiled solver's first call that took longer than this (s) says so (``FKResult.startup``)
+STARTUP_NOTE_S = 0.5
+
+
+def _startup_note(res) -> str | None:
+    """What of ``wall_time`` was loading or compiling compiled code, or None (none was)."""
+    if not res.startup > 0:
+        return None
+    return (
+        f"wall_time {res.wall_time:.3g} s includes {res.startup:.3g} s of loading or compiling "
+        "the compiled solver (its first call in this process)"
+    )
 
 
 def _solve(args, mech, joints: np.ndarray, pu):
@@ -183,77 +211,36 @@ def _near_warning(mech, res, near: np.ndarray, pu) -> str:
     )
 
 
-def all_solutions_of(mech, joints: np.ndarray) -> list[list[tuple[str, np.ndarray, bool]]]:
-    """Every real FK solution of each row of ``joints (N, m)`` (SI), with its assembly label and
-    whether it is the working one (what ``fk`` returns: the papers' assembly, nearest home).
-
-    2-UPS/(S+SPR)R: both branches of eq (14) (rho > 0 the paper's; a rho < 0 pose belongs to the
-    mirror assembly, ``UPS2(branch=-1)``); Stewart platforms: above or below the base (Z > 0)."""
-    if hasattr(mech, "fk_all_branches"):
-        sets = [(b, sols) for b, sols in mech.fk_all_branches(joints).items()]
-    elif hasattr(mech, "fk_all"):
-        sets = [(None, mech.fk_all(joints))]
-    else:
-        raise ValueError(
-            f"{mech.name} has no all-solutions method; --all works on "
-            f"{', '.join(all_solution_mechanisms())}"
-        )
-    try:
-        with np.errstate(all="ignore"):
-            working = np.atleast_2d(mech.fk(joints))
-    except ParakinError:  # some row has no working solution: mark none of that batch
-        working = np.full((len(joints), mech.n_pose), np.nan)
-    z = mech.pose_names.index("Z") if "Z" in mech.pose_names else None
-    out = []
-    for i in range(len(joints)):
-        rows = []
-        for branch, sols in sets:
-            for x in sols[i]:
-                if not np.all(np.isfinite(x)):
-                    continue
-                parts = []
-                if branch is not None:
-                    parts.append(
-                        f"branch {branch:+d} ({'rho > 0, the paper' if branch > 0 else 'rho < 0, mirror'})"
-                    )
-                if z is not None:
-                    parts.append("above the base" if x[z] > 0 else "below the base")
-                own = branch is None or branch == getattr(mech, "branch", branch)
-                near = (
-                    own
-                    and bool(np.all(np.isfinite(working[i])))
-                    and float(np.max(np.abs(mech.pose_difference(x, working[i])))) < 1e-7
-                )
-                if near:
-                    parts.append("working (what fk returns)")
-                rows.append((", ".join(parts), x, near))
-        out.append(rows)
-    return out
-
-
 def all_solution_mechanisms() -> list[str]:
-    return sorted(n for n, cls in mechanisms.REGISTRY.items() if hasattr(cls, "fk_all"))
+    """The registered mechanisms that list every real assembly (``--all``)."""
+    return sorted(n for n, cls in mechanisms.REGISTRY.items() if cls.lists_assemblies())
 
 
 def _fk_all(args, mech, given, joints, pu, ju) -> int:
+    if not mech.lists_assemblies():
+        raise ValueError(
+            f"{mech.name} has no all-solutions method; --all works on "
+            f"{', '.join(all_solution_mechanisms())} and on described mechanisms (--mechanism FILE)"
+        )
     with np.errstate(all="ignore"):
-        found = all_solutions_of(mech, np.atleast_2d(joints))
-    for rows in found:
+        found = mech.assemblies(np.atleast_2d(joints))
+    rows_of = [[(a.label, a.x, a.working) for a in rows] for rows in found.solutions]
+    for rows in rows_of:
         for _, x, _ in rows:
             _finite(from_si(x, pu), "a solution in --units " + args.units, given)
-    counts = [len(rows) for rows in found]
+    counts = found.n_found
     if args.output is not None:
         if Path(args.output).suffix.lower() == ".npy":
             k = max(counts + [1])
-            a = np.full((len(found), k, mech.n_pose), np.nan)
-            for i, rows in enumerate(found):
+            a = np.full((len(rows_of), k, mech.n_pose), np.nan)
+            for i, rows in enumerate(rows_of):
                 for j, (_, x, _) in enumerate(rows):
                     a[i, j] = from_si(x, pu)
             write_rows(args.output, mech.pose_names, pu, a)
         else:
             flat = [
                 (i + 1, j + 1, label, work, from_si(x, pu))
-                for i, rows in enumerate(found)
+                for i, rows in enumerate(rows_of)
                 for j, (label, x, work) in enumerate(rows)
             ]
             values = np.array([f[4] for f in flat]).reshape(-1, mech.n_pose)
@@ -266,9 +253,10 @@ def _fk_all(args, mech, given, joints, pu, ju) -> int:
                 extra={"working": [f[3] for f in flat], "assembly": [f[2] for f in flat]},
             )
         print(
-            f"parakin fk: {sum(counts)} real solution(s) of {len(found)} input(s) written to {args.output}",
+            f"parakin fk: {sum(counts)} real solution(s) of {len(rows_of)} input(s) written to {args.output}",
             file=sys.stderr,
         )
+    complete = None if found.complete is None else found.complete.tolist()
     if args.json:
         _print_json(
             mech,
@@ -277,19 +265,24 @@ def _fk_all(args, mech, given, joints, pu, ju) -> int:
                 "joint_units": ju,
                 "pose_units": pu,
                 "n_real": counts,
+                "n_found": counts,
+                # true: the method guarantees no real assembly is missing (a certificate or an
+                # exact closed form); false: it may have missed some; null: it says neither
+                "complete": complete,
                 "solutions": [
                     [
                         {"assembly": label, "working": work, "x": from_si(x, pu).tolist()}
                         for label, x, work in rows
                     ]
-                    for rows in found
+                    for rows in rows_of
                 ],
             },
         )
     elif args.output is None:
         q = np.atleast_2d(given)
-        for i, rows in enumerate(found):
-            print(f"{_fmt_vector(mech.joint_names, q[i], ju)}: {len(rows)} real solution(s)")
+        for i, rows in enumerate(rows_of):
+            sure = "" if complete is None else ("" if complete[i] else " (not certified complete)")
+            print(f"{_fmt_vector(mech.joint_names, q[i], ju)}: {len(rows)} real solution(s){sure}")
             for j, (label, x, _) in enumerate(rows):
                 print(
                     f"  #{j + 1}  {_fmt_vector(mech.pose_names, from_si(x, pu), pu)}  [{label or 'real'}]"
@@ -357,8 +350,8 @@ SOLVER_HELP = {
     "scipy-root": "scipy.optimize.root (hybr), pose by pose",
     "pso": "particle swarm (Li 2020, Li 2017); --maxiter iterations",
     "hybrid": "trained network + quasi-Newton (Zhao 2017; 3p4s, --network)",
-    "closed-form": "the mechanism's own fk: closed form (3p4s, stewart12) or its working assembly (2ups, stewart36, stewart66)",
-    "all-solutions": "every real solution, then the one nearest --x0 (2ups, stewart36, stewart66; --all lists them)",
+    "closed-form": "the mechanism's own fk: closed form (3p4s, stewart12) or its working assembly (2ups, stewart36, stewart66, a --mechanism FILE)",
+    "all-solutions": "every real solution, then the one nearest --x0 (2ups, stewart36, stewart66, a --mechanism FILE; --all lists them)",
 }
 
 
@@ -394,6 +387,11 @@ def _mechanism_help(what: str) -> str:
             f"  {name:<10} {fmt(cls.pose_names, cls.pose_units, cls.paper_pose_units)} | "
             f"{fmt(cls.joint_names, cls.joint_units, cls.paper_joint_units)}"
         )
+    lines.append(
+        "  --mechanism FILE: a mechanism described in YAML/JSON (examples/*.yaml): its pose is "
+        "x y z [alpha beta gamma] or x y phi, its joints each leg's length, slider position or "
+        "crank angle"
+    )
     return "\n".join(lines)
 
 
@@ -443,7 +441,7 @@ def add_fk(sub) -> None:
         "--all",
         action="store_true",
         help="list every real solution with its assembly label (mechanisms with an all-solutions "
-        f"method: {', '.join(all_solution_mechanisms())})",
+        f"method: {', '.join(all_solution_mechanisms())}, and every --mechanism FILE)",
     )
     _text_option(
         p,

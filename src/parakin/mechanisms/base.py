@@ -411,6 +411,15 @@ class Mechanism(ABC):
             raise ValueError(f"{self.name} has no all-solutions method (fk_all)")
         return np.asarray(fk_all(joints), dtype=float), None
 
+    @classmethod
+    def lists_assemblies(cls) -> bool:
+        """Whether :meth:`assemblies` can list every real assembly (the class has an all-solutions
+        method: ``fk_all``, or its own :meth:`real_solutions`)."""
+        return (
+            getattr(cls, "fk_all", None) is not None
+            or cls.real_solutions is not Mechanism.real_solutions
+        )
+
     def assembly_label(self, pose: ArrayLike, joints: ArrayLike) -> str:
         """A few words that say which assembly ``pose`` is among the solutions of ``joints`` (e.g.
         "above the base"); "" by default (the mechanism tells its assemblies apart no further)."""

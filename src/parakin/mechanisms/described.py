@@ -112,6 +112,8 @@ _BODY_KINDS = {
 _SLIDER_SIDE = 0.05
 #: Newton steps that polish each root of the planar polynomial on the closure equations
 _POLISH = 8
+#: samples of the planar polynomial (its coefficients, degree <= 4 each way, come exactly from 9)
+_SAMPLES = 16
 
 
 class DescriptionError(ValueError):
@@ -196,7 +198,7 @@ def from_dict(data: Any, source: str = "description") -> Described:
             f"{source}: expected a mapping with name, platform and legs, got {type(data).__name__}"
         )
     known = {"name", "platform", "legs", "home", "bounds", "masses", "description"}
-    _no_unknown(data, known, source, "")
+    _no_unknown(data, known, source, nested=False)
     name = data.get("name")
     if not isinstance(name, str) or not name.strip():
         raise DescriptionError(f"{source}: name: expected a non-empty text, got {name!r:.60}")
@@ -245,12 +247,13 @@ def from_dict(data: Any, source: str = "description") -> Described:
         raise DescriptionError(f"{source}: {exc}") from None
 
 
-def _no_unknown(data: dict, known: set[str], source: str, prefix: str) -> None:
+def _no_unknown(data: dict, known: set[str], where: str, nested: bool = True) -> None:
+    """A DescriptionError naming the first field of ``data`` not in ``known``: ``where.field``
+    (``where: field`` at the top level, where ``where`` is the file)."""
     unknown = sorted(str(k) for k in set(data) - known)
     if unknown:
-        raise DescriptionError(
-            f"{source}: {prefix}{unknown[0]}: unknown field (known: {', '.join(sorted(known))})"
-        )
+        field = f"{where}.{unknown[0]}" if nested else f"{where}: {unknown[0]}"
+        raise DescriptionError(f"{field}: unknown field (known: {', '.join(sorted(known))})")
 
 
 def _number(value: Any, where: str, unit: str = "m") -> float:
@@ -311,7 +314,7 @@ def _leg(data: Any, where: str) -> Leg:
             f"{where}.type: expected one of {', '.join(LEG_TYPES)}, got {kind!r:.60}"
         )
     required, optional = LEG_TYPES[kind]
-    _no_unknown(data, {"type", "limits", "name", *required, *optional}, where, ".")
+    _no_unknown(data, {"type", "limits", "name", *required, *optional}, where)
     for key in required:
         if data.get(key) is None:
             raise DescriptionError(
@@ -363,7 +366,7 @@ def _leg(data: Any, where: str) -> Leg:
 
 def _bounds(value: Any, n: int, units: tuple[str, ...], where: str) -> tuple[tuple, tuple]:
     if isinstance(value, dict):
-        _no_unknown(value, {"lower", "upper"}, where, ".")
+        _no_unknown(value, {"lower", "upper"}, where)
         value = [value.get("lower"), value.get("upper")]
     if not isinstance(value, (list, tuple)) or len(value) != 2:
         raise DescriptionError(f"{where}: expected [lower, upper] (two lists of {n} numbers)")
@@ -384,7 +387,7 @@ def _masses(value: Any, legs: tuple[Leg, ...], where: str) -> tuple:
         raise DescriptionError(f"{where}: expected a mapping of body kinds to masses")
     needed = ["platform"] + [k for leg in legs for k in _BODY_KINDS[leg.type]]
     needed = list(dict.fromkeys(needed))
-    _no_unknown(value, {*needed, "gravity"}, where, ".")
+    _no_unknown(value, {*needed, "gravity"}, where)
     out = []
     for kind in needed:
         body = value.get(kind)
@@ -393,7 +396,7 @@ def _masses(value: Any, legs: tuple[Leg, ...], where: str) -> tuple:
             raise DescriptionError(f"{at}: missing (this mechanism moves {', '.join(needed)})")
         if not isinstance(body, dict):
             body = {"mass": body}
-        _no_unknown(body, {"mass", "inertia", "com"}, at, ".")
+        _no_unknown(body, {"mass", "inertia", "com"}, at)
         mass = _number(body.get("mass"), f"{at}.mass", "kg")
         if not mass > 0:
             raise DescriptionError(f"{at}.mass: expected a mass > 0 (kg), got {mass:g}")
@@ -554,7 +557,8 @@ class Described(Mechanism, register=False):
         (:data:`parakin.kernels.legs.LEG`)."""
         sign = 0.0
         if self.platform != "spatial":
-            sign = float(np.sign(np.linalg.det(self._jacobian_at(self.home()))))
+            with np.errstate(invalid="ignore"):  # a home outside the domain: NaN, named later
+                sign = float(np.sign(np.linalg.det(self._jacobian_at(self.home()))))
         return self._params(sign)
 
     # ------------------------------------------------------------------ what a mechanism declares
@@ -667,93 +671,110 @@ class Described(Mechanism, register=False):
 
     # ------------------------------------------------------------------ which joints can assemble
     def check_joints(self, joints: ArrayLike) -> None:
-        """Raise UnreachableError where ``joints`` cannot be assembled: a joint beyond its limits,
-        a leg length not > 0, two legs whose spheres cannot hold their anchors at the anchors'
-        fixed distance (a necessary condition for every platform type), and, for a translational
-        or planar platform (where every assembly is found exactly), no real assembly at all."""
-        q = np.atleast_2d(as_batch(joints, self.n_joints, "joints"))
-        batch = q.shape[:-1]
-        for i, leg in enumerate(self.legs):
-            name, unit = self.joint_names[i], leg.joint_unit
+        """Raise UnreachableError where ``joints`` cannot be assembled as this mechanism works: a
+        joint beyond its limits, a leg length not > 0, two legs whose spheres cannot hold their
+        anchors at the anchors' fixed distance (a necessary condition for every platform type),
+        and, for a translational or planar platform (where every assembly is found exactly), no
+        real assembly, or none on the legs' branches and home's assembly mode (where no solver
+        can succeed)."""
+        given = as_batch(joints, self.n_joints, "joints")
+        shape = given.shape[:-1]
+        q = given.reshape(-1, self.n_joints)
+
+        def fail(mask: NDArray[np.bool_], message) -> None:
+            """``message(i)`` of the first flat row ``i`` where ``mask (N,)`` holds, at its place
+            in the caller's batch."""
+            raise_first(
+                mask.reshape(shape),
+                shape,
+                lambda idx: message(int(np.ravel_multi_index(idx, shape)) if shape else 0),
+            )
+
+        def row(i: int) -> tuple:
+            return tuple(np.round(q[i], 6).tolist())
+
+        for k, leg in enumerate(self.legs):
+            name, unit = self.joint_names[k], leg.joint_unit
             if leg.type == "length":
-                raise_first(
-                    ~(q[..., i] > 0),
-                    batch,
-                    lambda idx, i=i, name=name: (
-                        f"joint {name} = {q[idx][i]:g} m must be > 0 (a leg length)"
+                fail(
+                    ~(q[:, k] > 0),
+                    lambda i, k=k, name=name: (
+                        f"joint {name} = {q[i, k]:g} m must be > 0 (a leg length)"
                     ),
                 )
             if leg.limits is None:
                 continue
             lo, hi = leg.limits
-            value = q[..., i]
-            if unit == "rad":
-                gap = value - lo
+            if unit == "rad":  # an angle: within the arc from lo to hi, whatever the turn
+                gap = q[:, k] - lo
                 inside = gap - 2 * np.pi * np.floor(gap / (2 * np.pi)) <= hi - lo
             else:
-                inside = (lo <= value) & (value <= hi)
-            raise_first(
+                inside = (lo <= q[:, k]) & (q[:, k] <= hi)
+            fail(
                 ~inside,
-                batch,
-                lambda idx, i=i, name=name, lo=lo, hi=hi, unit=unit: (
-                    f"joint {name} = {q[idx][i]:.6g} {unit} is outside its limits "
-                    f"[{lo:g}, {hi:g}] {unit} (legs[{i}].limits)"
+                lambda i, k=k, name=name, lo=lo, hi=hi, unit=unit: (
+                    f"joint {name} = {q[i, k]:.6g} {unit} is outside its limits "
+                    f"[{lo:g}, {hi:g}] {unit} (legs[{k}].limits)"
                 ),
             )
-        self._check_pairs(q)
+        self._check_pairs(q, fail, row)
         if self.platform != "spatial":
             with np.errstate(all="ignore"):
                 sols, _ = self.real_solutions(q)
             none = ~np.any(np.all(np.isfinite(sols), axis=-1), axis=-1)
-            raise_first(
+            fail(
                 none,
-                batch,
-                lambda idx: (
-                    f"joints {tuple(np.round(q[idx], 6).tolist())} cannot be assembled: "
-                    f"no real assembly of the {self.platform} platform exists"
+                lambda i: (
+                    f"joints {row(i)} cannot be assembled: no real assembly of the "
+                    f"{self.platform} platform exists"
+                ),
+            )
+            fail(
+                ~np.any(self._working(sols, q), axis=-1),
+                lambda i: (
+                    f"joints {row(i)} assemble only with a leg on its other branch or in the "
+                    "other assembly mode, never as this mechanism works (fk --all lists every "
+                    "assembly)"
                 ),
             )
 
-    def _check_pairs(self, q: Array) -> None:
+    def _check_pairs(self, q: Array, fail, row) -> None:
         """A rigid platform holds every two anchors a fixed distance apart: for each pair of legs,
         some points of their spheres must lie that far apart (for a translational platform, whose
-        position lies on every sphere moved back by its anchor: those moved spheres must meet)."""
+        position lies on every sphere moved back by its anchor: those moved spheres must meet).
+        ``q`` (N, m); ``fail(mask, message)`` raises for the first row of ``mask``."""
         centre, radius = self.spheres(q)
         r = np.abs(radius)
         a = self.anchor_points
         slack = 1e-9 * max(1.0, self.size)
         for i in range(self.n_joints):
             for j in range(i + 1, self.n_joints):
-                ri, rj = r[..., i], r[..., j]
+                ri, rj = r[:, i], r[:, j]
                 if self.platform == "translational":
-                    gap = np.linalg.norm(
-                        (centre[..., i, :] - a[i]) - (centre[..., j, :] - a[j]), axis=-1
-                    )
+                    gap = np.linalg.norm((centre[:, i] - a[i]) - (centre[:, j] - a[j]), axis=-1)
                     bad = (gap > ri + rj + slack) | (gap < np.abs(ri - rj) - slack)
 
-                    def message(idx, i=i, j=j, gap=gap, ri=ri, rj=rj) -> str:
+                    def message(n, i=i, j=j, gap=gap, ri=ri, rj=rj) -> str:
                         return (
-                            f"joints {tuple(np.round(q[idx], 6).tolist())} cannot be assembled: "
-                            f"legs {i + 1} and {j + 1} put the platform on spheres of radii "
-                            f"{float(ri[idx]):.6g} and {float(rj[idx]):.6g} m whose centres are "
-                            f"{float(gap[idx]):.6g} m apart: they do not meet"
+                            f"joints {row(n)} cannot be assembled: legs {i + 1} and {j + 1} put "
+                            f"the platform on spheres of radii {ri[n]:.6g} and {rj[n]:.6g} m "
+                            f"whose centres are {gap[n]:.6g} m apart: they do not meet"
                         )
                 else:
-                    gap = np.linalg.norm(centre[..., i, :] - centre[..., j, :], axis=-1)
+                    gap = np.linalg.norm(centre[:, i] - centre[:, j], axis=-1)
                     lo = np.maximum(0.0, np.maximum(gap - ri - rj, np.abs(ri - rj) - gap))
                     hi = gap + ri + rj
                     held = float(np.linalg.norm(a[i] - a[j]))
                     bad = (held < lo - slack) | (held > hi + slack)
 
-                    def message(idx, i=i, j=j, lo=lo, hi=hi, held=held) -> str:
+                    def message(n, i=i, j=j, lo=lo, hi=hi, held=held) -> str:
                         return (
-                            f"joints {tuple(np.round(q[idx], 6).tolist())} cannot be assembled: "
-                            f"legs {i + 1} and {j + 1} hold their anchors {float(lo[idx]):.6g} to "
-                            f"{float(hi[idx]):.6g} m apart, the platform holds them {held:.6g} m "
-                            "apart"
+                            f"joints {row(n)} cannot be assembled: legs {i + 1} and {j + 1} hold "
+                            f"their anchors {lo[n]:.6g} to {hi[n]:.6g} m apart, the platform "
+                            f"holds them {held:.6g} m apart"
                         )
 
-                raise_first(bad, q.shape[:-1], message)
+                fail(bad, message)
 
     # ------------------------------------------------------------------ every assembly
     def fk_all(self, joints: ArrayLike) -> Array:
@@ -810,86 +831,102 @@ class Described(Mechanism, register=False):
         subtracting leg 1's circle from legs 2 and 3 gives ``M(phi) (x, y) = e(phi) / 2``;
         substituting ``(x, y) = adj(M) e / 2 det(M)`` into leg 1 leaves
         ``F(phi) = |N|^2 / 4 + D N . g_1 + D^2 (|g_1|^2 - r_1^2) = 0`` (``N = adj(M) e``,
-        ``D = det M``), a trigonometric polynomial of degree at most 4 in ``phi`` (the classical
-        sextic of the 3-RPR: its top degree cancels). Its coefficients come exactly from 16
-        samples (an FFT), its roots on the unit circle ``z = e^(i phi)`` are the assemblies, each
-        polished by Newton on the closure equations."""
+        ``D = det M``), a trigonometric polynomial of degree at most 4 in ``phi`` (for the 3-RPR
+        the classical sextic: the top degree cancels). Its coefficients come exactly from 16
+        samples (an FFT); its roots on the unit circle ``z = e^(i phi)`` (companion eigenvalues)
+        are the assemblies, each polished by Newton on the closure equations. Batched: one
+        eigenvalue call per polynomial degree, one polish of every candidate of every input."""
         n = len(q)
         centre, radius = self.spheres(q)
         a = self.anchor_points
         eff = radius**2 - (a[:, 2] - centre[..., 2]) ** 2  # (N, 3): circle radii squared, in plane
-        samples = 16
-        phi = 2 * np.pi * np.arange(samples) / samples
-        c, s = np.cos(phi), np.sin(phi)
-        ra = np.stack(
-            [
-                c[:, None] * a[:, 0] - s[:, None] * a[:, 1],
-                s[:, None] * a[:, 0] + c[:, None] * a[:, 1],
-            ],
-            -1,
-        )
-        g = ra[None] - centre[:, None, :, :2]  # (N, S, 3, 2)
-        coef, det_at = self._planar_poly(g, eff)
-        scale = np.max(np.abs(coef), axis=-1)
-        out = np.full((n, 8, 3), np.nan)
-        complete = np.ones(n, dtype=bool)
-        for i in range(n):
-            if not scale[i] > 0 or not np.all(eff[i] >= 0):
-                complete[i] = bool(scale[i] > 0)  # a leg too short for the plane: no assembly
+        phi = 2 * np.pi * np.arange(_SAMPLES) / _SAMPLES
+        coef = self._planar_poly(self._g(phi[None], centre), eff)  # (N, 9), ascending in z
+        size = np.max(np.abs(coef), axis=-1)
+        complete = np.isfinite(size) & (size > 0)
+        used = complete & np.all(eff >= 0, axis=-1)  # a circle of negative radius: no assembly
+        big = np.abs(coef) > 1e-11 * size[:, None]
+        lo = np.argmax(big, axis=-1)
+        hi = coef.shape[-1] - 1 - np.argmax(big[:, ::-1], axis=-1)
+        rows, roots = [], []
+        for low, high in sorted({(int(a_), int(b_)) for a_, b_, u in zip(lo, hi, used) if u}):
+            if high == low:
                 continue
-            cf = coef[i]
-            keep = np.flatnonzero(np.abs(cf) > 1e-11 * scale[i])
-            cf = cf[keep[0] : keep[-1] + 1]
-            roots = np.roots(cf[::-1]) if len(cf) > 1 else np.zeros(0)
-            on_circle = roots[np.abs(np.abs(roots) - 1.0) < 1e-3]
-            angles = np.angle(on_circle)
-            if not len(angles):
-                continue
-            gi = (
-                np.stack(
-                    [
-                        np.cos(angles)[:, None] * a[:, 0] - np.sin(angles)[:, None] * a[:, 1],
-                        np.sin(angles)[:, None] * a[:, 0] + np.cos(angles)[:, None] * a[:, 1],
-                    ],
-                    -1,
-                )
-                - centre[i, :, :2]
-            )
-            m = gi[:, 1:] - gi[:, :1]  # (k, 2, 2)
-            e = (eff[i, 1:] - eff[i, :1]) - (
-                np.sum(gi[:, 1:] ** 2, -1) - np.sum(gi[:, :1] ** 2, -1)
-            )
-            det = m[:, 0, 0] * m[:, 1, 1] - m[:, 0, 1] * m[:, 1, 0]
-            big = np.max(np.abs(m), axis=(1, 2)) ** 2
-            if np.any(np.abs(det) <= 1e-9 * big):
-                complete[i] = False  # the linear solve is singular at a root: (x, y) not unique
-            with np.errstate(all="ignore"):
-                xy = np.stack(
-                    [
-                        m[:, 1, 1] * e[:, 0] - m[:, 0, 1] * e[:, 1],
-                        -m[:, 1, 0] * e[:, 0] + m[:, 0, 0] * e[:, 1],
-                    ],
-                    -1,
-                ) / (2 * det[:, None])
-            poses = np.concatenate([xy, angles[:, None]], -1)
-            poses = self._polish(poses, q[i])
-            found = self._distinct(poses)
-            if len(found) < len(angles) and not self._roots_merge(on_circle):
-                complete[i] = False  # a root did not polish into an assembly of its own
-            out[i, : len(found)] = found[:8]
-        return out, complete & np.isfinite(scale)
+            group = np.flatnonzero(used & (lo == low) & (hi == high))
+            c = coef[group, low : high + 1]
+            deg = high - low
+            comp = np.zeros((len(group), deg, deg), dtype=complex)
+            comp[:, 0, :] = -c[:, -2::-1] / c[:, -1:]
+            comp[:, np.arange(1, deg), np.arange(deg - 1)] = 1.0
+            z = np.linalg.eigvals(comp)  # (k, deg)
+            on = np.abs(np.abs(z) - 1.0) < 1e-3
+            rows.append(np.broadcast_to(group[:, None], z.shape)[on])
+            roots.append(z[on])
+        if not rows or not sum(len(r) for r in rows):
+            return np.full((n, 8, 3), np.nan), complete
+        row = np.concatenate(rows)
+        z = np.concatenate(roots)
+        angle = np.angle(z)
+        g = self._g(angle, centre[row])  # (K, 3, 2)
+        m = g[:, 1:] - g[:, :1]
+        e = (eff[row, 1:] - eff[row, :1]) - (np.sum(g[:, 1:] ** 2, -1) - np.sum(g[:, :1] ** 2, -1))
+        det = m[:, 0, 0] * m[:, 1, 1] - m[:, 0, 1] * m[:, 1, 0]
+        # at a root where the linear solve is singular, (x, y) is not unique: no guarantee there
+        singular = np.abs(det) <= 1e-9 * np.max(np.abs(m), axis=(1, 2)) ** 2
+        complete[np.unique(row[singular])] = False
+        with np.errstate(all="ignore"):
+            xy = np.stack(
+                [
+                    m[:, 1, 1] * e[:, 0] - m[:, 0, 1] * e[:, 1],
+                    -m[:, 1, 0] * e[:, 0] + m[:, 0, 0] * e[:, 1],
+                ],
+                -1,
+            ) / (2 * det[:, None])
+        poses = self._polish(np.concatenate([xy, angle[:, None]], -1), q[row])
+        order = np.argsort(row, kind="stable")
+        counts = np.bincount(row, minlength=n)
+        slot = np.empty(len(row), dtype=np.intp)  # candidate k of its input
+        slot[order] = np.arange(len(row)) - np.repeat(np.cumsum(counts) - counts, counts)
+        cand = np.full((n, 8, 3), np.nan)
+        cand[row, slot] = poses
+        cand_z = np.full((n, 8), np.inf + 0j)
+        cand_z[row, slot] = z
+        found = self._distinct_rows(cand)
+        n_found = np.sum(np.isfinite(found[..., 0]), -1)
+        # a root that polished into no assembly of its own, unless two roots merged (a double root)
+        with np.errstate(invalid="ignore"):
+            gap = np.abs(cand_z[:, :, None] - cand_z[:, None, :])
+        gap[:, np.arange(8), np.arange(8)] = np.inf
+        merged = np.any(np.nan_to_num(gap, nan=np.inf) < 1e-4, axis=(1, 2))
+        complete &= (n_found == counts) | merged
+        return found, complete
+
+    def _g(self, phi: Array, centre: Array) -> Array:
+        """``g_i(phi) = R(phi) a_i - c_i`` in the plane, per angle: ``phi`` (1, S) with ``centre``
+        (N, 3, 3) gives (N, S, 3, 2); ``phi`` (K,) with ``centre`` (K, 3, 3) gives (K, 3, 2)."""
+        a = self.anchor_points
+        c, s = np.cos(phi)[..., None], np.sin(phi)[..., None]
+        turned = np.stack([c * a[:, 0] - s * a[:, 1], s * a[:, 0] + c * a[:, 1]], -1)
+        if phi.ndim == 2:  # (1, S, 3, 2) against (N, 1, 3, 2)
+            return turned - centre[:, None, :, :2]
+        return turned - centre[..., :2]
+
+    def _distinct_rows(self, cand: Array) -> Array:
+        """``cand (N, k, n)`` with every repeat of an earlier candidate's pose (angles modulo a
+        turn) made NaN, the finite ones first."""
+        d = self.pose_difference(cand[:, :, None, :], cand[:, None, :, :])
+        with np.errstate(invalid="ignore"):
+            same = np.max(np.abs(d), -1) < 1e-7 * max(1.0, self.size)
+        earlier = np.tril(np.ones(cand.shape[1], dtype=bool), -1)  # [i, j]: j before i
+        repeat = np.any(same & earlier, axis=-1)
+        out = np.where(repeat[..., None], np.nan, cand)
+        key = np.where(np.isfinite(out[..., 0]), 0, 1)
+        return np.take_along_axis(out, np.argsort(key, -1, kind="stable")[..., None], 1)
 
     @staticmethod
-    def _roots_merge(roots: NDArray[np.complex128]) -> bool:
-        """Whether two roots sit close together (a double root: one assembly, not two)."""
-        d = np.abs(roots[:, None] - roots[None])
-        np.fill_diagonal(d, np.inf)
-        return bool(np.any(d < 1e-4))
-
-    @staticmethod
-    def _planar_poly(g: Array, eff: Array) -> tuple[Array, Array]:
+    def _planar_poly(g: Array, eff: Array) -> Array:
         """Coefficients ``(N, 9)`` of ``z^4 F(phi)`` in ascending powers of ``z = e^(i phi)`` from the
-        samples ``g (N, S, 3, 2)``, and ``det M`` at the samples."""
+        samples ``g (N, S, 3, 2)`` of :meth:`_g` (see :meth:`_planar`)."""
         m = g[:, :, 1:] - g[:, :, :1]  # rows g_2 - g_1, g_3 - g_1
         gg = np.sum(g * g, -1)  # (N, S, 3)
         e = (eff[:, None, 1:] - eff[:, None, :1]) - (gg[..., 1:] - gg[..., :1])
@@ -898,14 +935,12 @@ class Described(Mechanism, register=False):
         n1 = -m[..., 1, 0] * e[..., 0] + m[..., 0, 0] * e[..., 1]
         f = 0.25 * (n0 * n0 + n1 * n1) + det * (n0 * g[..., 0, 0] + n1 * g[..., 0, 1])
         f = f + det**2 * (gg[..., 0] - eff[:, None, 0])
-        samples = f.shape[-1]
-        spectrum = np.fft.fft(f, axis=-1) / samples  # F = sum_k f_k e^(i k phi), k = -4..4
-        coef = np.concatenate([spectrum[:, -4:], spectrum[:, :5]], axis=-1)  # k = -4 .. 4
-        return coef, det
+        spectrum = np.fft.fft(f, axis=-1) / f.shape[-1]  # F = sum_k f_k e^(i k phi), k = -4..4
+        return np.concatenate([spectrum[:, -4:], spectrum[:, :5]], axis=-1)
 
     def _polish(self, poses: Array, q: Array) -> Array:
-        """Newton on the closure equations from each candidate pose (rows that do not converge to
-        a residual within ``1e-9 size`` become NaN)."""
+        """Newton on the closure equations from each candidate pose (K, n) for its joints (K, m)
+        (rows that do not converge to a residual within ``1e-9 size`` become NaN)."""
         x = poses.copy()
         qq = np.broadcast_to(q, (len(x), self.n_joints))
         with np.errstate(all="ignore"):
@@ -928,19 +963,6 @@ class Described(Mechanism, register=False):
                 res[fin] = np.max(np.abs(self.residual(x[fin], qq[fin])), -1)
         x[~(res <= 1e-9 * max(1.0, self.size))] = np.nan
         return wrap_angles(x, self.pose_units)
-
-    def _distinct(self, poses: Array) -> Array:
-        """The finite rows of ``poses``, each once (angles compared modulo a turn)."""
-        out: list[Array] = []
-        for x in poses:
-            if not np.all(np.isfinite(x)):
-                continue
-            if any(
-                np.max(np.abs(self.pose_difference(x, y))) < 1e-7 * max(1.0, self.size) for y in out
-            ):
-                continue
-            out.append(x)
-        return np.array(out).reshape(-1, self.n_pose)
 
     def _spatial(self, q: Array) -> tuple[Array, NDArray[np.bool_]]:
         """Six spheres hold six anchors: a 6-6 Gough-Stewart platform with base points the

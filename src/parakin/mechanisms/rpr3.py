@@ -18,6 +18,7 @@ leg lengths; the working one is home's side of the singularity locus, see ``on_a
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from types import ModuleType
 from typing import Any, ClassVar
 
@@ -30,6 +31,7 @@ from parakin.dynamics.model import Bodies, BodyGroup, Closure, MassModel, hexapo
 from parakin.kernels import Kernel, evaluate
 from parakin.kernels import rpr3 as kernels
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch
+from parakin.mechanisms.described import Described, Leg
 
 __all__ = ["RPR3"]
 
@@ -91,6 +93,35 @@ class RPR3(Mechanism):
     def home(self) -> Array:
         """The platform centred over the base, not turned."""
         return np.zeros(3)
+
+    @cached_property
+    def as_described(self) -> Described:
+        """The same mechanism as a description (three length legs on a planar platform,
+        :mod:`parakin.mechanisms.described`): its exact assemblies (the planar polynomial) decide
+        :meth:`check_joints`."""
+        legs = tuple(
+            Leg("length", (*b, 0.0), (*a, 0.0), name=name)
+            for b, a, name in zip(self.base, self.platform, self.joint_names)
+        )
+        lo, hi = self.pose_bounds()
+        return Described("rpr3", "planar", legs, tuple(self.home()), (tuple(lo), tuple(hi)))
+
+    def real_solutions(self, joints: ArrayLike) -> tuple[Array, Any]:
+        """Every real assembly (up to six) of leg lengths (N, 3), exactly (the planar polynomial of
+        :attr:`as_described`), and per input whether that is guaranteed complete."""
+        return self.as_described.real_solutions(joints)
+
+    def assembly_label(self, pose: ArrayLike, joints: ArrayLike) -> str:
+        """Home's side of the singularity locus (the working assembly mode) or the other."""
+        return self.as_described.assembly_label(pose, joints).split(", ")[0]
+
+    def check_joints(self, joints: ArrayLike) -> None:
+        """Raise UnreachableError where the leg lengths cannot be assembled on home's side of the
+        singularity locus (a length not > 0, two legs that cannot hold their pivots at the
+        platform's distance, no real assembly, or none in the working mode): what no solver could
+        then find. Exact: every assembly is a root of the planar polynomial
+        (:meth:`Described.check_joints`)."""
+        self.as_described.check_joints(joints)
 
     def pose_bounds(self) -> tuple[Array, Array]:
         """``|x|, |y| <= 0.1`` m, ``|phi| <= 20`` deg around home: the default geometry's working

@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike
 import parakin.dynamics.jet as dj
 from parakin.dynamics.jet import Jet
 from parakin.dynamics.model import Bodies, BodyGroup, Closure, MassModel, RigidBody, strut
+from parakin.errors import UnreachableError
 from parakin.geometry import rot_x, rot_y
 from parakin.kernels import evaluate
 from parakin.kernels import ups2 as kernels
@@ -367,6 +368,28 @@ class UPS2(Mechanism):
         """:meth:`fk_all` on both assembly branches of eq (14): ``{+1: (..., 8, 3), -1: (..., 8, 3)}``.
         A pose of branch -1 is interpreted by ``UPS2(..., branch=-1)``."""
         return {b: dataclasses.replace(self, branch=b).fk_all(joints) for b in (1, -1)}
+
+    def real_solutions(self, joints: ArrayLike) -> tuple[Array, None]:
+        """Every real solution on both branches of eq (14) (:meth:`fk_all_branches`), (N, 16, 3);
+        no completeness guarantee (the degree-8 polynomial's roots are judged real by a threshold)."""
+        both = self.fk_all_branches(joints)
+        return np.concatenate([both[1], both[-1]], axis=-2), None
+
+    def assembly_label(self, pose: ArrayLike, joints: ArrayLike) -> str:
+        """The branch of eq (14) on which ``pose`` assembles ``joints``: +1 (rho > 0, the paper's)
+        or -1 (rho < 0, the mirror assembly, ``UPS2(branch=-1)``)."""
+        for branch in (1, -1):
+            mirror = self if branch == self.branch else dataclasses.replace(self, branch=branch)
+            try:
+                if float(mirror.joint_error(pose, joints)) < 1e-6:
+                    return (
+                        "branch +1 (rho > 0, the paper)"
+                        if branch > 0
+                        else "branch -1 (rho < 0, mirror)"
+                    )
+            except UnreachableError:
+                continue
+        return ""
 
     def kernel_params(self) -> Array:
         """``a, k, c, h, branch`` and the home lengths ``l_j(home)``."""
