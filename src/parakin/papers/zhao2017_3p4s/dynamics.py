@@ -924,8 +924,10 @@ def claims(figdir: Path, ref: pd.DataFrame) -> list[Claim]:
     ADAMS, "exactly equal", no numbers printed) as claims of a zero difference, in % of the peak
     of the curve. The tolerance is the one data/reference/zhao2017_3p4s.csv declares for each row
     (the report applies it, :func:`parakin.claims.resolve`). Where the agreement needs our
-    correction of a printed equation it is *consistent after assuming* that correction, never
-    reproduced; the printed equations are judged too (they differ, the slips table shows why)."""
+    correction of a printed equation that reading is *consistent after assuming* the correction,
+    never reproduced; the printed equations are a reading too (they differ, the slips table shows
+    why), and with no reading declared the weakest decides the row (issue 45: *differs — cause
+    shown*; :func:`parakin.claims.decide`)."""
     out: list[Claim] = []
     why = "paper: ADAMS, 'exactly equal', no number printed; ours: "
 
