@@ -7,12 +7,12 @@ import sys
 
 import numpy as np
 
-from parakin.cli import common
 from parakin.cli.common import (
     _dumps,
     _mechanism_options,
     _text_option,
     finite_float,
+    mechanism_of,
     nonnegative_float,
 )
 from parakin.units import parse_quantity
@@ -59,9 +59,10 @@ def add_workspace(sub) -> None:
                    "shrunk to hold the workspace unless --no-fit)")  # fmt: skip
     p.add_argument("--no-fit", action="store_true", help="keep the box as given")
     p.add_argument("--joint-limit", action="append", default=[], metavar="NAME=LO:HI",
-                   help="a joint's limits (the others: -inf..inf)")  # fmt: skip
+                   help="a joint's limits, replacing the mechanism's (the other joints: none)")  # fmt: skip
     p.add_argument("--stroke", type=nonnegative_float, default=None, metavar="F",
-                   help="joint limits home +- F x the mean |home joint| (lengths; 0: none)")  # fmt: skip
+                   help="where the mechanism declares no joint limits: home +- F x the mean |home "
+                   "joint| for its length joints (default 0.25; 0: none)")  # fmt: skip
     p.add_argument("--orientation-box", action="append", default=[], metavar="NAME=LO:HI",
                    help="the box of a held coordinate for the reachable workspace")  # fmt: skip
     p.add_argument("--orientation-fraction", type=finite_float, default=0.25, metavar="F",
@@ -120,14 +121,6 @@ def _range(text: str, where: str) -> tuple[float, float]:
     return a, b
 
 
-def _the_mechanism(args):
-    """The mechanism the options name (``MECH`` or ``--mechanism FILE``), through the shared helper."""
-    of = getattr(common, "mechanism_of", None)
-    if of is not None:
-        return of(args)
-    return common._mechanism(args.mechanism, args.param, args.geometry)
-
-
 def region_of(args, mech):
     """The :class:`parakin.workspace.Region` the options describe."""
     from parakin.workspace import make_region
@@ -184,7 +177,7 @@ def region_of(args, mech):
 def cmd_workspace(args) -> int:
     from parakin.workspace import atlas as A
 
-    mech = _the_mechanism(args)
+    mech = mechanism_of(args)
     region, boxed = region_of(args, mech)
     sizes = A.Sizes(samples=args.samples, orientations=args.orientations, levels=args.levels,
                     grid=args.grid, rays=args.rays, fit=not (args.no_fit or boxed))  # fmt: skip

@@ -211,7 +211,8 @@ def make_region(
     ``pose_bounds()`` there; :func:`parakin.workspace.fit_box` grows it to hold the workspace);
     ``joint_limits``: ``(lo, hi)`` (scalars or ``n_joints`` values; default the mechanism's,
     :func:`declared_joint_limits`); without either, ``stroke`` (default :data:`DEFAULT_STROKE`,
-    0 for none) assumes home +- ``stroke`` x the mean |home joint value|; ``orientation_box``:
+    0 for none) assumes home +- ``stroke`` x the mean |home joint value| for the length joints
+    (a revolute joint keeps its full turn); ``orientation_box``:
     over the other coordinates (default: the given values +- ``orientation_fraction`` x half the
     width of their ``pose_bounds()``, within those bounds); ``cond_max`` >= 1;
     ``clearance`` >= 0 or None. Bad values raise a ValueError that names the value and the limit.
@@ -285,7 +286,7 @@ def _joint_limits(
     declared = declared_joint_limits(mech)
     if declared is not None and not np.any(np.isfinite(declared[0]) | np.isfinite(declared[1])):
         declared = None  # declared as "no limits" (a described mechanism's legs without any)
-    if declared is not None and stroke is None:
+    if declared is not None:
         return declared[0], declared[1], "declared by the mechanism"
     f = DEFAULT_STROKE if stroke is None else float(stroke)
     if not (np.isfinite(f) and 0 <= f <= 10):
@@ -303,9 +304,8 @@ def _joint_limits(
             "nothing: give the joint limits"
         )
     half = f * scale
-    how = "assumed" if stroke is None else "given"
     units = {u for u, lin in zip(mech.joint_units, linear) if lin}
     unit = f" {units.pop()}" if len(units) == 1 and "1" not in units else ""
     lo = np.where(linear, q0 - half, -np.inf)
     hi = np.where(linear, q0 + half, np.inf)
-    return lo, hi, f"{how}: home +- {f:g} x mean |home joint| = +- {half:.4g}{unit}"
+    return lo, hi, f"assumed: home +- {f:g} x mean |home joint| = +- {half:.4g}{unit}"

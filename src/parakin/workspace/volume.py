@@ -161,6 +161,8 @@ def fit_box(
     shrunk = False
     for step in range(rounds + 1):
         pts = grid_points(lo, hi, grid)
+        if np.all((given >= lo) & (given <= hi)):  # a coarse grid may miss a thin workspace
+            pts = np.vstack([pts, given])
         inside = reachable(region, pts, orient)
         if not np.any(inside):
             raise ValueError(
