@@ -177,6 +177,11 @@ def region_of(args, mech):
 def cmd_workspace(args) -> int:
     from parakin.workspace import atlas as A
 
+    from parakin import kernels
+    from parakin.workspace.compiled import MIN_ROWS
+
+    if args.samples < MIN_ROWS:  # too little work to pay for loading (or compiling) the loops
+        kernels.use_interpreted()
     mech = mechanism_of(args)
     region, boxed = region_of(args, mech)
     sizes = A.Sizes(samples=args.samples, orientations=args.orientations, levels=args.levels,

@@ -152,6 +152,11 @@ def locate(region: Region, pts: np.ndarray, values: dict[str, np.ndarray] | None
         both = ok[ia] & ok[ib] & np.isfinite(det[ia]) & np.isfinite(det[ib])
         change = both & (np.sign(det[ia]) * np.sign(det[ib]) < 0)
         a0, b0 = ia[change], ib[change]
+        zero = np.flatnonzero(ok & (det == 0))  # a grid point exactly on the locus
+        if len(zero):
+            scale = ev[f"smax_{m}"][zero]
+            keep = np.ones(len(zero), dtype=bool)
+            parts.append(_located(region, kind, flat[zero], flat[zero], keep, scale, m))
         if not len(a0):
             continue
         s0 = np.sign(det[a0])
