@@ -289,7 +289,9 @@ def test_fk_all_to_csv_and_npy(tmp_path, capsys):
 
 def test_fk_all_needs_an_all_solutions_method(capsys):
     assert main(["fk", "3p4s", "--joints", "0.43", "0.43", "0.43", "--all"]) == 2
-    assert "has no all-solutions method; --all works on 2ups, stewart36" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "has no all-solutions method; --all works on 2ups, rpr3, stewart36" in err
+    assert "--mechanism FILE" in err  # and on every described mechanism
 
 
 def test_fk_all_no_real_solution_exits_1(capsys):

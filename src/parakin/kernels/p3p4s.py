@@ -2,36 +2,40 @@
 
 ``residual`` / ``jacobian`` / ``ik`` / ``in_domain`` / ``on_assembly`` of ``P3P4S``, elementwise
 and branch-free (:mod:`parakin.kernels._math`): one pose under numba, a batch on the trailing
-axis under numpy (what the ``P3P4S`` methods call) and torch. ``p`` (see ``P3P4S.kernel``):
-``delta, L``, the radial unit vectors ``e_i`` (``p[2:11]``, 3 x 3) and the rail unit vectors
-``m_i`` (``p[11:20]``).
+axis under numpy (what the ``P3P4S`` methods call) and torch. ``p`` (:data:`PARAMS`, by name):
+``delta``, ``L``, the radial unit vectors ``e_i`` (``e``, 3 x 3) and the rail unit vectors
+``m_i`` (``m``, 3 x 3).
 """
 
 from __future__ import annotations
 
-from parakin.kernels._math import kernel, nan, sqrt, where
+from parakin.kernels._math import Layout, kernel, nan, sqrt, where
+
+#: the parameter vector, by name (``P3P4S.kernel_params`` packs it; its length is checked once)
+PARAMS = Layout(delta=1, L=1, e=(3, 3), m=(3, 3))
+_DELTA, _L, _E, _M = PARAMS.delta, PARAMS.L, PARAMS.e, PARAMS.m
 
 
 @kernel
 def _rod(p, x, q, i, c):
     """Coordinate ``c`` of rod ``i``: ``d_i - c_i = w_i - l_i m_i``, ``w_i = p - delta e_i`` (eq 3)."""
-    return x[c] - p[0] * p[2 + 3 * i + c] - q[i] * p[11 + 3 * i + c]
+    return x[c] - p[_DELTA] * p[_E + 3 * i + c] - q[i] * p[_M + 3 * i + c]
 
 
 @kernel
 def _discriminant(p, x, i):
     """``b_i = w_i . m_i`` and eq (5)'s ``L^2 - |w_i - b_i m_i|^2`` of limb ``i``."""
-    w0 = x[0] - p[0] * p[2 + 3 * i]
-    w1 = x[1] - p[0] * p[3 + 3 * i]
-    w2 = x[2] - p[0] * p[4 + 3 * i]
-    b = w0 * p[11 + 3 * i] + w1 * p[12 + 3 * i] + w2 * p[13 + 3 * i]
-    return b, p[1] * p[1] - ((w0 * w0 + w1 * w1 + w2 * w2) - b * b)
+    w0 = x[0] - p[_DELTA] * p[_E + 3 * i]
+    w1 = x[1] - p[_DELTA] * p[_E + 1 + 3 * i]
+    w2 = x[2] - p[_DELTA] * p[_E + 2 + 3 * i]
+    b = w0 * p[_M + 3 * i] + w1 * p[_M + 1 + 3 * i] + w2 * p[_M + 2 + 3 * i]
+    return b, p[_L] * p[_L] - ((w0 * w0 + w1 * w1 + w2 * w2) - b * b)
 
 
 @kernel
 def residual(p, x, q, out):
     """``(|d_i - c_i|^2 - L^2) / 2L`` (eq 4): metres to first order, polynomial everywhere."""
-    ll = p[1]
+    ll = p[_L]
     for i in range(3):
         r0, r1, r2 = _rod(p, x, q, i, 0), _rod(p, x, q, i, 1), _rod(p, x, q, i, 2)
         out[i] = (r0 * r0 + r1 * r1 + r2 * r2 - ll * ll) / (2 * ll)
@@ -42,7 +46,7 @@ def jacobian(p, x, q, out):
     """``d residual / d p``: row i is ``(d_i - c_i) / L`` (= n_i on the constraint manifold)."""
     for i in range(3):
         for c in range(3):
-            out[i, c] = _rod(p, x, q, i, c) / p[1]
+            out[i, c] = _rod(p, x, q, i, c) / p[_L]
 
 
 @kernel
@@ -74,6 +78,6 @@ def on_assembly(p, x, q):
     for i in range(3):
         nm = 0.0
         for c in range(3):
-            nm = nm + _rod(p, x, q, i, c) * p[11 + 3 * i + c]
-        ok = ok & (nm / p[1] >= -1e-6)
+            nm = nm + _rod(p, x, q, i, c) * p[_M + 3 * i + c]
+        ok = ok & (nm / p[_L] >= -1e-6)
     return ok

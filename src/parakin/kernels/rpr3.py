@@ -6,24 +6,28 @@ the platform origin and its rotation. With ``a_i`` the platform pivot in the pla
 ``R(phi)`` the planar rotation, the leg vector is ``v_i = (x, y) + R(phi) a_i - B_i`` and
 ``rho_i = |v_i|``.
 
-``p``: the base pivots ``B_i`` (``p[0:6]``, 3 x 2), the platform pivots ``a_i`` (``p[6:12]``,
-3 x 2) and the sign of ``det(d rho / d pose)`` at the home pose (``p[12]``), which names the
-working assembly mode (see :func:`on_assembly`).
+``p`` (:data:`PARAMS`, by name): the base pivots ``B_i`` (``base``, 3 x 2), the platform pivots
+``a_i`` (``platform``, 3 x 2) and the sign of ``det(d rho / d pose)`` at the home pose
+(``home_sign``), which names the working assembly mode (see :func:`on_assembly`).
 """
 
 from __future__ import annotations
 
-from parakin.kernels._math import cos, kernel, nan, sin, sqrt, where
+from parakin.kernels._math import Layout, cos, kernel, nan, sin, sqrt, where
+
+#: the parameter vector, by name (``RPR3.kernel_params`` packs it; its length is checked once)
+PARAMS = Layout(base=(3, 2), platform=(3, 2), home_sign=1)
+_BASE, _PLATFORM, _SIGN = PARAMS.base, PARAMS.platform, PARAMS.home_sign
 
 
 @kernel
 def _leg(p, x, i):
     """``R(phi) a_i`` and the leg vector ``v_i`` (four scalars)."""
     c, s = cos(x[2]), sin(x[2])
-    ax, ay = p[6 + 2 * i], p[7 + 2 * i]
+    ax, ay = p[_PLATFORM + 2 * i], p[_PLATFORM + 2 * i + 1]
     wx = c * ax - s * ay
     wy = s * ax + c * ay
-    return wx, wy, x[0] + wx - p[2 * i], x[1] + wy - p[2 * i + 1]
+    return wx, wy, x[0] + wx - p[_BASE + 2 * i], x[1] + wy - p[_BASE + 2 * i + 1]
 
 
 @kernel
@@ -81,4 +85,4 @@ def on_assembly(p, x, q):
     b0, b1, b2 = _row(p, x, 1)
     c0, c1, c2 = _row(p, x, 2)
     det = a0 * (b1 * c2 - b2 * c1) - a1 * (b0 * c2 - b2 * c0) + a2 * (b0 * c1 - b1 * c0)
-    return det * p[12] > 0
+    return det * p[_SIGN] > 0

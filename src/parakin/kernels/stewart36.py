@@ -2,14 +2,18 @@
 
 ``residual`` / ``jacobian`` / ``ik`` / ``in_domain`` / ``on_assembly`` of ``Stewart36``,
 elementwise and branch-free (:mod:`parakin.kernels._math`): one pose under numba, a batch on the
-trailing axis under numpy (what the ``Stewart36`` methods call) and torch. ``p`` (see
-``Stewart36.kernel``) holds the platform point of each leg in the moving frame (``p[0:18]``,
-6 x 3) and the base points (``p[18:36]``, 6 x 3).
+trailing axis under numpy (what the ``Stewart36`` methods call) and torch. ``p`` (:data:`PARAMS`,
+by name) holds the platform point of each leg in the moving frame (``platform``, 6 x 3) and the
+base points (``base``, 6 x 3).
 """
 
 from __future__ import annotations
 
-from parakin.kernels._math import cos, kernel, sin, sqrt
+from parakin.kernels._math import Layout, cos, kernel, sin, sqrt
+
+#: the parameter vector, by name (``Stewart36.kernel_params`` packs it; its length is checked once)
+PARAMS = Layout(platform=(6, 3), base=(6, 3))
+_PLATFORM, _BASE = PARAMS.platform, PARAMS.base
 
 
 @kernel
@@ -34,7 +38,7 @@ def _rotation(x):
 @kernel
 def _leg(p, x, t, i):
     """``w = T a_i`` and the leg vector ``v = O_A + w - B_i`` of leg ``i`` (six scalars)."""
-    a0, a1, a2 = p[3 * i], p[3 * i + 1], p[3 * i + 2]
+    a0, a1, a2 = p[_PLATFORM + 3 * i], p[_PLATFORM + 3 * i + 1], p[_PLATFORM + 3 * i + 2]
     w0 = t[0] * a0 + t[1] * a1 + t[2] * a2
     w1 = t[3] * a0 + t[4] * a1 + t[5] * a2
     w2 = t[6] * a0 + t[7] * a1 + t[8] * a2
@@ -42,9 +46,9 @@ def _leg(p, x, t, i):
         w0,
         w1,
         w2,
-        x[3] + w0 - p[18 + 3 * i],
-        x[4] + w1 - p[19 + 3 * i],
-        x[5] + w2 - p[20 + 3 * i],
+        x[3] + w0 - p[_BASE + 3 * i],
+        x[4] + w1 - p[_BASE + 3 * i + 1],
+        x[5] + w2 - p[_BASE + 3 * i + 2],
     )
 
 

@@ -4,15 +4,26 @@
 (differentiated from the same closed forms), ``ik`` (strokes, no stroke-limit check),
 ``in_domain`` and ``on_assembly``, elementwise and branch-free (:mod:`parakin.kernels._math`):
 one pose under numba, a batch on the trailing axis under numpy (what the ``UPS2`` methods call)
-and torch. ``p`` (see ``UPS2.kernel``): ``a, k, c, h, branch, l1_home, l2_home, l3_home``.
+and torch. ``p`` (:data:`PARAMS`, by name): ``a, k, c, h, branch`` and the home lengths
+``l_home`` (3).
 """
 
 from __future__ import annotations
 
 import math
 
-from parakin.kernels._math import cos, kernel, maximum, nan, pi, sin, sqrt, where
+from parakin.kernels._math import Layout, cos, kernel, maximum, nan, pi, sin, sqrt, where
 
+#: the parameter vector, by name (``UPS2.kernel_params`` packs it; its length is checked once)
+PARAMS = Layout(a=1, k=1, c=1, h=1, branch=1, l_home=3)
+_A, _K, _C, _H, _BRANCH, _HOME = (
+    PARAMS.a,
+    PARAMS.k,
+    PARAMS.c,
+    PARAMS.h,
+    PARAMS.branch,
+    PARAMS.l_home,
+)
 _SQ3 = math.sqrt(3.0)
 
 
@@ -22,7 +33,7 @@ def _squares(p, x):
     ``l1^2 = 4c^2/9 + 3a^2/4 - (2/sqrt3) a Y``, ``l2,3^2 = Q -/+ s``, ``s = a u sin(beta)``,
     ``Q = u^2 + k^2 + a^2/4 + t^2 - a k cos(beta)``, ``u = rho + k sin(gamma)``,
     ``t = k cos(gamma) + Y - h``, ``rho = branch sqrt(c^2 - Y^2)`` (eq 14, clamped at 0)."""
-    a, k, c, h, branch = p[0], p[1], p[2], p[3], p[4]
+    a, k, c, h, branch = p[_A], p[_K], p[_C], p[_H], p[_BRANCH]
     beta, gamma, y = x[0], x[1], x[2]
     rho = branch * sqrt(maximum(c * c - y * y, 0.0))
     u = rho + k * sin(gamma)
@@ -37,15 +48,15 @@ def _squares(p, x):
 def residual(p, x, q, out):
     """``f_j = l_j(pose) - l_j(home) - q_j`` (m): eq (18) with strokes as inputs."""
     l1, qq, s, u, rho, t = _squares(p, x)
-    out[0] = sqrt(maximum(l1, 0.0)) - p[5] - q[0]
-    out[1] = sqrt(maximum(qq - s, 0.0)) - p[6] - q[1]
-    out[2] = sqrt(maximum(qq + s, 0.0)) - p[7] - q[2]
+    out[0] = sqrt(maximum(l1, 0.0)) - p[_HOME] - q[0]
+    out[1] = sqrt(maximum(qq - s, 0.0)) - p[_HOME + 1] - q[1]
+    out[2] = sqrt(maximum(qq + s, 0.0)) - p[_HOME + 2] - q[2]
 
 
 @kernel
 def jacobian(p, x, q, out):
     """``d l_j / d (beta, gamma, Y)`` = ``d(l_j^2) / (2 l_j)``."""
-    a, k = p[0], p[1]
+    a, k = p[_A], p[_K]
     beta, gamma, y = x[0], x[1], x[2]
     l1, qq, s, u, rho, t = _squares(p, x)
     drho = -y / rho
@@ -69,18 +80,18 @@ def jacobian(p, x, q, out):
 @kernel
 def ik(p, x, out):
     """Strokes ``l(pose) - l(home)``; False (and NaN) where ``|Y| >= c`` (eq 14: no real rho)."""
-    ok = abs(x[2]) < p[2]
+    ok = abs(x[2]) < p[_C]
     l1, qq, s, u, rho, t = _squares(p, x)
-    out[0] = where(ok, sqrt(maximum(l1, 0.0)) - p[5], nan)
-    out[1] = where(ok, sqrt(maximum(qq - s, 0.0)) - p[6], nan)
-    out[2] = where(ok, sqrt(maximum(qq + s, 0.0)) - p[7], nan)
+    out[0] = where(ok, sqrt(maximum(l1, 0.0)) - p[_HOME], nan)
+    out[1] = where(ok, sqrt(maximum(qq - s, 0.0)) - p[_HOME + 1], nan)
+    out[2] = where(ok, sqrt(maximum(qq + s, 0.0)) - p[_HOME + 2], nan)
     return ok
 
 
 @kernel
 def in_domain(p, x):
     """``|Y| < c`` (eq. 14 has a real rho; the caller checks finiteness)."""
-    return abs(x[2]) < p[2]
+    return abs(x[2]) < p[_C]
 
 
 @kernel

@@ -379,7 +379,7 @@ class Mechanism(ABC):
         3.56 rad and -2.72 rad are the same crank angle. Raises where :meth:`ik` does (callers
         isolate such rows)."""
         d = self.ik(pose) - np.asarray(joints, dtype=float)
-        rad = np.array([u == "rad" for u in self.joint_units])
+        rad = np.array([u == "rad" for u in getattr(self, "joint_units", ())], dtype=bool)
         if rad.any():
             d = np.where(rad, (d + np.pi) % (2 * np.pi) - np.pi, d)
         return np.max(np.abs(d), axis=-1, initial=0.0)
@@ -425,13 +425,24 @@ class Mechanism(ABC):
         "above the base"); "" by default (the mechanism tells its assemblies apart no further)."""
         return ""
 
+    def solution_labels(self, solutions: Array, joints: Array) -> list[list[str]]:
+        """The label of each solution ``(N, k, n)`` of :meth:`real_solutions` for joints ``(N, m)``
+        (NaN rows get ""): :meth:`assembly_label` of each, unless the mechanism knows more from
+        where in its answer a solution sits (the 2-UPS: which branch's polynomial gave it)."""
+        return [
+            [self.assembly_label(x, q) if np.all(np.isfinite(x)) else "" for x in rows]
+            for rows, q in zip(solutions, joints)
+        ]
+
     def assemblies(self, joints: ArrayLike) -> Assemblies:
         """Every real assembly of each joint vector ``(N, m)`` (SI), labelled
-        (:meth:`assembly_label`), with the working one marked: the solution that ``fk`` returns
-        (the mechanism's own assembly, nearest home), where ``fk`` has one for that input."""
+        (:meth:`solution_labels`), with the working one marked: the solution that ``fk`` returns
+        (the mechanism's own assembly, nearest home) where ``fk`` has one for that input (one per
+        input at most: the nearest, the first of equals)."""
         q = np.atleast_2d(as_batch(joints, self.n_joints, "joints"))
         with np.errstate(all="ignore"):
             sols, complete = self.real_solutions(q)
+            labels = self.solution_labels(sols, q)
         working = np.full((len(q), self.n_pose), np.nan)
         if self.fk is not None:
             try:
@@ -449,25 +460,29 @@ class Mechanism(ABC):
                         pass
         out = []
         for i in range(len(q)):
+            finite = [j for j, x in enumerate(sols[i]) if np.all(np.isfinite(x))]
+            best, best_gap = None, 1e-7
+            if np.all(np.isfinite(working[i])):
+                for j in finite:
+                    gap = float(np.max(np.abs(self.pose_difference(sols[i, j], working[i]))))
+                    if gap < best_gap and self._answers(sols[i, j], q[i]):
+                        best, best_gap = j, gap
             rows = []
-            for x in sols[i]:
-                if not np.all(np.isfinite(x)):
-                    continue
-                near = (
-                    bool(np.all(np.isfinite(working[i])))
-                    and float(np.max(np.abs(self.pose_difference(x, working[i])))) < 1e-7
-                )
-                if near:  # the working one must also be an answer on this instance's IK
-                    try:
-                        near = float(self.joint_error(x, q[i])) < 1e-6
-                    except (ParakinError, ArithmeticError):
-                        near = False
-                label = self.assembly_label(x, q[i])
-                if near:
+            for j in finite:
+                label = labels[i][j]
+                if j == best:
                     label = ", ".join(filter(None, [label, "working (what fk returns)"]))
-                rows.append(Assembly(np.asarray(x, dtype=float), label, near))
+                rows.append(Assembly(np.asarray(sols[i, j], dtype=float), label, j == best))
             out.append(rows)
         return Assemblies(out, None if complete is None else np.asarray(complete, dtype=bool))
+
+    def _answers(self, pose: Array, joints: Array) -> bool:
+        """Whether ``pose`` is an answer for ``joints`` on this instance's IK (within 1e-6)."""
+        try:
+            with np.errstate(all="ignore"):
+                return float(self.joint_error(pose, joints)) < 1e-6
+        except (ParakinError, ArithmeticError):
+            return False
 
     def kernel(self) -> Kernel | None:
         """This mechanism's kernels (:mod:`parakin.kernels`): the module :attr:`kernels` with

@@ -280,7 +280,7 @@ class P3P4S(Mechanism):
     # ------------------------------------------------------------------ closed-form FK
     def kernel_params(self) -> Array:
         """``delta, L``, the radial unit vectors ``e_i`` (3 x 3), the rail unit vectors ``m_i``."""
-        return np.concatenate([[self.delta, self.L], self.e.ravel(), self.m.ravel()])
+        return kernels.PARAMS.pack(delta=self.delta, L=self.L, e=self.e, m=self.m)
 
     def fk(self, joints: ArrayLike, branch: Literal["upper", "lower"] = "upper") -> Array:
         """Closed-form forward kinematics: the intersection of three spheres (our addition).

@@ -81,14 +81,15 @@ class RPR3(Mechanism):
 
     def _home_det(self) -> float:
         """``det(d rho / d pose)`` at home, by the kernel (its sign is not a parameter yet)."""
-        p = np.concatenate([np.ravel(self.base), np.ravel(self.platform), [1.0]])
+        p = kernels.PARAMS.pack(base=self.base, platform=self.platform, home_sign=1.0)
         jac = evaluate(Kernel(kernels, p, 3, 3), "jacobian", self.home(), np.zeros(3))
         return float(np.linalg.det(jac))
 
     def kernel_params(self) -> Array:
-        """Base pivots, platform pivots, and the sign of the home pose's Jacobian determinant."""
+        """Base pivots, platform pivots, and the sign of the home pose's Jacobian determinant, by
+        the names of :data:`parakin.kernels.rpr3.PARAMS`."""
         sign = np.sign(self._home_det())
-        return np.concatenate([np.ravel(self.base), np.ravel(self.platform), [sign]])
+        return kernels.PARAMS.pack(base=self.base, platform=self.platform, home_sign=sign)
 
     def home(self) -> Array:
         """The platform centred over the base, not turned."""

@@ -415,7 +415,7 @@ class Stewart36(SixLegs):
 
     def kernel_params(self) -> Array:
         """The platform point of each leg in the moving frame (6 x 3), then the base points."""
-        return np.concatenate([self.top_points[LEG_TOP].ravel(), self.base_points.ravel()])
+        return kernels.PARAMS.pack(platform=self.top_points[LEG_TOP], base=self.base_points)
 
     def mirror(self, pose: ArrayLike) -> Array:
         """Reflection about the base plane: ``(alpha, -beta, -gamma, X, Y, -Z)`` (same leg lengths)."""

@@ -38,7 +38,6 @@ from numpy.typing import ArrayLike
 import parakin.dynamics.jet as dj
 from parakin.dynamics.jet import Jet
 from parakin.dynamics.model import Bodies, BodyGroup, Closure, MassModel, RigidBody, strut
-from parakin.errors import UnreachableError
 from parakin.geometry import rot_x, rot_y
 from parakin.kernels import evaluate
 from parakin.kernels import ups2 as kernels
@@ -375,27 +374,25 @@ class UPS2(Mechanism):
         both = self.fk_all_branches(joints)
         return np.concatenate([both[1], both[-1]], axis=-2), None
 
-    def assembly_label(self, pose: ArrayLike, joints: ArrayLike) -> str:
-        """The branch of eq (14) on which ``pose`` assembles ``joints``: +1 (rho > 0, the paper's)
-        or -1 (rho < 0, the mirror assembly, ``UPS2(branch=-1)``)."""
-        for branch in (1, -1):
-            mirror = self if branch == self.branch else dataclasses.replace(self, branch=branch)
-            try:
-                if float(mirror.joint_error(pose, joints)) < 1e-6:
-                    return (
-                        "branch +1 (rho > 0, the paper)"
-                        if branch > 0
-                        else "branch -1 (rho < 0, mirror)"
-                    )
-            except UnreachableError:
-                continue
-        return ""
+    def solution_labels(self, solutions: Array, joints: Array) -> list[list[str]]:
+        """The branch of eq (14) each solution of :meth:`real_solutions` belongs to: its first 8
+        rows are branch +1's (rho > 0, the paper's), the last 8 branch -1's (rho < 0, the mirror
+        assembly, ``UPS2(branch=-1)``); a pose may belong to both (at Y = 0 the two coincide)."""
+        names = {1: "branch +1 (rho > 0, the paper)", -1: "branch -1 (rho < 0, mirror)"}
+        return [
+            [
+                names[1 if j < 8 else -1] if np.all(np.isfinite(x)) else ""
+                for j, x in enumerate(rows)
+            ]
+            for rows in solutions
+        ]
 
     def kernel_params(self) -> Array:
         """``a, k, c, h, branch`` and the home lengths ``l_j(home)``."""
-        return np.concatenate(
-            [[self.a, self.k, self.c, self.h, float(self.branch)], self.home_lengths]
-        )
+        return kernels.PARAMS.pack(
+            a=self.a, k=self.k, c=self.c, h=self.h, branch=float(self.branch),
+            l_home=self.home_lengths,
+        )  # fmt: skip
 
     def fk(self, joints: ArrayLike) -> Array:
         """The working-branch FK solution: the real solution with |beta|, |gamma| < 90 deg closest

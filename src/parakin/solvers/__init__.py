@@ -196,7 +196,7 @@ def solve_fk(
             mech, method, joints, x0, tol, int(maxiter), options, joint_tol, start
         )
         if one is not None:
-            _wrap(one.x, mech.pose_units)  # the call's own work array: wrapped in place
+            _wrap(one.x, _units(mech))  # the call's own work array: wrapped in place
             if kernels.load_seconds() != loading:  # the first call: it loaded (or compiled)
                 one = dataclasses.replace(one, startup=kernels.load_seconds() - loading)
             return one.bind(mech)
@@ -223,8 +223,9 @@ def solve_fk(
         result = verify(mech, flat_q, result, jtol, int(maxiter))
         if bad.any():
             result = _mark_bad_rows(mech, result, bad, int(maxiter))
-    x = result.x.copy() if _wrap(result.x, mech.pose_units, dry=True) else result.x
-    _wrap(x, mech.pose_units)
+    units = _units(mech)
+    x = result.x.copy() if _wrap(result.x, units, dry=True) else result.x
+    _wrap(x, units)
     return dataclasses.replace(
         result.reshape(batch),
         x=x.reshape(*batch, x.shape[-1]),
@@ -232,6 +233,11 @@ def solve_fk(
         method=method,
         startup=kernels.load_seconds() - loading,
     ).bind(mech)  # FKResult.conditioning: computed when asked
+
+
+def _units(mech: Mechanism) -> tuple[str, ...]:
+    """The mechanism's pose units (none declared: nothing is an angle)."""
+    return getattr(mech, "pose_units", ())
 
 
 def _wrap(x: Array, units: tuple[str, ...], dry: bool = False) -> bool:
