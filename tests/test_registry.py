@@ -17,14 +17,30 @@ ROOT = Path(__file__).resolve().parents[1]
 ARTEFACTS = artefacts()
 
 
+#: each committed record (the config that makes it): the default run's, and the cluster census's
+RECORDS = {"figures": [], "figures/cluster": ["config/cluster.yaml"]}
+
+
 def test_every_committed_file_is_made_by_one_artefact():
+    from parakin.config import load_run_config
+
     committed = subprocess.run(
         ["git", "ls-files", "figures"], cwd=ROOT, capture_output=True, text=True
     ).stdout.split()
     assert committed, "no committed record"
-    declared = {p for a in ARTEFACTS.values() for p in a.output_paths("figures", "data/generated")}
-    assert sorted(set(committed) - declared - {"figures/REPORT.md", "figures/report.csv"}) == []
-    assert sorted(p for p in declared if not p.startswith("data/") and p not in committed) == []
+    for record, overlays in RECORDS.items():
+        config = load_run_config([ROOT / o for o in overlays])
+        assert config["record_dir"] == record
+        found = artefacts(config["studies"])
+        declared = {p for a in found.values() for p in a.output_paths(record, "data/generated")}
+        others = [r for r in RECORDS if r != record and r.startswith(record + "/")]
+        mine = {
+            p
+            for p in committed
+            if p.startswith(record + "/") and not any(p.startswith(o + "/") for o in others)
+        }
+        assert sorted(mine - declared - {f"{record}/REPORT.md", f"{record}/report.csv"}) == []
+        assert sorted(p for p in declared if not p.startswith("data/") and p not in mine) == []
 
 
 def test_outputs_are_declared_once_and_every_tolerance_has_a_reason():

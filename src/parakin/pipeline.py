@@ -69,7 +69,7 @@ def _study_problem(name: str) -> str:
     if not found:
         return "is not a module"
     try:
-        importlib.import_module(name)
+        registry.import_study(name)
     except ImportError as exc:
         return f"cannot be imported ({exc})"
     if not any(

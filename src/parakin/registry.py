@@ -20,6 +20,7 @@ from __future__ import annotations
 import ast
 import importlib
 import inspect
+import pkgutil
 import re
 import sys
 from collections.abc import Callable, Iterable, Sequence
@@ -41,6 +42,7 @@ __all__ = [
     "REGISTRY",
     "load",
     "of_module",
+    "import_study",
     "find",
     "which",
     "prune_config",
@@ -448,10 +450,22 @@ def figure(
     return drawn_figure(study, name, stem, draw, *more, **declaration)(make)
 
 
+def import_study(name: str):
+    """Import the study module ``name`` and, where it is a package, every module in it (in the
+    order of their names), so that all its ``@artefact`` declarations are registered."""
+    module = importlib.import_module(name)
+    for sub in pkgutil.walk_packages(getattr(module, "__path__", []), name + "."):
+        importlib.import_module(sub.name)
+    return module
+
+
 def load(studies: Iterable[str], *, complete: bool = True) -> dict[str, Artefact]:
     """Import the study modules (dotted names) and return the registry restricted to them, in order;
-    ``complete``: every artefact they need must be among them (what the pipeline requires)."""
-    modules = [importlib.import_module(m) for m in studies]
+    ``complete``: every artefact they need must be among them (what the pipeline requires). A
+    study that is a package (a paper: one module per section) has all its modules imported, in
+    the order of their names: its ``__init__`` imports none of them, so that a job that runs one
+    artefact imports only the module that declares it (and what that imports)."""
+    modules = [import_study(m) for m in studies]
     names = {m.__name__ for m in modules}
     picked = {
         k: a

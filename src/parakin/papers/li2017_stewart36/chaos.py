@@ -32,7 +32,6 @@ from parakin.papers.li2017_stewart36.common import (
     table_and_figure,
 )
 from parakin.papers.sections import table_text
-from parakin.plot import new_figure, save_figure, use_style
 from parakin.progress import Progress
 from parakin.registry import Tolerance
 from parakin.solvers import solve_fk
@@ -142,6 +141,8 @@ def table1(config: dict, outdir: Path) -> list[Path]:
 def draw_fig02(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 2 drawn from ``fig02_chaotic_weights.csv`` alone (columns ``w_mu<mu>`` of the sequences,
     ``mu`` and ``mu_printed`` the two values of mu)."""
+    from parakin.plot import new_figure, save_figure
+
     mu, mu_printed = (float(frame[c].iloc[0]) for c in ("mu", "mu_printed"))
     fig, ax = new_figure((6.4, 2.8))
     ax.plot(
@@ -237,6 +238,8 @@ def draw_fig03(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 3 drawn from ``fig03_convergence.csv`` alone: its rows with an ``iteration`` give the
     median and 10-90 % band per iteration, its rows with a ``run`` the LM-polished fitness of
     each run (right panel)."""
+    from parakin.plot import new_figure, save_figure, use_style
+
     conv = frame[frame["iteration"].notna()]
     pol = frame[frame["run"].notna()]
     fig, _ = new_figure((7.0, 4.0))

@@ -31,15 +31,6 @@ from parakin.papers.li2017_stewart36.common import (
     table3,
 )
 from parakin.papers.sections import table_claims, table_text
-from parakin.plot import (
-    draw_mechanism,
-    mechanism_axes,
-    new_figure,
-    save_figure,
-    skeleton_from_table,
-    skeleton_table,
-    use_style,
-)
 from parakin.registry import ROUNDING, table_files
 from parakin.solvers import solve_fk
 
@@ -140,6 +131,8 @@ def table3_mismatch(config: dict, bs: np.ndarray) -> dict[str, np.ndarray]:
 def draw_table3_consistency(frame: pd.DataFrame, path: Path) -> Path:
     """extra_table3_consistency from its CSV: per b the largest leg mismatch of each of rows 2-19
     with row 1's leg lengths (thin), their largest and smallest (bold)."""
+    from parakin.plot import new_figure, save_figure
+
     cols = [c for c in frame.columns if c.startswith("mismatch_row")]
     b = frame["b"].to_numpy()
     fig, ax = new_figure((6.4, 3.4))
@@ -345,6 +338,8 @@ def solutions_artefact(config: dict, outdir: Path) -> list[Path]:
 def draw_solution_counts(frame: pd.DataFrame, path: Path) -> Path:
     """Histogram of real-solution counts per b, drawn from ``extra_solution_counts.csv`` alone
     (columns ``b``, ``real_0`` .. ``real_16`` and ``paper_solutions``)."""
+    from parakin.plot import new_figure, save_figure
+
     fig, ax = new_figure((6.4, 2.8))
     width = 0.8 / len(frame)
     ks = np.arange(0, 17, 2)
@@ -464,6 +459,14 @@ def draw_fig01(frame: pd.DataFrame, path: Path) -> Path:
 def draw_solutions(frame: pd.DataFrame, path: Path) -> Path:
     """Every above-base solution side by side, drawn from ``extra_solutions_skeletons.csv`` alone
     (one skeleton table per ``solution``, with its pose in the paper's units for the title)."""
+    from parakin.plot import (
+        draw_mechanism,
+        mechanism_axes,
+        new_figure,
+        save_figure,
+        skeleton_from_table,
+    )
+
     groups = list(frame.groupby("solution", sort=False))
     k = len(groups)
     fig, _ = new_figure((3.0 * k, 3.2))
@@ -499,6 +502,8 @@ def draw_solutions(frame: pd.DataFrame, path: Path) -> Path:
 def fig01(config: dict, outdir: Path) -> list[Path]:
     """Fig. 1 redrawn from our model at Table 3 row 1, plus every above-base solution of the
     reconstructed input (Fig. 4's role: the model the paper simulated)."""
+    from parakin.plot import skeleton_table
+
     m = mech(config)
     q = fk_input(config)
     sols = m.fk_all(q)
@@ -524,6 +529,8 @@ def fig01(config: dict, outdir: Path) -> list[Path]:
 
 def draw_cm_velocity(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 5 (surrogate) drawn from ``fig05_cm_velocity.csv`` alone."""
+    from parakin.plot import new_figure, save_figure
+
     fig, ax = new_figure((6.4, 3.0))
     for c in ("VX", "VY", "VZ"):
         ax.plot(frame["t_s"], frame[c], lw=1.0, label=c)
@@ -541,6 +548,8 @@ def draw_cm_velocity(frame: pd.DataFrame, path: Path) -> Path:
 def _draw_ranges(frame: pd.DataFrame, path: Path, cols: tuple[str, ...], unit: str, title: str):
     """Three coordinates over time, each over the band of the range the paper states (the columns
     ``<c>_stated_min``, ``<c>_stated_max`` of ``frame``)."""
+    from parakin.plot import new_figure, save_figure, use_style
+
     fig, _ = new_figure((6.4, 4.6))
     fig.clear()
     with use_style():

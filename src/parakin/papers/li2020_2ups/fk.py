@@ -30,7 +30,6 @@ from parakin.papers.li2020_2ups.common import (
     to_paper,
 )
 from parakin.papers.sections import table_text
-from parakin.plot import new_figure, save_figure
 from parakin.progress import Progress
 from parakin.registry import ROUNDING, Tolerance
 from parakin.solvers import solve_fk
@@ -308,6 +307,8 @@ FIG2_TITLES = {"as_printed": "Table 1 as printed (w = 0.9)", "improved": "improv
 def draw_fig02(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 2 drawn from ``fig02_fitness.csv`` alone (the dashed line: its ``threshold_mm``)."""
     from matplotlib.ticker import MaxNLocator
+
+    from parakin.plot import new_figure, save_figure
 
     fig, _ = new_figure((6.8, 2.8))
     fig.clear()

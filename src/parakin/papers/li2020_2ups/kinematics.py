@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from matplotlib.ticker import MaxNLocator
 
 from parakin.claims import Claim, printed_value
 from parakin.config import rng
@@ -17,12 +16,6 @@ from parakin.papers.drawing import draw_skeleton_table
 from parakin.papers.li2020_2ups.common import KEY, mech, table, table_and_figure
 from parakin.papers.li2020_2ups.symbolic import derivation, loop_closure_model
 from parakin.papers.sections import table_text
-from parakin.plot import (
-    new_figure,
-    save_figure,
-    skeleton_table,
-    use_style,
-)
 from parakin.registry import DESCRIPTIVE, EXACT, ROUNDING
 
 #: pose drawn in Fig. 1 (deg, deg, mm): tilted so that both rotations are visible
@@ -44,6 +37,8 @@ def draw_fig01(frame: pd.DataFrame, path: Path) -> Path:
 @table_and_figure("fig01", "fig01_mechanism", draw_fig01, config=[KEY], tolerance=DESCRIPTIVE)
 def fig01(config: dict) -> pd.DataFrame:
     """Fig. 1 redrawn from our model at FIG1_POSE, with the plotted coordinates as CSV."""
+    from parakin.plot import skeleton_table
+
     m = mech(config)
     pose = np.array([np.deg2rad(FIG1_POSE[0]), np.deg2rad(FIG1_POSE[1]), FIG1_POSE[2] * 1e-3])
     return skeleton_table(m.skeleton(pose), frame_length=FIG1_FRAME_LENGTH)
@@ -149,6 +144,10 @@ def _grid(frame: pd.DataFrame, axes: tuple[str, ...], *values: str) -> list[np.n
 
 def draw_parasitic(frame: pd.DataFrame, path: Path) -> Path:
     """X and dZ over the (beta, Y) box, drawn from ``extra_parasitic.csv`` alone."""
+    from matplotlib.ticker import MaxNLocator
+
+    from parakin.plot import new_figure, save_figure
+
     bb, yy, x_mm, dz_mm = _grid(frame, ("beta_deg", "Y_mm"), "X_mm", "dZ_mm")
     a, b, c = (float(frame[k].iloc[0]) for k in ("a_mm", "b_mm", "c_mm"))
     fig, axes = new_figure((6.6, 2.8))
@@ -200,6 +199,8 @@ def parasitic(config: dict) -> pd.DataFrame:
 
 def draw_fk_solutions(frame: pd.DataFrame, path: Path) -> Path:
     """Real FK solutions over (beta, gamma) at three Y, drawn from ``extra_fk_solutions.csv`` alone."""
+    from parakin.plot import new_figure, save_figure
+
     bb, gg, yy, count = _grid(frame, ("beta_deg", "gamma_deg", "Y_mm"), "n_real")
     fig, _ = new_figure((7.2, 2.6))
     fig.clear()
@@ -250,6 +251,8 @@ def solution_count(config: dict) -> pd.DataFrame:
 def draw_singularity_workspace(frame: pd.DataFrame, path: Path) -> Path:
     """det J over (beta, gamma) at three Y, hatched where eq. (19) fails, drawn from
     ``extra_singularity_workspace.csv`` alone."""
+    from parakin.plot import new_figure, save_figure, use_style
+
     bb, gg, yy, det, inside = _grid(
         frame, ("beta_deg", "gamma_deg", "Y_mm"), "det_J_m2", "within_eq19"
     )

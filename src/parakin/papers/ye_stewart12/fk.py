@@ -23,7 +23,6 @@ from parakin.papers.ye_stewart12.common import (
     table_and_figure,
     test_pose,
 )
-from parakin.plot import skeleton_table
 from parakin.registry import DESCRIPTIVE, EXACT, TIMING
 
 EQS = ("f (21)", "g (22)", "v (23)", "u (24)", "w (25)", "h (26)")
@@ -128,6 +127,8 @@ def _skeleton_frame(
     config: dict, pose: np.ndarray, passive: tuple[int, ...], **extra
 ) -> pd.DataFrame:
     """The drawing's points and segments (:func:`skeleton_table`), plus constant columns ``extra``."""
+    from parakin.plot import skeleton_table
+
     sk = mech(config).skeleton(pose, passive=passive)
     return skeleton_table(sk, frame_length=FRAME_LENGTH).assign(**extra)
 

@@ -42,7 +42,6 @@ from parakin.papers.ye_stewart12.common import (
     table,
     table_and_figure,
 )
-from parakin.plot import new_figure, save_figure, use_style
 from parakin.registry import DESCRIPTIVE, ITERATIVE, table_files
 from parakin.solvers import solve_fk
 
@@ -147,6 +146,8 @@ def _draw_steps(frame: pd.DataFrame, path: Path, tol: float) -> Path:
     """Steps vs d (rows up to d_max), one panel per method (N-R, the paper's inverse Broyden, the
     direct Broyden beyond the paper), one line per mode; the suptitle is the CSV's constant column
     ``passive_caption``."""
+    from parakin.plot import new_figure, save_figure
+
     sub = frame
     keys = _methods_in(sub)
     fig, axes = new_figure((3.5 * len(keys), 3.0))
@@ -237,6 +238,8 @@ def draw_fig12(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 12 from its CSV: log10 d_max over the (n, L) grid, one panel per mode and method (rows:
     N-R, the paper's inverse Broyden, the direct Broyden beyond the paper); the grid is the CSV's
     n_mm and L_mm values, the suptitle its constant column ``passive_caption``."""
+    from parakin.plot import new_figure, save_figure
+
     df = frame
     ns, ls = np.unique(df["n_mm"].to_numpy()), np.unique(df["L_mm"].to_numpy())
     keys = _methods_in(df)
@@ -436,6 +439,8 @@ def draw_basin(frame: pd.DataFrame, path: Path) -> Path:
     the suptitle from the CSV's constant columns ``trials`` and ``passive_caption``."""
     import textwrap
 
+    from parakin.plot import new_figure, save_figure, use_style
+
     df = frame
     keys = _methods_in(df)
     fig, _ = new_figure((3.5 * len(keys), 3.4))
@@ -515,6 +520,8 @@ def draw_fig09(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 9 from its CSV: the active (A) / passive (P) grid of legs per mode; the passive sets
     (and whether they are the nested ones) are read from the CSV's ``active`` column."""
     from matplotlib.colors import ListedColormap
+
+    from parakin.plot import new_figure, save_figure
 
     df = frame
     modes = range(5, -1, -1)

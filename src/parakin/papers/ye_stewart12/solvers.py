@@ -33,7 +33,6 @@ from parakin.papers.ye_stewart12.common import (
     table,
     time_solve,
 )
-from parakin.plot import new_figure, save_figure
 from parakin.registry import ITERATIVE
 
 #: N-R and Broyden converge to 1e-6 / 1e-9 mm: step counts may move by one where a step lands at
@@ -148,6 +147,8 @@ def table5(config: dict, outdir: Path) -> list[Path]:
 def draw_fig08(frame: pd.DataFrame, path: Path) -> Path:
     """Fig. 8 from its CSV: composite length per iteration (N-R, Broyden), the exact one, and the
     deviation ``deviation_pct`` (a constant column) in the title."""
+    from parakin.plot import new_figure, save_figure
+
     df = frame
     exact = float(df["exact_mm"].iloc[0])
     n = len(df)

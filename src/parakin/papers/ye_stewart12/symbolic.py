@@ -12,9 +12,9 @@ from __future__ import annotations
 
 from functools import lru_cache
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pandas as pd
-import sympy as sp
 
 from parakin.claims import Claim, printed_value
 from parakin.io import write_table
@@ -22,9 +22,14 @@ from parakin.papers.sections import table_text
 from parakin.papers.ye_stewart12.common import KEY, artefact
 from parakin.registry import EXACT
 
+if TYPE_CHECKING:  # sympy is imported where it is used: the table's job alone needs it
+    import sympy as sp
+
 
 @lru_cache(maxsize=1)
 def equations() -> dict[str, object]:
+    import sympy as sp
+
     n, L = sp.symbols("n L", positive=True)
     a = n + L
     m = sp.Matrix(sp.symbols("x0 y0 z0"))
@@ -64,6 +69,8 @@ def equations() -> dict[str, object]:
 
 
 def _terms(expr: sp.Expr, weights: dict) -> list[tuple[int, sp.Expr]]:
+    import sympy as sp
+
     out = []
     for term in sp.Add.make_args(expr):
         powers = term.as_powers_dict()

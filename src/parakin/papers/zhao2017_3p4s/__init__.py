@@ -8,14 +8,30 @@ paper; each has ``ARTEFACTS``, ``claims(figdir, ref)`` and ``summary(figdir, ref
 
 from __future__ import annotations
 
-from parakin.papers.sections import combine
-from parakin.papers.zhao2017_3p4s import dynamics, fk, kinematics, optimization
+import importlib
+
 from parakin.papers.zhao2017_3p4s.common import KEY, TITLE
 
 #: the sections of the reproduction, in the paper's order
-SECTIONS = [kinematics, fk, dynamics, optimization]
-
-#: artefact name -> function(config, outdir) writing that artefact's files; claims(); summary()
-ARTEFACTS, claims, summary = combine(SECTIONS)
+SECTION_NAMES = (
+    "kinematics",
+    "fk",
+    "dynamics",
+    "optimization",
+)
 
 __all__ = ["KEY", "TITLE", "ARTEFACTS", "SECTIONS", "claims", "summary"]
+
+
+def __getattr__(name: str):
+    """``SECTIONS`` (the section modules), ``ARTEFACTS`` (artefact name -> function(config,
+    outdir)), ``claims`` and ``summary``, on first use: a pipeline job imports the one section
+    its artefact lives in, not the others (and not what they import)."""
+    if name not in ("SECTIONS", "ARTEFACTS", "claims", "summary"):
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    from parakin.papers.sections import combine
+
+    sections = [importlib.import_module(f"{__name__}.{s}") for s in SECTION_NAMES]
+    artefacts, claims, summary = combine(sections)
+    globals().update(SECTIONS=sections, ARTEFACTS=artefacts, claims=claims, summary=summary)
+    return globals()[name]

@@ -8,7 +8,6 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import least_squares, minimize
 
 from parakin.claims import Claim, load_reference, printed_value
 from parakin.io import write_and_draw, write_table
@@ -103,6 +102,8 @@ def fit_geometry(
     ``L`` and ``phi`` enter the IK, so the fitted mechanism keeps the stated ``r_a`` and ``d`` and
     carries ``delta`` in ``r_b``.
     """
+    from scipy.optimize import least_squares
+
     lo = np.array([delta_range[0], np.deg2rad(phi_range_deg[0])])
     hi = np.array([delta_range[1], np.deg2rad(phi_range_deg[1])])
     deltas = np.linspace(lo[0], hi[0], grid)
@@ -128,6 +129,7 @@ def minimax_geometry(poses: np.ndarray, printed: np.ndarray, start: P3P4S) -> P3
     For data rounded to 0.01 m the natural consistency test is max error <= 0.005 m; the
     least-squares fit need not satisfy it even where a consistent geometry exists.
     """
+    from scipy.optimize import minimize
 
     def worst(v: np.ndarray) -> float:
         return float(
