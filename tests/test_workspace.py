@@ -239,7 +239,10 @@ def test_interval_functions_enclose_every_sample(name):
         "sin": (lambda: _NAMES["sin"](a), lambda x, y: np.sin(x)),
         "cos": (lambda: _NAMES["cos"](a), lambda x, y: np.cos(x)),
         "atan2": (lambda: _NAMES["atan2"](a, b), lambda x, y: np.arctan2(x, y)),
-        "where": (lambda: _NAMES["where"](a > 0.5, a * b, b), lambda x, y: np.where(x > 0.5, x * y, y)),
+        "where": (
+            lambda: _NAMES["where"](a > 0.5, a * b, b),
+            lambda x, y: np.where(x > 0.5, x * y, y),
+        ),
         "maximum": (lambda: _NAMES["maximum"](a, b), np.maximum),
         "mul": (lambda: a * b - a * a, lambda x, y: x * y - x * x),
         "div": (lambda: a / (b * b + 1.0), lambda x, y: x / (y * y + 1)),
@@ -261,7 +264,9 @@ def test_interval_boxes_agree_with_points():
     inside, outside = classify_boxes(region, lo, hi)
     assert inside.any() and outside.any()
     pts = lo[:, None] + g.uniform(0, 1, (300, 40, 3)) * (hi - lo)[:, None]
-    member = W.classify(region, pts.reshape(-1, 3), cond=False, compiled=False).member.reshape(300, 40)
+    member = W.classify(region, pts.reshape(-1, 3), cond=False, compiled=False).member.reshape(
+        300, 40
+    )
     assert np.all(member[inside]) and not np.any(member[outside])
 
 
@@ -311,7 +316,18 @@ def test_sample_reachable_still_importable_and_seeded():
 
 
 # ---------------------------------------------------------------------------------------- CLI
-SMALL = ["--samples", "3000", "--levels", "2", "--grid", "11", "--rays", "16", "--orientations", "1"]
+SMALL = [
+    "--samples",
+    "3000",
+    "--levels",
+    "2",
+    "--grid",
+    "11",
+    "--rays",
+    "16",
+    "--orientations",
+    "1",
+]
 
 
 def _run(capsys, *argv):
@@ -368,9 +384,19 @@ def test_study_atlas_and_table_at_small_sizes(tmp_path):
 
     config = {
         "seed": 1,
-        "workspace": dict(samples=3000, orientations=1, orientation_fraction=0.25, stroke=0.25,
-                          cond_max=100.0, levels=2, grid=11, rays=16, fit_grid=9,
-                          delta_samples=2000, delta_levels=2),  # fmt: skip
+        "workspace": dict(
+            samples=3000,
+            orientations=1,
+            orientation_fraction=0.25,
+            stroke=0.25,
+            cond_max=100.0,
+            levels=2,
+            grid=11,
+            rays=16,
+            fit_grid=9,
+            delta_samples=2000,
+            delta_levels=2,
+        ),  # fmt: skip
     }
     df = S.atlas_data(config, "rpr3")
     assert set(df.part) >= {"meta", "volume", "cell", "ray"}
