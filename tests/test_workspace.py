@@ -16,7 +16,7 @@ import pytest
 from parakin import workspace as W
 from parakin.mechanisms import REGISTRY
 from parakin.mechanisms.described import from_dict
-from parakin.workspace.interval import Interval, _NAMES, _Context, Node, classify_boxes
+from parakin.workspace.interval import _NAMES, Interval, Node, _Context, classify_boxes
 
 ROOT = Path(__file__).resolve().parents[1]
 

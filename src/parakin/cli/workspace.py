@@ -175,9 +175,8 @@ def region_of(args, mech):
 
 
 def cmd_workspace(args) -> int:
-    from parakin.workspace import atlas as A
-
     from parakin import kernels
+    from parakin.workspace import atlas as A
     from parakin.workspace.compiled import MIN_ROWS
 
     if args.samples < MIN_ROWS:  # too little work to pay for loading (or compiling) the loops
