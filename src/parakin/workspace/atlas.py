@@ -322,10 +322,11 @@ def _slice_panel(ax, df: pd.DataFrame, meta: dict, k: int) -> None:
         w = 3 - u - v
         at = meta["at"][w]
         ax.set_title(
-            f"slice {meta['axes'][w]} = {at:.4g}{_unit_suffix(meta['units'][w])}", fontsize=8
+            f"({'ab'[k]}) slice {meta['axes'][w]} = {at:.4g}{_unit_suffix(meta['units'][w])}",
+            fontsize=8,
         )
     else:
-        ax.set_title("the workspace plane", fontsize=8)
+        ax.set_title("(a) the workspace plane", fontsize=8)
     ax.legend(handles=handles, fontsize=5.5, loc="best", framealpha=0.8, frameon=True)
 
 
@@ -344,7 +345,7 @@ def _cond_panel(ax, fig, df: pd.DataFrame, meta: dict) -> None:
                    colors="w", linewidths=0.8)  # fmt: skip
     ax.set_xlabel(_label(meta["axes"][0], meta["units"][0]))
     ax.set_ylabel(_label(meta["axes"][1], meta["units"][1]))
-    ax.set_title(f"condition number (white: cond = {meta['cond_max']:g})", fontsize=8)
+    ax.set_title(f"(b) condition number (white: cond = {meta['cond_max']:g})", fontsize=8)
 
 
 def _reason_colour(reason: str) -> str:
@@ -389,7 +390,11 @@ def _boundary_panel(ax, df: pd.DataFrame, meta: dict) -> None:
         ax.set_ylabel(_label(names[1], units[1]), fontsize=6, labelpad=-2)
         ax.set_zlabel(_label(names[2], units[2]), fontsize=6, labelpad=-2)
         ax.tick_params(labelsize=5, pad=-1)
-        ax.set_title("boundary surface (rays), singular points", fontsize=8)
+        from matplotlib.ticker import MaxNLocator
+
+        for axis in (ax.xaxis, ax.yaxis, ax.zaxis):  # 3-D tick labels crowd: three per axis
+            axis.set_major_locator(MaxNLocator(3))
+        ax.set_title("(c) boundary surface (rays), singular points", fontsize=8)
     else:
         for reason in dict.fromkeys(rays["label"]):
             r = rays[rays.label == reason]
@@ -397,7 +402,7 @@ def _boundary_panel(ax, df: pd.DataFrame, meta: dict) -> None:
         ax.set_xlabel(_label(names[0], units[0]))
         ax.set_ylabel(_label(names[1], units[1]))
         ax.set_aspect("equal", adjustable="datalim")
-        ax.set_title("boundary along rays, by active constraint", fontsize=8)
+        ax.set_title("(c) boundary along rays, by active constraint", fontsize=8)
     seen = dict.fromkeys(_reason_name(s) for s in rays["label"])
     colour_of = {_reason_name(s): _reason_colour(s) for s in rays["label"]}
     ax.legend(
@@ -434,8 +439,11 @@ def _volume_panel(ax, df: pd.DataFrame, meta: dict) -> None:
         ax.plot([-0.25], [vol.loc["rays", "value"]], "d", color="#009E73", ms=4,
                 label="rays (star-shaped estimate)")  # fmt: skip
     ax.set_xticks(x, [names[k] for k in kinds], fontsize=6)
+    top = max(float(np.max(vol.loc[kinds, "value"] + 1.96 * vol.loc[kinds, "se"])),
+              float(vol["value"].max()))  # fmt: skip
+    ax.set_ylim(0, 1.45 * top)  # room for the legend above the bars
     ax.set_ylabel("volume" + ("" if meta["unit"] == "1" else f" ({meta['unit']})"))
-    ax.set_title("volumes", fontsize=8)
+    ax.set_title("(d) volumes", fontsize=8)
     ax.legend(fontsize=5.5, loc="upper right")
 
 
@@ -468,11 +476,6 @@ def _draw(df: pd.DataFrame):
     _boundary_panel(c, df, meta)
     d = fig.add_subplot(2, 2, 4)
     _volume_panel(d, df, meta)
-    for ax, letter in zip((a, b, c, d), "abcd"):
-        if dim == 3 and ax is c:
-            ax.text2D(-0.12, 1.08, f"({letter})", transform=ax.transAxes, fontweight="bold")
-        else:
-            ax.text(-0.12, 1.04, f"({letter})", transform=ax.transAxes, fontweight="bold")
     given = ", ".join(
         f"{k} = {v:.4g}{_unit_suffix(meta['given_units'][k])}" for k, v in meta["given"].items()
     )
