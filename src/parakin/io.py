@@ -170,13 +170,17 @@ def read_bytes(
         raise error(f"{where} does not exist") from None
     except OSError as exc:
         raise error(f"{where} cannot be read ({exc.strerror or type(exc).__name__})") from None
-    with os.fdopen(fd, "rb") as fh:
+    try:
         st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode):
+        if not stat.S_ISREG(st.st_mode):  # checked on what is open: no race with a rename
             kind = "a directory" if stat.S_ISDIR(st.st_mode) else "a device, FIFO or socket"
             raise error(f"{where} is not a regular file ({kind})")
         if st.st_size > limit:
             raise error(f"{where} is {st.st_size} bytes, more than the limit {limit}")
+    except BaseException:
+        os.close(fd)
+        raise
+    with os.fdopen(fd, "rb") as fh:
         data = fh.read(limit + 1)
     if len(data) > limit:  # grew while being read
         raise error(f"{where} is more than {limit} bytes, the limit")

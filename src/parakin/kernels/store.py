@@ -21,11 +21,23 @@ the old files or none (numba then compiles), never a half-removed directory. Whe
 taken (a platform without ``fcntl``), the cache works as it would for one process.
 
 The directory is ``$PARAKIN_KERNEL_CACHE``, else the per-user cache of ``platformdirs``
-(``~/.cache/parakin/kernels`` on Linux). Where it cannot be written, the per-user cache, then a
-temporary directory, then none (the numpy path: :func:`root` returns ``None``), each step with a
-one-line notice on the ``parakin.kernels`` logger. Numba's own cache directory
-(``NUMBA_CACHE_DIR``) is pointed at ``<root>/numba`` when this module is imported, before any
-parakin module decorates a function, so no cache lands beside the sources.
+(``~/.cache/parakin/kernels`` on Linux); never a name in a shared temporary directory. Numba
+unpickles the files of its cache, so loading one runs whatever its writer put there: a directory
+is used only where no other user can have written into it (:func:`_unsafe`): made with mode 0700,
+then checked with ``lstat`` on an open descriptor: a directory, not a symbolic link, owned by this
+user, not writable by anyone else (group or other read bits are taken away, 0700), and every
+directory above it owned by this user or root and not writable by others (unless sticky, as
+``/tmp``). A directory that fails is not used: the next candidate, then none (the numpy path:
+:func:`root` returns ``None``), each step with one line on the ``parakin.kernels`` logger.
+
+What is loaded is what it claims (:func:`first_call`): every cached function of a build records
+the build (kernel module and source hash), its group and its own name in its index key and in its
+data file, beside the signature numba keys it by; a file of another kernel, group or function
+(copied or renamed into place) is refused before any of its code runs. Then a known-answer check
+(:func:`_known_answer`) runs each entry once per process on a probe whose answer the kernel's own
+source gives on Python floats. Either failure rebuilds the build, with one line. Numba's own cache
+directory (``NUMBA_CACHE_DIR``) is pointed at ``<root>/numba`` when this module is imported,
+before any parakin module decorates a function, so no cache lands beside the sources.
 """
 
 from __future__ import annotations
@@ -34,8 +46,8 @@ import hashlib
 import logging
 import os
 import shutil
+import stat
 import sys
-import tempfile
 import threading
 import uuid
 from collections.abc import Callable, Iterator
@@ -56,6 +68,9 @@ log = logging.getLogger("parakin.kernels")
 
 #: what a kernel's directory name ends in: ``-`` and this many hex digits of its hash
 HASH_DIGITS = 16
+#: the layout of a build's files, part of its hash: 2 = every cached function tagged with its
+#: build, group and name (:class:`_TaggedCache`); builds of format 1 are never loaded
+FORMAT = 2
 _LOCK = threading.RLock()
 #: the directory of ``<root>`` that holds the lock files
 LOCKS = ".locks"
@@ -70,14 +85,101 @@ def _notice(message: str) -> None:
 
 
 def _writable(path: Path) -> str | None:
-    """None where ``path`` is (or can be made) a directory we may write, else why not."""
+    """None where a file can be made in directory ``path`` (made exclusively, never through a
+    planted name, and removed at once), else why not."""
+    probe = path / f".probe-{uuid.uuid4().hex[:12]}"
     try:
-        path.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=path):
-            pass
+        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _NOFOLLOW, 0o600))
+        probe.unlink()
     except OSError as exc:
         return exc.strerror or type(exc).__name__
     return None
+
+
+#: ``open`` flag that refuses a symbolic link as the last component (0 where the OS has none)
+_NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
+
+
+def _owner(uid: int) -> str:
+    """``uid 65534 (nobody)``: a uid with its user name where there is one."""
+    try:
+        import pwd
+
+        return f"uid {uid} ({pwd.getpwuid(uid).pw_name})"
+    except (ImportError, KeyError):
+        return f"uid {uid}"
+
+
+def _unsafe_ancestor(path: Path, me: int) -> str | None:
+    """Why a directory above ``path`` lets another user replace what is below it, or None.
+
+    Every directory on the way, as written and as resolved (a symbolic link on the way is judged
+    by where it leads, and the directory holding it by itself), must be owned by this user or
+    root and not writable by group or others, unless sticky (``/tmp``: there nobody renames or
+    removes another user's entry)."""
+    seen = set()
+    for chain in (path.parent, Path(os.path.realpath(path.parent))):
+        for ancestor in [chain, *chain.parents]:
+            if ancestor in seen:
+                continue
+            seen.add(ancestor)
+            try:
+                st = os.stat(ancestor)
+            except OSError as exc:
+                return f"{ancestor} cannot be examined ({exc.strerror or type(exc).__name__})"
+            if st.st_uid not in (me, 0):
+                return f"{ancestor} above it is owned by {_owner(st.st_uid)}"
+            if st.st_mode & 0o022 and not st.st_mode & stat.S_ISVTX:
+                return (
+                    f"{ancestor} above it is writable by other users "
+                    f"(mode {stat.S_IMODE(st.st_mode):04o}, not sticky)"
+                )
+    return None
+
+
+def _unsafe(path: Path) -> str | None:
+    """None where ``path`` is (or is now made) a cache directory no other user can have written
+    into, else why it is not used (one clause).
+
+    Made with mode 0700 where it does not exist, then opened without following a symbolic link
+    and examined through that descriptor (``fstat``: what was checked is what is open, whatever is
+    renamed meanwhile): a directory owned by this user, writable by nobody else. Group and other
+    read or search bits of a directory of ours are removed (0700: they let nobody write, but the
+    cache is nobody else's business). Where the OS has no user ids (Windows), only writability."""
+    path = Path(os.path.abspath(path))
+    me = os.geteuid() if hasattr(os, "geteuid") else None
+    try:
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+        except FileExistsError:  # a file on the way
+            return f"{next(p for p in path.parents if p.exists())} is not a directory"
+        try:
+            os.mkdir(path, 0o700)
+        except FileExistsError:
+            pass
+        if os.path.islink(path):  # lstat: a planted link is never followed
+            return f"it is a symbolic link (to {os.readlink(path)})"
+        if me is None:
+            return _writable(path)
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0) | _NOFOLLOW)
+    except OSError as exc:
+        return exc.strerror or type(exc).__name__
+    try:
+        st = os.fstat(fd)
+        mode = stat.S_IMODE(st.st_mode)
+        if not stat.S_ISDIR(st.st_mode):
+            return "it is not a directory"
+        if st.st_uid != me:
+            return f"it is owned by {_owner(st.st_uid)}, not by this user ({_owner(me)})"
+        if mode & 0o022:
+            return f"it is writable by other users (mode {mode:04o}; it must be 0700)"
+        if mode & 0o077:
+            os.fchmod(fd, 0o700)
+    except OSError as exc:
+        return exc.strerror or type(exc).__name__
+    finally:
+        os.close(fd)
+    return _unsafe_ancestor(path, me) or _writable(path)
 
 
 def _user_dir() -> Path:
@@ -90,27 +192,28 @@ def _user_dir() -> Path:
 
 
 def _candidates() -> list[tuple[str, Path]]:
-    """``(label, path)`` in the order tried."""
+    """``(label, path)`` in the order tried: never a shared temporary directory (any user can
+    make such a name first)."""
     out = []
     env = os.environ.get("PARAKIN_KERNEL_CACHE")
     if env:
         out.append(("$PARAKIN_KERNEL_CACHE", Path(env)))
     out.append(("the per-user cache", _user_dir()))
-    user = f"{os.getuid()}" if hasattr(os, "getuid") else "user"
-    out.append(("a temporary directory", Path(tempfile.gettempdir()) / f"parakin-kernels-{user}"))
     return out
 
 
 @cache
 def root() -> Path | None:
-    """The cache directory (created), or ``None`` where no candidate can be written (then the
-    compiled path is off). Resolved once per process."""
-    for i, (label, path) in enumerate(_candidates()):
-        why = _writable(path)
+    """The cache directory (created, checked by :func:`_unsafe`), or ``None`` where no candidate
+    can be used (then the compiled path is off: no code is loaded from disk). Resolved once per
+    process; each candidate refused is one line on the ``parakin.kernels`` logger."""
+    candidates = _candidates()
+    for i, (label, path) in enumerate(candidates):
+        why = _unsafe(path)
         if why is None:
-            return path
-        nxt = _candidates()[i + 1][0] if i + 1 < len(_candidates()) else "the numpy path"
-        _notice(f"kernel cache {path} ({label}) is not writable ({why}); using {nxt}")
+            return Path(os.path.abspath(path))
+        nxt = candidates[i + 1][0] if i + 1 < len(candidates) else "no disk cache (numpy path)"
+        _notice(f"kernel cache {path} ({label}) is not used: {why}; using {nxt}")
     return None
 
 
@@ -141,7 +244,7 @@ def digest(*modules: ModuleType) -> str:
     """Hash of the sources of ``modules`` and of the numba and Python versions (hex, truncated)."""
     import numba
 
-    h = hashlib.sha256()
+    h = hashlib.sha256(f"format {FORMAT}\0".encode())
     for mod in modules:
         h.update(mod.__name__.encode() + b"\0" + _source(mod) + b"\0")
     h.update(f"numba {numba.__version__} python {sys.version}".encode())
@@ -167,8 +270,8 @@ def _lock_fd(path: Path) -> int | None:
     if fcntl is None:
         return None
     try:
-        path.parent.mkdir(exist_ok=True)
-        return os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+        path.parent.mkdir(mode=0o700, exist_ok=True)
+        return os.open(path, os.O_RDWR | os.O_CREAT | _NOFOLLOW, 0o600)
     except OSError:
         return None
 
@@ -274,32 +377,237 @@ def numba_cache(path: Path) -> Iterator[None]:
             numba.config.CACHE_DIR = old
 
 
-def first_call(fn: Callable[..., Any], where: Path, *args: Any) -> Any:
-    """``fn(*args)`` for the first time (numba loads it from its cache in build ``where`` or
-    compiles it). Where that fails and another process rebuilt ``where`` meanwhile (a new
-    directory), it is tried again; where ``where`` is unchanged and holds cached files, a cache
-    entry could not be read (truncated, garbage, written by another build): ``where`` is made
-    again (:func:`_discard`: a fresh directory of the same name), under the kernel's lock, and the
-    call made once more, with a one-line notice. A failure with an empty build (a genuine compile
-    error) is raised."""
-    before = _inode(where)
+class CacheMismatch(Exception):
+    """A cached function's file is not the one asked for: another kernel's, group's or
+    function's (copied or renamed into place), or one written without the tags."""
+
+
+#: every mismatch met in this process (numba may report the failed load of a callee, met while
+#: compiling its caller, as an error of its own: :func:`first_call` reads the reason here)
+_MISMATCHES: list[str] = []
+
+
+def _what(key: Any) -> str:
+    """The function an index key or data tag names: ``function F of group G of build B``."""
+    tag = key[1] if isinstance(key, tuple) and len(key) == 2 else None
+    if isinstance(tag, tuple) and len(tag) == 3:
+        return f"{tag[2]} ({tag[1]}, build {tag[0]})"
+    return "an entry without tags"
+
+
+@cache
+def _tagged_cache() -> type:
+    """numba's ``FunctionCache`` that tags what it writes and refuses what is not tagged as its
+    own (``_parakin_tag``: build, group, function; set by :func:`_guard`)."""
+    from numba.core.caching import FunctionCache
+
+    class TaggedCache(FunctionCache):
+        _parakin_tag: tuple[str, str, str]
+
+        def _index_key(self, sig: Any, codegen: Any) -> Any:
+            # numba's key holds the signature, the target and a hash of the bytecode, which is the
+            # same for every kernel's copy of an entry: the tag tells them apart
+            return (super()._index_key(sig, codegen), self._parakin_tag)
+
+        def _refuse(self, why: str) -> None:
+            _MISMATCHES.append(f"{self._cache_file._index_name} {why}")
+            raise CacheMismatch(_MISMATCHES[-1])
+
+        def _load_overload(self, sig: Any, target_context: Any) -> Any:
+            if not self._enabled:
+                return None
+            index = self._cache_file._load_index()
+            for other in index:
+                if not (isinstance(other, tuple) and len(other) == 2) or (
+                    other[1] != self._parakin_tag
+                ):
+                    self._refuse(f"lists {_what(other)}, not {_what((None, self._parakin_tag))}")
+            name = index.get(self._index_key(sig, target_context.codegen()))
+            if name is None:
+                return None
+            try:
+                data = self._cache_file._load_data(name)
+            except OSError:  # removed while the index still named it: compiled again
+                return None
+            label = (self._parakin_tag, str(sig))
+            if not (isinstance(data, tuple) and len(data) == 2 and data[0] == label):
+                got = data[0] if isinstance(data, tuple) and len(data) == 2 else None
+                sig_text = f" for {got[1]}" if isinstance(got, tuple) and len(got) == 2 else ""
+                self._refuse(
+                    f"its data file {name} holds {_what((None, got and got[0]))}{sig_text}"
+                )
+            return self._impl.rebuild(target_context, data[1])
+
+        def _save_overload(self, sig: Any, data: Any) -> None:
+            if not self._enabled or not self._impl.check_cachable(data):
+                return
+            self._impl.locator.ensure_cache_path()
+            key = self._index_key(sig, data.codegen)
+            label = (self._parakin_tag, str(sig))
+            self._cache_file.save(key, (label, self._impl.reduce(data)))
+
+    return TaggedCache
+
+
+def _guard(fn: Any, where: Path) -> list[Any]:
+    """Give every cached numba function that ``fn`` reaches through its globals (the entry, the
+    entries it calls, the kernel's functions) and whose cache lies in build ``where`` a
+    :func:`_tagged_cache` tagged ``(build, group, name)``, before anything is loaded. Returns them."""
+    from numba.core.caching import FunctionCache
+    from numba.core.dispatcher import Dispatcher
+
+    tagged = _tagged_cache()
+    out, todo, seen = [], [fn], set()
+    while todo:
+        disp = todo.pop()
+        if id(disp) in seen or not isinstance(disp, Dispatcher):
+            continue
+        seen.add(id(disp))
+        store = getattr(disp, "_cache", None)
+        if type(store) in (FunctionCache, tagged):
+            try:
+                group = Path(store._cache_path).relative_to(where).parts[0]
+            except (ValueError, IndexError):
+                group = None  # cached elsewhere (numba's part of the cache): keyed by its file
+            if group is not None:
+                store.__class__ = tagged  # same fields, same locator: only the keys change
+                store._parakin_tag = (where.name, group, disp.py_func.__qualname__)
+                out.append(disp)
+        todo.extend(v for v in disp.py_func.__globals__.values() if isinstance(v, Dispatcher))
+    return out
+
+
+#: the entries of :mod:`parakin.kernels.entries` a known answer is asked of (the particle swarm's,
+#: random by design, are checked by their tags alone)
+_BATCHED = ("serial", "parallel", "verify_serial", "verify_parallel")
+_VERIFY = ("check", "verify_serial", "verify_parallel")
+_PROBED = ("row", "one", "serial", "parallel", *_VERIFY)
+
+
+def _known_answer(fn: Any, args: tuple) -> str | None:
+    """Ask entry ``fn`` (called with ``args``) a question whose answer the kernel's own source
+    gives on Python floats; None where it answers so, or where no question applies (not an entry
+    of :data:`_PROBED`, or a first pose outside the kernel's domain), else what differs.
+
+    The probe: ``x`` the first pose of the call (a start, or an answer to verify), ``q`` its IK
+    moved by 1e-3 (1 + |q_k|) k / m. A solver entry, run with ``maxiter = 0``, must return
+    ``x`` unchanged and the residual's inf-norm at ``(x, q)``; a verification entry the joint
+    error ``max |ik(x) - q|``, in domain, and the assembly flag. One call of the compiled code
+    with arrays of the call's own types (nothing new is compiled) and a few kernel evaluations
+    on Python floats: microseconds, once per entry and process."""
+    import numpy as np
+
+    from parakin.kernels import _scalar_namespace
+    from parakin.kernels.methods import VECTOR
+
+    py = fn.py_func
+    name = py.__name__
+    res = py.__globals__.get("RES")
+    module = sys.modules.get(getattr(getattr(res, "py_func", None), "__module__", ""))
+    if name not in _PROBED or module is None:
+        return None
+    ns = _scalar_namespace(module)
+    batched = name in _BATCHED
+    p = np.asarray(args[0])
+    x = np.array(args[2][0] if batched else args[2], dtype=float)
+    like = args[1][0] if batched else args[1]
+    m = like.shape[0]
+    pl, xl, ik = p.tolist(), x.tolist(), [0.0] * m
     try:
-        return fn(*args)
-    except Exception as exc:
-        cause = exc
-    with _locked(where.parent, where.name.rpartition("-")[0]):
-        if _inode(where) != before:  # rebuilt by another process while this one read it
-            return fn(*args)
-        if before is None or not any(where.rglob("*.nb*")):
-            raise cause
-        while cause.__context__ is not None and "numba" in type(cause).__module__:
-            cause = cause.__context__  # numba wraps what went wrong while loading a callee
-        _notice(
-            f"kernel cache {where} could not be read ({type(cause).__name__}: "
-            f"{' '.join(str(cause).split())[:80]}); rebuilt"
+        with np.errstate(all="ignore"):
+            if not (np.all(np.isfinite(x)) and ns.in_domain(pl, xl) and ns.ik(pl, xl, ik)):
+                return None
+    except (ArithmeticError, ValueError):
+        return None
+    ik = np.array(ik)
+    q = (ik + 1e-3 * (1 + np.abs(ik)) * np.arange(1, m + 1) / m).astype(like.dtype)
+    scale = 1e-10 * (1 + float(np.max(np.abs(q))))
+    if name in _VERIFY:
+        want, on = float(np.max(np.abs(ik - q))), bool(ns.on_assembly(pl, xl, q.tolist()))
+        if batched:
+            flags, err = np.zeros_like(args[3][:1]), np.zeros_like(args[4][:1])
+            fn(p, q[None], x[None], flags, err)
+            got, flags = float(err[0]), flags[0]
+        else:
+            flags = np.zeros_like(args[3])
+            got = float(fn(p, q, x, flags))
+        if flags[0] == 1 and bool(flags[1]) == on and abs(got - want) <= 1e-7 * want + scale:
+            return None
+        return (
+            f"{name} gave joint error {got:.6g}, flags {flags.tolist()} where the kernel's "
+            f"source gives {want:.6g}, [1, {int(on)}]"
         )
-        _discard(where, remake=True)
+    r = [0.0] * m
+    ns.residual(pl, xl, q.tolist(), r)
+    want = float(np.max(np.abs(r)))
+    opts = np.array(args[3], copy=True)
+    opts[VECTOR.index("maxiter")] = 0
+    if batched:
+        xo, info, out = (np.zeros_like(args[k][:1]) for k in (4, 5, 6))
+        fn(p, q[None], x[None], opts, xo, info, out)
+        got, xo = float(out[0]), xo[0]
+    else:
+        xo, info = np.zeros_like(args[4]), np.zeros_like(args[5])
+        if name == "one":
+            out = np.zeros_like(args[6])
+            fn(p, q, x, opts, xo, info, out)
+            got = float(out[0])
+        else:
+            got = float(fn(p, q, x, opts, xo, info))
+    if np.array_equal(xo, x) and abs(got - want) <= 1e-7 * want + scale:
+        return None
+    return f"{name} gave residual {got:.6g} where the kernel's source gives {want:.6g}"
+
+
+def _forget(dispatchers: list[Any]) -> None:
+    """Drop what ``dispatchers`` loaded or compiled in this process: they load (or compile) again
+    from the rebuilt directory."""
+    for disp in dispatchers:
+        disp._reset_overloads()
+
+
+def first_call(fn: Callable[..., Any], where: Path, *args: Any) -> Any:
+    """``fn(*args)`` for the first time: numba loads ``fn`` from its cache in build ``where`` (or
+    compiles it), the files tagged and checked (:func:`_guard`), then its known answer is asked
+    (:func:`_known_answer`) before the call itself. Where any of that fails and another process
+    rebuilt ``where`` meanwhile (a new directory), it is tried again; where ``where`` is unchanged
+    and holds cached files, an entry could not be read (truncated, garbage), is not what it claims
+    (another kernel's, group's or function's) or answers wrong: ``where`` is made again
+    (:func:`_discard`: a fresh directory of the same name), under the kernel's lock, and the call
+    made once more, with a one-line notice. A failure with an empty build (a genuine compile
+    error) is raised; so is a failure of the fresh build. A fresh build that answers its probe
+    wrong (numba's own error, never seen) is used with a notice."""
+    guarded = _guard(fn, where)
+    before, seen = _inode(where), len(_MISMATCHES)
+    cause: BaseException | None = None
+    try:
+        wrong = _known_answer(fn, args)
+        if wrong is None:
+            return fn(*args)
+    except Exception as exc:
+        cause, wrong = exc, None
+    with _locked(where.parent, where.name.rpartition("-")[0]):
+        if _inode(where) == before:  # not rebuilt by another process meanwhile: rebuild it
+            if cause is not None and (before is None or not any(where.rglob("*.nb*"))):
+                raise cause
+            _notice(f"kernel cache {where} {_fault(cause, wrong, _MISMATCHES[seen:])}; rebuilt")
+            _discard(where, remake=True)
+        _forget(guarded)
+        wrong = _known_answer(fn, args)
+        if wrong is not None:
+            _notice(f"kernel cache {where}: the fresh build fails its known-answer check ({wrong})")
         return fn(*args)
+
+
+def _fault(cause: BaseException | None, wrong: str | None, mismatches: list[str]) -> str:
+    """What was wrong with a build, in one clause."""
+    if mismatches:
+        return f"holds a file that is not what it claims: {' '.join(mismatches[-1].split())[:400]}"
+    if wrong is not None:
+        return f"failed its known-answer check: {wrong}"
+    while cause.__context__ is not None and "numba" in type(cause).__module__:
+        cause = cause.__context__  # numba wraps what went wrong while loading a callee
+    return f"could not be read ({type(cause).__name__}: {' '.join(str(cause).split())[:80]})"
 
 
 def _size(path: Path) -> int:
