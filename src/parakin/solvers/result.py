@@ -512,6 +512,17 @@ def conditioning(mech: Mechanism, x: Array) -> Conditioning:
     Square systems only (a redundant system, more joints than pose coordinates, has no such fold
     in general: offset NaN, never flagged). Rows that are not finite, or whose IK fails near
     ``x``, give NaN and are not flagged.
+
+    How near is near, relative to the mechanism and not to one set of coordinates: ``distance``
+    is the smaller of (1) the offset as a fraction of the pose box, ``max_k |offset_k| /
+    width_k``, and (2) how far the mechanism's drawn points (:meth:`Mechanism.skeleton`) move from
+    ``x`` to ``x + offset``, as a fraction of the extent of the points that move (the platform
+    and the legs, in metres: no coordinate chart, no box). Both are scale-free, and
+    ``near_singular`` is ``distance <= NEAR_SINGULAR`` (1%) on either. (2) is what sees a
+    neighbour across a chart's own singularity: at Z-Y-X Euler angles near gimbal lock (beta near
+    pi/2) a rotation of 0.012 rad is an offset of 0.07 rad in alpha and gamma, 1.1% of their box,
+    which (1) alone let pass. (2) is computed where (1) is between 1% and 10% (a few skeleton
+    drawings per such answer, none elsewhere), so what (1) flags is flagged as before.
     """
     x = np.asarray(x, dtype=float)
     shape, n = x.shape[:-1], x.shape[-1]
@@ -524,6 +535,8 @@ def conditioning(mech: Mechanism, x: Array) -> Conditioning:
     with np.errstate(invalid="ignore"):
         distance = np.max(np.abs(offset) / width, axis=-1, initial=0.0)
     distance = np.where(np.isfinite(distance), distance, np.inf)
+    look = np.flatnonzero((distance > NEAR_SINGULAR) & (distance <= 10 * NEAR_SINGULAR))
+    distance = np.minimum(distance, _points_moved(mech, flat, offset, look))
     return Conditioning(
         condition=condition.reshape(shape),
         neighbour=offset.reshape(*shape, n),
@@ -531,6 +544,30 @@ def conditioning(mech: Mechanism, x: Array) -> Conditioning:
         near_singular=(distance <= NEAR_SINGULAR).reshape(shape),
         threshold=NEAR_SINGULAR,
     )
+
+
+def _points_moved(mech: Mechanism, x: Array, offset: Array, rows: Array) -> Array:
+    """Per row of ``x (N, n)``: the largest displacement of the mechanism's drawn points from
+    ``x`` to ``x + offset``, as a fraction of the extent (bounding-box diagonal) of the points
+    that move; inf where not computed (rows not in ``rows``, a mechanism that draws nothing, a
+    pose it cannot draw, fewer than two moving points)."""
+    out = np.full(len(x), np.inf)
+    for i in rows:
+        try:
+            with np.errstate(all="ignore"):
+                a, b = (
+                    np.array(list(mech.skeleton(p).points.values()), dtype=float).reshape(-1, 3)
+                    for p in (x[i], x[i] + offset[i])
+                )
+        except (NotImplementedError, ParakinError, ArithmeticError, ValueError, TypeError):
+            continue
+        step = np.linalg.norm(b - a, axis=-1)
+        moving = step > 1e-12 * (1.0 + np.max(np.abs(a), initial=0.0))
+        if moving.sum() >= 2 and np.all(np.isfinite(step)):
+            extent = float(np.linalg.norm(np.ptp(a[moving], axis=0)))
+            if extent > 0:
+                out[i] = float(np.max(step)) / extent
+    return out
 
 
 def _fold(mech: Mechanism, x: Array, width: Array) -> tuple[Array, Array]:
