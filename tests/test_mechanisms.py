@@ -199,3 +199,24 @@ def test_docs_quote_the_3rpr_as_it_is():
     }
     for path, body in blocks:
         assert body in (root / path).read_text(), f"docs/kernels.md quotes {path} as it was"
+
+
+def test_discovery_is_explicit_and_skips_nothing_in_silence(monkeypatch):
+    """Every module of parakin.mechanisms is listed (a mechanism module in MODULES, imported and
+    registered; a helper in HELPERS); one listed nowhere, underscore or not, is an ImportError that
+    names it."""
+    import pkgutil
+
+    import parakin.mechanisms as pm
+
+    assert pm.unlisted_modules() == []
+    assert {cls.__module__.rsplit(".", 1)[1] for cls in pm.REGISTRY.values()} == set(pm.MODULES)
+    real = pkgutil.iter_modules
+
+    def with_new_module(path):
+        yield from real(path)
+        yield pkgutil.ModuleInfo(None, "delta_robot", False)
+
+    monkeypatch.setattr(pm.pkgutil, "iter_modules", with_new_module)
+    with pytest.raises(ImportError, match="delta_robot are listed neither in MODULES"):
+        pm.discover()
