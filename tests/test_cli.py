@@ -330,3 +330,47 @@ def test_cold_start_imports_no_heavy_module():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "[]"
+
+
+def test_a_failed_fk_prints_no_pose(capsys):
+    """A diverged solve says so on stderr and prints no pose on stdout; in a batch each failed
+    input keeps a marked line without numbers; JSON gives its pose as null and the last iterate
+    under its own name."""
+    argv = [
+        "fk",
+        "3p4s",
+        "--joints",
+        "0.43",
+        "0.43",
+        "0.43",
+        "--solver",
+        "newton",
+        "--maxiter",
+        "1",
+    ]
+    assert main(argv) == 1
+    captured = capsys.readouterr()
+    assert captured.out == "" and "did not converge" in captured.err
+    q = P3P4S().ik([0.0, 0.0, 0.59])  # the second input: solved at its start, no iteration
+    batch = ["fk", "3p4s", "--joints", "0.43", "0.43", "0.43", *map(repr, q.tolist()),
+             "--solver", "newton", "--maxiter", "1", "--x0", "0", "0", "0.59"]  # fmt: skip
+    assert main(batch) == 1
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == "# not solved (MAXITER)" and lines[1].startswith("x = ")
+    assert main([*argv, "--json"]) == 1
+    out = json.loads(capsys.readouterr().out)
+    assert out["x"] is None and len(out["last_iterate"]) == 3 and out["success"] is False
+    assert out["startup"] >= 0.0
+
+
+def test_fk_json_says_when_wall_time_includes_compiling(capsys, monkeypatch):
+    """FKResult.startup: the seconds of wall_time spent loading or compiling; the JSON names it."""
+    monkeypatch.setattr("parakin.kernels._LOAD_SECONDS", [0.0])
+    assert (
+        main(["fk", "rpr3", "--joints", "0.44", "0.43", "0.45", "--solver", "newton", "--json"])
+        == 0
+    )
+    out = json.loads(capsys.readouterr().out)
+    assert (
+        "startup" in out and out["startup_note"] is None
+    )  # numpy path (few inputs): nothing loaded
