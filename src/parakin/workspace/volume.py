@@ -138,12 +138,14 @@ def fit_box(
     orientations: int = 0,
     rng: np.random.Generator | None = None,
 ) -> tuple[Region, list[str]]:
-    """The region with a box that holds its workspace, found on a ``grid``-point-per-axis grid:
-    where a member lies on a face of the box that side grows by half the box's width (at most
-    ``rounds`` times); where none does, the box shrinks to the members' bounding box plus one grid
-    cell on each side, checked again. An angle axis (unit ``rad``) spans at most one turn about its
-    given value. Returns the region and the faces the workspace still touches (``"x min"``, ...;
-    empty when it fits: a volume of a truncated workspace is of its part in the box). ``orientations``: fit the reachable workspace (that many orientations tried per point)."""
+    """The region with a box that holds its workspace, found on a ``grid``-point-per-axis grid
+    (and a finer grid on each face): where a member lies on a face of the box that side grows by
+    half the box's width (at most ``rounds`` times); where none does, the box shrinks to the
+    members' bounding box plus a quarter of its extent (at least a grid cell) on each side, and is
+    checked again. An angle axis (unit ``rad``) spans at most one turn about its given value.
+    Returns the region and the faces the workspace still touches (``"x min"``, ...; empty when it
+    fits: a volume of a truncated workspace is of its part in the box). ``orientations``: fit the
+    reachable workspace (that many orientations tried per point)."""
     if not (isinstance(grid, (int, np.integer)) and grid >= 3):
         raise ValueError(f"grid = {grid!r} must be an integer >= 3")
     rng = np.random.default_rng(0) if rng is None else rng
@@ -173,18 +175,39 @@ def fit_box(
         touching = []
         grow_lo = np.zeros(region.dim, dtype=bool)
         grow_hi = np.zeros(region.dim, dtype=bool)
+        # the faces on a finer grid of their own: a thin part of the workspace (a sliver along an
+        # edge of the IK's domain) can reach a face between the points of the volume grid
+        n_face = int(min(4 * grid, max(3, 40_000 ** (1 / max(region.dim - 1, 1)))))
+        face = grid_points(lo, hi, n_face) if region.dim == 1 else None
         for k in range(region.dim):
-            grow_lo[k] = np.any(inside & (pts[:, k] == lo[k])) and lo[k] > cap_lo[k]
-            grow_hi[k] = np.any(inside & (pts[:, k] == hi[k])) and hi[k] < cap_hi[k]
+            for side, bound in ((0, lo[k]), (1, hi[k])):
+                if face is None:
+                    others = [j for j in range(region.dim) if j != k]
+                    sub = grid_points(lo[others], hi[others], n_face)
+                    fpts = np.empty((len(sub), region.dim))
+                    fpts[:, others] = sub
+                else:
+                    fpts = face.copy()
+                fpts[:, k] = bound
+                on_face = np.any(reachable(region, fpts, orient)) or np.any(
+                    inside & (pts[:, k] == bound)
+                )
+                if side == 0:
+                    grow_lo[k] = on_face and lo[k] > cap_lo[k]
+                else:
+                    grow_hi[k] = on_face and hi[k] < cap_hi[k]
             touching += [f"{names[k]} min"] * bool(grow_lo[k]) + [f"{names[k]} max"] * bool(
                 grow_hi[k]
             )
         if not touching:
             if shrunk:
                 break
-            cell = width / (grid - 1)
-            new_lo = np.maximum(lo, pts[inside].min(axis=0) - cell)
-            new_hi = np.minimum(hi, pts[inside].max(axis=0) + cell)
+            # a quarter of the members' extent on each side (at least a cell): thin tips of the
+            # workspace between the grid's points reach beyond the members' bounding box
+            span = pts[inside].max(axis=0) - pts[inside].min(axis=0)
+            pad = np.maximum(width / (grid - 1), 0.25 * span)
+            new_lo = np.maximum(lo, pts[inside].min(axis=0) - pad)
+            new_hi = np.minimum(hi, pts[inside].max(axis=0) + pad)
             shrunk = True
             if np.allclose(new_lo, lo) and np.allclose(new_hi, hi):
                 break
