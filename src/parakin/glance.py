@@ -141,6 +141,10 @@ def _label(item: str) -> str:
     return item
 
 
+#: the kind of a claim's tolerance, as README's headline lines say it beside the printed value
+_BOUND_WORDS = {"upper": " (upper bound)", "lower": " (lower bound)", "order": " (order)"}
+
+
 def _headline(report: pd.DataFrame, key: str) -> list[str]:
     """The abstract's and conclusions' claims of one paper, each with its verdict."""
     rows = report[(report["paper"] == key) & report["artefact"].isin(["abstract", "conclusion"])]
@@ -152,8 +156,10 @@ def _headline(report: pd.DataFrame, key: str) -> list[str]:
         seen.add(q)
         unit = f" {r.unit}" if r.unit not in ("", "1") else ""
         evidence = f" ([evidence](figures/{r.evidence}))" if r.evidence else ""
+        # the paper value as printed; what kind of claim it is comes from the tolerance column
+        how = _BOUND_WORDS.get(str(r.tolerance).split(":")[0], "")
         out.append(
-            f"  - {r.artefact} `{q}`: paper {r[4]}{unit}, ours {r.ours or '—'} → **{r.verdict}**{evidence}"
+            f"  - {r.artefact} `{q}`: paper {r[4]}{unit}{how}, ours {r.ours or '—'} → **{r.verdict}**{evidence}"
         )
     return out
 
