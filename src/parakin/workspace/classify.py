@@ -139,7 +139,7 @@ def classify(
     compute cond(J) (the dexterous test); ``interference``: test the legs' clearance where the
     region asks for one; ``compiled``: None = the compiled path for large batches where it is on."""
     x = region.poses(points, orientation).reshape(-1, region.mech.n_pose)
-    from parakin.workspace import compiled as cc
+    import parakin.workspace.compiled as cc
 
     fast = cc.classifier(region, len(x), compiled)
     if fast is not None:

@@ -42,8 +42,8 @@ def _sources(module: types.ModuleType) -> list[types.ModuleType]:
 def loops_of(module: types.ModuleType) -> types.SimpleNamespace:
     """The loops of :mod:`parakin.workspace._loops` compiled over kernel ``module``, numba-cached
     in ``<kernel cache>/<module>.workspace-<hash>``."""
+    import parakin.workspace._loops as _loops
     from parakin.kernels import _math, store
-    from parakin.workspace import _loops
 
     numba = kernels._numba()
     kern = kernels.compiled(module)
