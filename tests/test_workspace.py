@@ -73,6 +73,28 @@ def test_lens_volume_closed_form_within_bounds_and_error_bar(lens):
     assert bounds.outer - bounds.inner < 0.5 * exact  # the bounds mean something
 
 
+@pytest.mark.parametrize(
+    "name, axes, unit",
+    [("3p4s", None, "m^3"), ("rpr3", None, "m^2"), ("rpr3", ["x", "y", "phi"], "m^2 rad")],
+)
+def test_monte_carlo_between_the_certified_bounds(name, axes, unit):
+    """A translational and a planar mechanism (the latter also with its angle as an axis)."""
+    region, _ = W.fit_box(W.make_region(REGISTRY[name](), axes=axes))
+    assert region.unit == unit
+    est = W.volumes(region, 100_000, np.random.default_rng(13), cond=False, compiled=False)
+    bounds = W.certify(region, levels=5)
+    v, se = est["constant"].volume, est["constant"].se
+    assert bounds.inner - 4 * se <= v <= bounds.outer + 4 * se
+    assert 0 < bounds.inner < bounds.outer
+
+
+def test_long_runs_print_a_progress_line(capsys):
+    region = W.make_region(REGISTRY["rpr3"]())
+    W.volumes(region, 2000, np.random.default_rng(0), cond=False, compiled=False, progress=True)
+    err = capsys.readouterr().err
+    assert "workspace of rpr3: 100%" in err and "2000/2000 poses" in err
+
+
 def test_lens_slice_area_closed_form(lens):
     """The 2-D workspace over (x, y) at z = 0.2: two discs of radius sqrt(1 - 0.04)."""
     region, _ = W.fit_box(W.make_region(lens, axes=["x", "y"]))
