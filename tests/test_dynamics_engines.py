@@ -6,7 +6,7 @@ exact rigid-body dynamics (MuJoCo's soft loop constraints are switched off for `
 enter only through their exact Jacobians; pinocchio solves its constrained KKT system exactly), so
 they differ by rounding only: about 1e-16 times the condition numbers of the actuator Jacobian
 (< 1e3 on these trajectories) and of the least-squares solves, i.e. ~1e-13; 1e-9 leaves room for
-other BLAS kernels. pinocchio is an optional peer (``pip install pin``): its tests skip without it.
+other BLAS kernels. pinocchio (``pin``) is a pinned dependency (environment.txt): never skipped.
 """
 
 from __future__ import annotations
@@ -62,10 +62,6 @@ def test_mujoco_model_is_the_description(case):
     assert model.opt.disableflags == 0  # the recipe restores the constraint flag
 
 
-@pytest.mark.skipif(
-    not __import__("parakin.dynamics.pinocchio_check", fromlist=["available"]).available(),
-    reason="optional peer pinocchio (pip install pin) not installed",
-)
 def test_pinocchio_agrees(case):
     from parakin.dynamics import pinocchio_check as pc
 
