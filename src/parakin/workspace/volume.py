@@ -111,16 +111,18 @@ def reachable(
     member: np.ndarray | None = None,
     *,
     compiled: bool | None = None,
+    interference: bool = True,
 ) -> np.ndarray:
     """Whether each point is in the constant-orientation workspace at its given orientation
-    (``member``, computed if not given) or at one of ``orientations`` (:func:`orientation_set`)."""
-    inside = (classify(region, pts, cond=False).member if member is None else member).copy()
+    (``member``, computed if not given) or at one of ``orientations`` (:func:`orientation_set`);
+    ``interference``: test the legs' clearance (False: IK and joint limits only, a superset)."""
+    kw = {"cond": False, "compiled": compiled, "interference": interference}
+    inside = (classify(region, pts, **kw).member if member is None else member).copy()
     for o in orientations:
         todo = ~inside
         if not np.any(todo):
             break
-        inside[todo] = classify(region, pts[todo], orientation=o[None], cond=False,
-                                compiled=compiled).member  # fmt: skip
+        inside[todo] = classify(region, pts[todo], orientation=o[None], **kw).member
     return inside
 
 
@@ -165,7 +167,9 @@ def fit_box(
         pts = grid_points(lo, hi, grid)
         if np.all((given >= lo) & (given <= hi)):  # a coarse grid may miss a thin workspace
             pts = np.vstack([pts, given])
-        inside = reachable(region, pts, orient)
+        # the box holds the workspace without the legs' clearance, a superset: the clearance
+        # costs most where legs come from drawings, and takes nothing from the box
+        inside = reachable(region, pts, orient, interference=False)
         if not np.any(inside):
             raise ValueError(
                 f"no point of the box {lo.tolist()}..{hi.tolist()} ({grid} per axis) is in the "
@@ -189,7 +193,7 @@ def fit_box(
                 else:
                     fpts = face.copy()
                 fpts[:, k] = bound
-                on_face = np.any(reachable(region, fpts, orient)) or np.any(
+                on_face = np.any(reachable(region, fpts, orient, interference=False)) or np.any(
                     inside & (pts[:, k] == bound)
                 )
                 if side == 0:
