@@ -145,7 +145,7 @@ def _numbers(value, ndim: int, where: str, want: str):
             raise ValueError(f"{where}: expected {want}, got a list nested deeper")
         return [_numbers(v, ndim - 1, where, want) for v in value]
     if ndim > 0:
-        raise ValueError(f"{where}: expected {want}, got {_short_repr(value)}")
+        raise ValueError(f"{where}: expected {want}, got shape () ({_short_repr(value)})")
     if isinstance(value, (bool, np.bool_)):
         raise ValueError(f"{where}: {value!r} is a boolean (YAML true/false), not a number")
     if isinstance(value, str):
