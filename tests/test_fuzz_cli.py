@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import collections
 import contextlib
+import copy
 import dataclasses
 import functools
 import io
@@ -25,6 +26,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -813,3 +815,325 @@ def test_near_singular_poses_through_the_cli(name, row, offset):
         assert not moved or out["near_singular"], (argv, out["x"])
         warned = [line for line in stderr.splitlines() if "warning: near a singularity" in line]
         assert len(warned) == int(out["near_singular"]), stderr
+
+
+# ------------------------------- dynamics, --geometry and --mechanism files (issue 46)
+#: hostile values for a parameter, a leg field or a pose cell (YAML-dumpable)
+HOSTILE_VALUES = [
+    0,
+    -1,
+    0.5,
+    1e308,
+    -1e308,
+    float("nan"),
+    float("inf"),
+    10**30,
+    True,
+    False,
+    None,
+    "",
+    "abc",
+    "35deg",
+    "120mm",
+    "1e3",
+    [],
+    [1, 2],
+    [[1, 2, 3]] * 7,
+    {"a": 1},
+    "[" * 40,
+]
+DYNAMIC = sorted(n for n, c in mechanisms.REGISTRY.items() if c().mass_model() is not None)
+EXAMPLES_DIR = ROOT / "examples"
+
+
+def _structural(draw) -> bytes | None:
+    """A hostile file whatever its meaning (one draw in four): an alias bomb, nesting 30-200
+    deep, a recursive alias, a tab, bytes that are not UTF-8, a list or a scalar at the top."""
+    kind = draw(st.integers(0, 11))
+    if kind == 0:
+        levels = draw(st.integers(2, 12))
+        rows = ["a0: &a0 [1, 1, 1, 1, 1, 1, 1, 1, 1]"]
+        rows += [f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 9)}]" for i in range(1, levels)]
+        return ("\n".join(rows) + "\n").encode()
+    if kind == 1:
+        depth = draw(st.sampled_from([30, 33, 64, 65, 200]))
+        return f"x: {'[' * depth}1{']' * depth}\n".encode()
+    if kind == 2:
+        return b"a: &x [1, *x]\n"
+    if kind == 3:
+        return b"a:\n\tb: 1\n"
+    if kind == 4:
+        return bytes(draw(st.lists(st.integers(128, 255), min_size=1, max_size=8)))
+    if kind == 5:
+        return draw(st.sampled_from([b"- 1\n- 2\n", b"3\n", b"", b"~\n", b"{}", b"[]"]))
+    return None
+
+
+def _dump(draw, data) -> bytes:
+    """``data`` as YAML or JSON (NaN and inf as JSON's non-standard tokens), sometimes cut short."""
+    if draw(st.booleans()):
+        text = yaml.safe_dump(data, sort_keys=False)
+    else:
+        text = json.dumps(data)
+    raw = text.encode()
+    if draw(st.integers(0, 9)) == 0:
+        raw = raw[: draw(st.integers(0, len(raw)))]
+    return raw
+
+
+def _common(argv: list[str]) -> tuple[int, str, str]:
+    """The properties every command keeps: exit 0, 1 or 2; no traceback; an error is one line;
+    ``--json`` is strict JSON."""
+    code, stdout, stderr = run(argv)
+    assert code in (0, 1, 2), (argv, code, stderr)
+    assert "Traceback" not in stderr + stdout, (argv, stderr[-2000:])
+    if code == 2:
+        assert len(stderr.strip().splitlines()) == 1, (argv, stderr)
+    if code == 0 and "--json" in argv:
+        _strict_json(stdout)
+    return code, stdout, stderr
+
+
+@st.composite
+def geometry_argv(draw):
+    """ik or fk of a registered mechanism with a hostile --geometry file (and --param)."""
+    name = draw(st.sampled_from(sorted(mechanisms.REGISTRY)))
+    cls = mechanisms.REGISTRY[name]
+    mech = cls()
+    raw = _structural(draw)
+    if raw is None:
+        known = parameters_of(cls)
+        keys = draw(
+            st.lists(
+                st.sampled_from([*known, "name", "nope", "pose_names"]), min_size=0, max_size=3
+            )
+        )
+        data = {}
+        for key in keys:
+            default = known.get(key, 1.0)
+            if draw(st.booleans()):  # near the default: a real geometry, scaled
+                scale = draw(st.sampled_from([1.0, 0.9, 1.1, -1.0, 0.0, 1e3]))
+                data[key] = (np.asarray(default, dtype=float) * scale).tolist()
+            else:
+                data[key] = draw(st.sampled_from(HOSTILE_VALUES))
+        raw = _dump(draw, data)
+    folder = Path(tempfile.mkdtemp(dir=_SCRATCH.name))
+    path = folder / draw(st.sampled_from(["g.yaml", "g.json"]))
+    path.write_bytes(raw)
+    home = mech.home()
+    if draw(st.booleans()):
+        argv = ["ik", name, "--pose", *map(repr, home.tolist())]
+    else:
+        argv = ["fk", name, "--joints", *map(repr, mech.ik(home).tolist())]
+    argv += ["--geometry", str(path)]
+    if draw(st.integers(0, 3)) == 0:
+        key = draw(st.sampled_from(sorted(parameters_of(cls))))
+        argv += ["--param", f"{key}={draw(st.sampled_from(['1', '0.2', 'true', '[1]', 'x']))}"]
+    return argv + ["--json"]
+
+
+@settings(
+    max_examples=450,
+    derandomize=True,
+    deadline=None,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
+@given(argv=geometry_argv())
+def test_hostile_geometry_files(argv):
+    """Whatever a --geometry file holds: exit 0/1/2, one line, strict JSON, and an answer is right
+    for the geometry it prints (ik: those joints; fk: its pose gives the joints back)."""
+    code, stdout, _ = _common(argv)
+    if code != 0:
+        return
+    out = _strict_json(stdout)
+    if argv[0] == "fk":
+        _check_right_answer(argv, out)
+    else:
+        cls = mechanisms.REGISTRY[out["mechanism"]]
+        mech = cls(**{k: v for k, v in out["parameters"].items() if k in parameters_of(cls)})
+        np.testing.assert_allclose(mech.ik(np.asarray(out["pose"])), out["joints"], rtol=1e-12)
+
+
+@st.composite
+def dynamics_argv(draw):
+    """parakin dynamics with a hostile trajectory CSV (rows, times, cells, columns) and options."""
+    name = draw(st.sampled_from(DYNAMIC))
+    mech = mechanisms.REGISTRY[name]()
+    lo, hi = mech.pose_bounds()
+    clean = draw(st.integers(0, 2)) > 0  # two in three: a trajectory that should be answered
+    k = draw(st.sampled_from([4, 6, 12] if clean else [0, 1, 3, 4, 12]))
+    t = np.linspace(0.0, 1.0, k)
+    order = "up" if clean else draw(st.sampled_from(["up", "flat", "down"]))
+    if order == "flat":
+        t[:] = 0.5
+    elif order == "down":
+        t = t[::-1]
+    amp = draw(st.sampled_from([0.0, 0.02, 0.1] if clean else [0.3, 2.0, 100.0]))
+    wave = np.sin(np.outer(t * 6.0, np.arange(1, 7)))[:, : mech.n_pose]
+    pose = mech.home() + amp * 0.5 * (hi - lo) * wave
+    names = ["t", *mech.pose_names]
+    cells = [[repr(float(v)) for v in (ti, *row)] for ti, row in zip(t, pose)]
+    if name == "rpr3" and draw(st.integers(0, 3)) == 0:  # through a singular pose
+        names, cells = ["t", "x", "y", "phi"], [r.split(",") for r in SINGULAR_RPR3]
+    for _ in range(0 if clean else draw(st.integers(0, 2))):
+        if cells:
+            i, j = draw(st.integers(0, len(cells) - 1)), draw(st.integers(0, len(names) - 1))
+            cells[i][j] = draw(st.sampled_from(["nan", "inf", "abc", "", "1e308", '"1', "-0"]))
+    if not clean and draw(st.booleans()):
+        names = names[:-1] if draw(st.booleans()) else [*names, "extra"]
+    folder = Path(tempfile.mkdtemp(dir=_SCRATCH.name))
+    path = folder / "traj.csv"
+    path.write_text("\n".join([",".join(names), *(",".join(r) for r in cells)]) + "\n")
+    argv = ["dynamics", name, "--trajectory", str(path)]
+    if draw(st.booleans()):
+        argv.append("--flag-singular")
+    if draw(st.integers(0, 3)) == 0:
+        argv += ["--wrench", *draw(st.lists(st.sampled_from(NUMBERS[:20]), min_size=6, max_size=6))]
+    if draw(st.integers(0, 3)) == 0:
+        argv += ["--output", str(folder / draw(st.sampled_from(["f.csv", "f.npy", "f.txt"])))]
+    if draw(st.booleans()):
+        argv.append("--json")
+    return argv
+
+
+#: the rows of a 3-RPR trajectory through a singular pose (its third sample)
+SINGULAR_RPR3 = [
+    "0,0,0,0",
+    "0.1,0.1,0.01,-0.5",
+    "0.2,0.29763715,0.03302491,-1.04719755",
+    "0.3,0.2,0.02,-0.8",
+    "0.4,0,0,0",
+]
+
+
+@settings(
+    max_examples=300,
+    derandomize=True,
+    deadline=None,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
+@given(argv=dynamics_argv())
+def test_hostile_trajectories(argv):
+    """Whatever the trajectory: exit 0/1/2, one line, strict JSON; a force is null (JSON) or NaN
+    (text) only where its sample is flagged singular or unbalanced, and a JSON answer is the
+    library's own inverse dynamics of that file (no silent wrong answer)."""
+    code, stdout, stderr = _common(argv)
+    if code != 0:
+        return
+    flagged = "singular or unbalanced" in stderr
+    if "--json" not in argv:
+        if not flagged and "--output" not in argv:
+            assert "nan" not in stdout.lower() and "inf" not in stdout.lower(), (argv, stdout)
+        return
+    out = _strict_json(stdout)
+    from parakin import dynamics
+    from parakin.dynamics.trajectory import read_trajectory
+
+    mech = mechanisms.REGISTRY[argv[1]]()
+    traj = read_trajectory(argv[3], mech)
+    wrench = None
+    if "--wrench" in argv:
+        i = argv.index("--wrench")
+        wrench = [float(v) for v in argv[i + 1 : i + 7]]
+    want = dynamics.inverse_dynamics(mech, *traj.state(traj.t), wrench=wrench, on_singular="flag")
+    bad = np.asarray(out["singular"]) | np.asarray(out["unbalanced"])
+    assert flagged == bool(bad.any()), (argv, stderr)
+    force = np.array([[np.nan if f is None else f for f in row] for row in out["force"]])
+    assert np.array_equal(np.isnan(force).any(-1), bad), (argv, out)
+    np.testing.assert_allclose(force, want.force, rtol=1e-12, equal_nan=True)
+
+
+def _takes_mechanism_files() -> bool:
+    import argparse
+
+    from parakin.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    return any("--mechanism" in a.option_strings for a in sub.choices["ik"]._actions)
+
+
+@functools.cache
+def _example(path: str):
+    """An example description (as loaded), its mechanism's home and the home's joints."""
+    from parakin.mechanisms import from_file
+
+    mech = from_file(path)
+    return yaml.safe_load(Path(path).read_text()), mech.home(), mech.ik(mech.home())
+
+
+def _mutate_leaf(draw, node):
+    """``node`` (a description) with one field deleted, or set to a hostile value."""
+    node = copy.deepcopy(node)
+    paths = []
+
+    def walk(n, at):
+        if isinstance(n, dict):
+            for k, v in n.items():
+                paths.append((*at, k))
+                walk(v, (*at, k))
+        elif isinstance(n, list):
+            for i, v in enumerate(n):
+                paths.append((*at, i))
+                walk(v, (*at, i))
+
+    walk(node, ())
+    if not paths:
+        return node
+    path = draw(st.sampled_from(paths))
+    parent = node
+    for key in path[:-1]:
+        parent = parent[key]
+    if draw(st.integers(0, 3)) == 0:
+        del parent[path[-1]]
+    else:
+        parent[path[-1]] = draw(st.sampled_from(HOSTILE_VALUES))
+    return node
+
+
+@st.composite
+def mechanism_file_argv(draw):
+    """ik or fk with --mechanism FILE: an example description with a field deleted or made
+    hostile, or a file hostile whatever its meaning."""
+    example = str(draw(st.sampled_from(sorted(EXAMPLES_DIR.glob("*.yaml")))))
+    data, home, joints = _example(example)
+    raw = _structural(draw)
+    if raw is None:
+        for _ in range(draw(st.integers(0, 2))):
+            data = _mutate_leaf(draw, data)
+        raw = _dump(draw, data)
+    folder = Path(tempfile.mkdtemp(dir=_SCRATCH.name))
+    path = folder / draw(st.sampled_from(["m.yaml", "m.json"]))
+    path.write_bytes(raw)
+    if draw(st.booleans()):
+        argv = ["ik", "--mechanism", str(path), "--pose", *map(repr, home.tolist())]
+    else:
+        argv = ["fk", "--mechanism", str(path), "--joints", *map(repr, joints.tolist())]
+    return argv + ["--json"]
+
+
+@pytest.mark.skipif(not _takes_mechanism_files(), reason="no --mechanism option yet (issue 43)")
+@settings(
+    max_examples=250,
+    derandomize=True,
+    deadline=None,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
+@given(argv=mechanism_file_argv())
+def test_hostile_mechanism_files(argv):
+    """Whatever a mechanism file holds: exit 0/1/2, one line naming the file, strict JSON, and an
+    answer is right for the mechanism that file describes."""
+    code, stdout, _ = _common(argv)
+    if code != 0:
+        return
+    from parakin.mechanisms import from_file
+
+    out = _strict_json(stdout)
+    mech = from_file(argv[2])
+    if argv[0] == "ik":
+        np.testing.assert_allclose(mech.ik(np.asarray(out["pose"])), out["joints"], rtol=1e-12)
+    else:
+        x, q = np.asarray(out["x"], dtype=float), np.asarray(out["joints"], dtype=float)
+        assert np.max(mech.joint_error(x, q)) < 1e-8, (argv, out)

@@ -2,7 +2,8 @@
 
 Each case mutates ``config/quick.yaml`` (a leaf set to a hostile value, a key deleted or
 misspelt, a section replaced, an unknown key, a ``studies`` list of known, misspelt and foreign
-modules, an alias bomb, a file cut short, a tab, bytes that are not UTF-8) and runs
+modules, an alias bomb, a file cut short, a tab, bytes that are not UTF-8, a list nested up to
+10^5 deep, the config as JSON) and runs
 ``parakin reproduce zhao2017_3p4s no-such-artefact --config FILE`` in process: the answer is exit 2
 with one line, either the config's error (naming the key or the file) or, for a config that is
 valid, "unknown artefact" or, where its studies leave Zhao's out, "unknown study" (so the config was loaded, merged and checked all the way). Never a
@@ -14,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import copy
 import io
+import json
 import signal
 from pathlib import Path
 
@@ -129,6 +131,11 @@ def _case(g: np.random.Generator, base: dict) -> bytes:
     if kind == 3:  # bytes that are not UTF-8
         i = int(g.integers(len(text) + 1))
         return text[:i] + bytes(g.integers(128, 256, size=3).tolist()) + text[i:]
+    if kind == 4:  # nested deep under some key (10^5 deep crashed libyaml's composer; issue 46)
+        depth = int(g.choice([33, 64, 65, 1000, 100_000]))
+        return text + f"deep: {'[' * depth}1{']' * depth}\n".encode()
+    if kind == 5:  # the same config as JSON (what another tool writes)
+        return json.dumps(config).encode()
     return text
 
 

@@ -308,6 +308,7 @@ def _entry(cache: Path, kernel: str) -> Path:
     return index
 
 
+@pytest.mark.slow  # three compiles of the toy kernel's verification, ~5 s each
 @pytest.mark.parametrize("how", ["index", "data", "retagged"])
 def test_another_kernels_entry_is_never_loaded(warm, tmp_path, how, monkeypatch):
     """Kernel b's compiled verification put in kernel a's place, three ways: b's index under a's
@@ -374,6 +375,7 @@ class _Planted:
         return (open, (self.marker, "w"))
 
 
+@pytest.mark.slow  # the compiled build it plants is made by the module's fixture (~10 s)
 @as_root
 def test_a_planted_cache_directory_runs_no_code(warm, tmp_path):
     """The issue's attack: PARAKIN_KERNEL_CACHE unset, and the victim's per-user cache is a
