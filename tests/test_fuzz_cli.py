@@ -1063,6 +1063,21 @@ def _example(path: str):
     return yaml.safe_load(Path(path).read_text()), mech.home(), mech.ik(mech.home())
 
 
+@functools.cache
+def _descriptions() -> list[str]:
+    """The files of examples/ that describe a mechanism (others there are --geometry files)."""
+    from parakin.errors import ParakinError
+
+    out = []
+    for path in sorted(EXAMPLES_DIR.glob("*.yaml")):
+        try:
+            _example(str(path))
+        except (ParakinError, ValueError):
+            continue
+        out.append(str(path))
+    return out
+
+
 def _mutate_leaf(draw, node):
     """``node`` (a description) with one field deleted, or set to a hostile value."""
     node = copy.deepcopy(node)
@@ -1096,7 +1111,7 @@ def _mutate_leaf(draw, node):
 def mechanism_file_argv(draw):
     """ik or fk with --mechanism FILE: an example description with a field deleted or made
     hostile, or a file hostile whatever its meaning."""
-    example = str(draw(st.sampled_from(sorted(EXAMPLES_DIR.glob("*.yaml")))))
+    example = draw(st.sampled_from(_descriptions()))
     data, home, joints = _example(example)
     raw = _structural(draw)
     if raw is None:
