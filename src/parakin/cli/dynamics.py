@@ -7,6 +7,7 @@ import sys
 import numpy as np
 
 from parakin.cli.common import (
+    _compiled_if_worth_it,
     _dumps,
     _fmt_vector,
     _mechanism_options,
@@ -67,6 +68,7 @@ def cmd_dynamics(args) -> int:
     if mech.mass_model() is None:
         raise ValueError(f"{mech.name} declares no masses (mass_model()): no dynamics")
     traj = read_trajectory(args.trajectory, mech)
+    _compiled_if_worth_it(len(traj.t))
     res = dynamics.inverse_dynamics(
         mech,
         *traj.state(traj.t),

@@ -29,7 +29,6 @@ import functools
 import importlib.util
 import math
 import numbers
-import os
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -52,9 +51,13 @@ PROBE_RTOL = 1e-9
 
 
 def available() -> bool:
-    """False where numba is missing or ``PARAKIN_KERNELS=0`` (the project's switch for every
-    compiled path): the dynamics then runs its numpy functions, with the same numbers."""
-    return os.environ.get("PARAKIN_KERNELS", "1") != "0" and _have_numba()
+    """False where the compiled path is off (:func:`parakin.kernels.enabled`: numba missing,
+    ``PARAKIN_KERNELS=0``, no cache of one's own, or inside :func:`parakin.kernels.interpreted`,
+    as a command of a few samples runs): the dynamics then runs its numpy functions, with the
+    same numbers."""
+    from parakin import kernels
+
+    return kernels.enabled() and _have_numba()
 
 
 @functools.lru_cache(maxsize=1)

@@ -129,9 +129,12 @@ class Sampled:
     acceleration: Array | None = None
 
     def state(self, t: ArrayLike) -> tuple[Array, Array, Array]:
+        tt = np.asarray(t, dtype=float)
+        if self.rate is not None and self.acceleration is not None and np.array_equal(tt, self.t):
+            # the table's own samples, all given: nothing to interpolate (and no scipy to import)
+            return self.pose.copy(), self.rate.copy(), self.acceleration.copy()
         from scipy.interpolate import CubicSpline
 
-        tt = np.asarray(t, dtype=float)
         spline = CubicSpline(self.t, self.pose, axis=0)
         x = spline(tt)
         v = spline(tt, 1) if self.rate is None else CubicSpline(self.t, self.rate, axis=0)(tt)
