@@ -31,6 +31,7 @@ shape once, where the vector is made.
 from __future__ import annotations
 
 import math
+import sys
 import types
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any, NamedTuple
@@ -152,8 +153,17 @@ def rebind(
 ) -> types.SimpleNamespace:
     """Every :func:`kernel` function of ``module`` re-created over a copy of its globals with
     ``names`` bound in, each passed through ``wrap`` (e.g. ``numba.njit(...)``). The copies call
-    each other through that namespace, so helpers follow their callers onto the backend."""
-    glob = dict(vars(module))
+    each other through that namespace, so helpers follow their callers onto the backend. A
+    function ``module`` takes from another kernel module (the 6-6's leg equations are the 3-6's)
+    keeps that module's constants (its parameter offsets): their globals come first, ``module``'s
+    own override them."""
+    glob: dict[str, Any] = {}
+    for fn in vars(module).values():
+        if getattr(fn, "__parakin_kernel__", False) and fn.__module__ != module.__name__:
+            source = sys.modules.get(fn.__module__)
+            if source is not None:
+                glob.update(vars(source))
+    glob.update(vars(module))
     glob.update(names)
     out = {}
     for key, fn in vars(module).items():
