@@ -603,6 +603,18 @@ def _takes_mechanism_files() -> bool:
     return any("--mechanism" in a.option_strings for a in sub.choices["ik"]._actions)
 
 
+@pytest.mark.parametrize("suffix", [".csv", ".npy"])
+def test_an_input_table_that_is_a_fifo_is_refused_at_once(tmp_path, suffix):
+    """``--input`` of a FIFO (or a link to /dev/zero) named like a table: refused, not waited on."""
+    fifo = tmp_path / f"in{suffix}"
+    os.mkfifo(fifo)
+    zero = tmp_path / f"zero{suffix}"
+    zero.symlink_to("/dev/zero")
+    for path in (fifo, zero):
+        code, _, stderr = run(["fk", "3p4s", "--input", str(path)])
+        one_line(code, stderr, str(path), "not a regular file")
+
+
 @pytest.mark.parametrize(
     "content, needles",
     [

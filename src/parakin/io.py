@@ -513,15 +513,15 @@ def read_rows(
 
 
 def _read_npy(path: str, where: str, n: int, names: Sequence[str]) -> np.ndarray:
-    with open(path, "rb") as fh:
-        magic = fh.read(len(_NPY_MAGIC))
+    data = read_bytes(path, where, MAX_TEXT_BYTES)  # a regular file of bounded size, no FIFO
+    magic = data[: len(_NPY_MAGIC)]
     if magic != _NPY_MAGIC:
         raise ValueError(
             f"{where}: not a .npy file ({'empty' if not magic else 'no .npy header'}; "
             "np.save writes one, or give a .csv)"
         )
     try:
-        a = np.load(path, allow_pickle=False)
+        a = np.load(io.BytesIO(data), allow_pickle=False)
     except (ValueError, EOFError) as exc:  # truncated, pickled objects, a corrupt header
         raise ValueError(f"{where}: not a readable numeric .npy array ({_one_line(exc)})") from None
     if a.dtype.kind not in "iuf" or a.ndim == 0 or a.shape[-1] != n:
