@@ -387,6 +387,10 @@ def test_cli_text_output_and_files(capsys, tmp_path):
         (["3p4s", "--joint-limit", "l9=0:1"], "not a joint"),
         (["3p4s", "--samples", "0"], "integer in"),
         (["--mechanism", "/nonexistent.yaml"], "nonexistent"),
+        (["rpr3", "--at", "phi=1e308"], "at most 1000 rad"),
+        (["rpr3", "--box", "x=-1e308:1e308"], "at most 1e+06 m"),
+        (["rpr3", "--at", "x=0.1"], "not a held coordinate"),
+        (["rpr3", "--at", "phi=nan"], "must be finite"),
     ],
 )
 def test_cli_bad_input_one_line_exit_2(capsys, argv, words):

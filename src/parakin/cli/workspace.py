@@ -8,6 +8,8 @@ import sys
 import numpy as np
 
 from parakin.cli.common import (
+    ANGLE_LIMIT,
+    PARAM_LIMIT,
     _dumps,
     _mechanism_options,
     _text_option,
@@ -111,13 +113,26 @@ def _pairs(items: list[str], option: str, known, what: str) -> dict[str, str]:
     return out
 
 
-def _range(text: str, where: str) -> tuple[float, float]:
+def _value(text: str, where: str, unit: str) -> float:
+    """A number or quantity (``10deg``), finite and within the CLI's bounds: an angle (unit
+    ``rad``) within :data:`ANGLE_LIMIT`, anything else within :data:`PARAM_LIMIT` (SI)."""
+    v = parse_quantity(text)
+    limit = ANGLE_LIMIT if unit == "rad" else PARAM_LIMIT
+    if not (np.isfinite(v) and abs(v) <= limit):
+        raise ValueError(
+            f"{where}: {text!r} must be finite and at most {limit:g} {unit} in magnitude"
+        )
+    return v
+
+
+def _range(text: str, where: str, unit: str = "") -> tuple[float, float]:
     lo, sep, hi = text.partition(":")
     if not sep:
         raise ValueError(f"{where}: {text!r} must look like LO:HI")
     a, b = parse_quantity(lo), parse_quantity(hi)
     if not (np.isfinite(a) and np.isfinite(b) and a < b):
         raise ValueError(f"{where}: {text!r} must have finite LO < HI")
+    _value(lo, where, unit), _value(hi, where, unit)
     return a, b
 
 
@@ -135,10 +150,17 @@ def region_of(args, mech):
                 )
     pose = np.asarray(mech.home(), dtype=float).copy()
     for key, value in _pairs(args.at, "--at", names, "pose coordinate").items():
-        pose[names.index(key)] = parse_quantity(value)
+        k = names.index(key)
+        pose[k] = _value(value, f"--at {key}", mech.pose_units[k])
     region = make_region(mech, axes=axes, pose=pose, stroke=args.stroke,
                          orientation_fraction=args.orientation_fraction, cond_max=args.cond_max,
                          clearance=args.clearance)  # fmt: skip
+    for key in _pairs(args.at, "--at", names, "pose coordinate"):
+        if names.index(key) in region.axes:
+            raise ValueError(
+                f"--at {key}: an axis of the workspace ({', '.join(region.axis_names)}), not a "
+                "held coordinate; set its range with --box"
+            )
     boxed = _pairs(args.box, "--box", names, "pose coordinate")
     lo, hi = region.lo.copy(), region.hi.copy()
     for key, text in boxed.items():
@@ -147,7 +169,9 @@ def region_of(args, mech):
             raise ValueError(
                 f"--box {key}: not an axis of the workspace ({', '.join(region.axis_names)})"
             )
-        lo[region.axes.index(k)], hi[region.axes.index(k)] = _range(text, f"--box {key}")
+        lo[region.axes.index(k)], hi[region.axes.index(k)] = _range(
+            text, f"--box {key}", mech.pose_units[k]
+        )
     olo, ohi = region.orient_lo.copy(), region.orient_hi.copy()
     for key, text in _pairs(
         args.orientation_box, "--orientation-box", names, "pose coordinate"
@@ -158,7 +182,7 @@ def region_of(args, mech):
                 f"--orientation-box {key}: an axis of the workspace, not a held coordinate"
             )
         olo[region.others.index(k)], ohi[region.others.index(k)] = _range(
-            text, f"--orientation-box {key}"
+            text, f"--orientation-box {key}", mech.pose_units[k]
         )
     joints = _pairs(args.joint_limit, "--joint-limit", mech.joint_names, "joint")
     changes = {"lo": lo, "hi": hi, "orient_lo": olo, "orient_hi": ohi}
@@ -169,7 +193,7 @@ def region_of(args, mech):
         jhi = np.full(mech.n_joints, np.inf)
         for key, text in joints.items():
             k = mech.joint_names.index(key)
-            jlo[k], jhi[k] = _range(text, f"--joint-limit {key}")
+            jlo[k], jhi[k] = _range(text, f"--joint-limit {key}", mech.joint_units[k])
         changes.update(joint_lo=jlo, joint_hi=jhi, limits_source="given")
     return region.replace(**changes), bool(boxed)
 
