@@ -1128,6 +1128,7 @@ def mechanism_file_argv(draw):
     return argv + ["--json"]
 
 
+@pytest.mark.slow  # ~20 s: every case builds a described mechanism
 @pytest.mark.skipif(not _takes_mechanism_files(), reason="no --mechanism option yet (issue 43)")
 @settings(
     max_examples=250,

@@ -168,3 +168,76 @@ def test_record_copies_atomically_and_follows_no_symlink(tmp_path, monkeypatch):
     assert len(copied) == len(files) + 2 and victim.read_text() == "keep\n"
     assert (committed / files[0]).read_text() == f"new {files[0]}\n"
     assert not list(committed.rglob("*.tmp*"))
+
+
+# ------------------------------------------------------------ bounded reading (issue 46)
+def test_read_text_refuses_what_is_not_a_regular_file_and_what_is_too_large(tmp_path):
+    import os
+
+    from parakin.io import read_text
+
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    for path, needle in [("/dev/zero", "not a regular file"), (fifo, "not a regular file")]:
+        with pytest.raises(ValueError, match=needle):
+            read_text(path, "--input")
+    with pytest.raises(ValueError, match="not a regular file \\(a directory\\)"):
+        read_text(tmp_path)
+    (tmp_path / "big").write_bytes(b"x" * 101)
+    with pytest.raises(ValueError, match="101 bytes, more than the limit 100"):
+        read_text(tmp_path / "big", limit=100)
+    with pytest.raises(ValueError, match="does not exist"):
+        read_text(tmp_path / "missing")
+
+
+@pytest.mark.parametrize(
+    "text, needle",
+    [
+        ("a: &a [1, 1]\n" + "".join(f"a{i}: &a{i} [*a, *a]\n" for i in range(3)), None),
+        ("x: " + "[" * 63 + "]" * 63, None),  # 64 levels with the mapping
+        ("x: " + "[" * 64 + "]" * 64, "nests deeper than the limit 64 (line 1, column 67)"),
+        ("x: &a [1]\ny: [" + ", ".join(["*a"] * 1001) + "]", "more than 1000 YAML aliases"),
+        ("a: &x [*x]", "refers to itself"),
+        ("[" + ", ".join(["1"] * 100_001) + "]", "expands to 1e+05 values"),
+        ("a:\n\tb: 1", "is not valid YAML (line 2, column 1)"),
+        ("a: !!python/object/apply:os.getpid []", "is not valid YAML"),
+        ('{"a":\t[1, 2]}', None),  # JSON with a tab (YAML refuses it)
+    ],
+    ids=[
+        "aliases",
+        "64-levels",
+        "65-levels",
+        "1001-aliases",
+        "recursive",
+        "100001",
+        "tab",
+        "tag",
+        "json",
+    ],
+)
+def test_parse_data_bounds(text, needle):
+    import re
+
+    from parakin.errors import InputError
+    from parakin.io import parse_data
+
+    if needle is None:
+        assert parse_data(text, "T") is not None
+    else:
+        with pytest.raises(InputError, match=re.escape(needle)):
+            parse_data(text, "T")
+
+
+def test_load_data_is_fast_at_its_size_limit(tmp_path):
+    """The largest accepted file, the most values: read, checked and built in about a second."""
+    import time
+
+    from parakin.io import MAX_DATA_BYTES, load_data
+
+    rows = "\n".join(f"- {i}.5" for i in range(99_000))
+    path = tmp_path / "big.yaml"
+    path.write_text(rows)
+    assert path.stat().st_size < MAX_DATA_BYTES
+    start = time.perf_counter()
+    assert len(load_data(path, "big")) == 99_000
+    assert time.perf_counter() - start < 10  # ~1 s on a loaded 2-core machine
