@@ -506,3 +506,15 @@ def test_cli_dynamics_and_bench_take_a_file(tmp_path, capsys):
     assert main(["dynamics", "rpr3", "--mechanism", str(EXAMPLES / "delta.yaml"),
                  "--trajectory", str(csv)]) == 2  # fmt: skip
     assert "not both" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_cli_bench_runs_the_atlas_on_a_file(capsys):
+    """`parakin bench --mechanism FILE --quick`: every standard solver on the atlas's scenarios
+    (compiles the legs kernel's every method on an empty cache: minutes)."""
+    assert main(["bench", "--mechanism", str(EXAMPLES / "rrr3.yaml"), "--quick", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    nominal = {r["method"]: r for r in rows if r["scenario"] == "nominal"}
+    assert {"newton", "lm", "broyden", "bfgs", "all-solutions", "scipy-root"} <= set(nominal)
+    assert nominal["newton"]["success_rate"] == 1.0
+    assert nominal["all-solutions"]["success_rate"] == 1.0

@@ -436,7 +436,7 @@ class Described(Mechanism, register=False):
     #: the one kernel of every described mechanism: the leg types are its parameters
     kernels: ClassVar[ModuleType] = kernels
     #: the units a paper would print (no paper: millimetres and degrees, the usual ones)
-    _PAPER = {"m": "mm", "rad": "deg"}
+    _PAPER: ClassVar[dict[str, str]] = {"m": "mm", "rad": "deg"}
 
     def __post_init__(self) -> None:
         if self.platform not in PLATFORMS:
