@@ -879,6 +879,17 @@ def _higher(TH, FS, k, R, moving, n):
 
 
 @njit(**_O)
+def _series(U, V, F, scale, add, moving, n):
+    """A term of the features' series that only the parameters' motion reads (a pair with
+    ``x_0``): every feature where the anchors move, ``e.e`` alone where only ``c`` does."""
+    if moving:
+        features(U, V, F, scale, add, n)
+        return
+    for ln in range(n):
+        _put(F, 2, ln, _f_sum4(U, V, 0, ln), scale, add)
+
+
+@njit(**_O)
 def taylor(TH, T, A, L, piv, D, FS, Fx, R, Wk, moving, n):
     """Taylor coefficients ``T[1..4]`` of the path through ``T[0]`` (each lane at its ``t``,
     ``TH`` its coefficients' series there) with the LU ``A, L, piv, D`` of the Jacobian. The
@@ -886,7 +897,9 @@ def taylor(TH, T, A, L, piv, D, FS, Fx, R, Wk, moving, n):
     ``l = 0, 1, 2`` of ``theta_l . F_{k-l}`` (``F_m = sum_{i+j=m} phi(x_i, x_j)``, the
     features' series, and without the ``x_0, x_k`` terms for ``l = 0``), so ``J x_k = -r_k``.
     ``FS`` (4, 2, 19, W) holds ``F_0 .. F_3``, ``Fx`` (2, 19, W) and ``R`` (2, 8, W) scratch."""
-    features(T[0], T[0], FS[0], 1.0, False, n)
+    # where only the leg constants move, the parameters' terms read only e.e: the features of
+    # the pairs with x_0 are needed for that one alone
+    _series(T[0], T[0], FS[0], 1.0, False, moving, n)
     # k = 1: the parameters' motion only
     for m in range(8):
         for ln in range(n):
@@ -895,21 +908,21 @@ def taylor(TH, T, A, L, piv, D, FS, Fx, R, Wk, moving, n):
     _higher(TH, FS, 1, R, moving, n)
     _negate_rhs(R, n)
     solve(A, L, piv, D, R, T[1], Wk, n)
-    features(T[0], T[1], FS[1], 2.0, False, n)
+    _series(T[0], T[1], FS[1], 2.0, False, moving, n)
     # k = 2
     features(T[1], T[1], FS[2], 1.0, False, n)
     combine(TH, 0, FS[2], R, True, False, n)
     _higher(TH, FS, 2, R, moving, n)
     _negate_rhs(R, n)
     solve(A, L, piv, D, R, T[2], Wk, n)
-    features(T[0], T[2], FS[2], 2.0, True, n)
+    _series(T[0], T[2], FS[2], 2.0, True, moving, n)
     # k = 3
     features(T[1], T[2], FS[3], 2.0, False, n)
     combine(TH, 0, FS[3], R, True, False, n)
     _higher(TH, FS, 3, R, moving, n)
     _negate_rhs(R, n)
     solve(A, L, piv, D, R, T[3], Wk, n)
-    features(T[0], T[3], FS[3], 2.0, True, n)
+    _series(T[0], T[3], FS[3], 2.0, True, moving, n)
     # k = 4
     features(T[1], T[3], Fx, 2.0, False, n)
     features(T[2], T[2], Fx, 1.0, True, n)

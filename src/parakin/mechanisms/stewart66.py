@@ -84,6 +84,9 @@ FIBER_SEED = 66
 HOME_HEIGHT = 1.5
 #: retries (with a fresh random bend of the parameter path) of inputs not complete after the first pass
 RETRIES = 3
+#: :meth:`Stewart66.fk_all` takes the new-geometry path (no start system of the geometry's own) for
+#: at most this many inputs on a geometry whose start system is not built yet
+NEW_GEOMETRY_MAX = 1
 #: step control of the once-per-geometry tracking from the stored generic start (cautious)
 START_TRACK: dict[str, float] = {"h0": 0.02, "tau": 5e-4, "hmin": 1e-13, "max_steps": 3000}
 #: attempts at a geometry's start system: the direct segment, then detours through random problems
@@ -118,7 +121,14 @@ def _compiled_kernel(q0: np.ndarray):
 
 
 def load_start() -> dict[str, np.ndarray]:
-    """The stored generic start system (``base``, ``platform``, ``c``, ``patch``, ``solutions``)."""
+    """The stored generic start system (``base``, ``platform``, ``c``, ``patch``, ``solutions``),
+    a copy the caller may change."""
+    return {k: v.copy() for k, v in _stored_start().items()}
+
+
+@lru_cache(maxsize=1)
+def _stored_start() -> dict[str, np.ndarray]:
+    """:func:`load_start`, read once per process (every new-geometry call sets out from it)."""
     with (
         resources.files("parakin.mechanisms").joinpath("data/stewart66_start.npz").open("rb") as fh
     ):
@@ -200,21 +210,47 @@ def _start_leg(attempt: int) -> tuple[np.ndarray, tuple, np.ndarray, np.ndarray]
     patch = (rng.normal(size=8) + 1j * rng.normal(size=8)) / 4
     x0 = st["solutions"] / (st["solutions"] @ patch)[:, None]
     mid = hc.random_problem(rng)
-    x, ok, _ = _start_track(hc.GeneralHomotopy(patch, start, mid), x0)
+    x, ok, _ = _start_track(patch, start, mid, x0)
     return patch, mid, x, ok
 
 
-def _start_track(hom: hc.GeneralHomotopy, x0: np.ndarray):
-    """The cautious tracking (:data:`START_TRACK`) of a start system's paths: compiled
-    (:mod:`parakin.kernels.stewart66_start`, the same algorithm path by path) where the kernels
-    are on, else :func:`parakin.mechanisms.stewart66_homotopy.track`."""
+def _start_track(patch: np.ndarray, source: tuple, target: tuple, x0: np.ndarray):
+    """A start system's paths from the problem ``source`` to ``target`` (each ``(B, P, c)``, all
+    parameters on one straight complex segment) in the affine ``patch``: ``(x, reached, steps)``.
+    Compiled where the kernels are on: the lane tracker of every 6-6 homotopy
+    (:mod:`parakin.kernels.stewart66_lanes`, the Taylor/Padé predictor of the per-input paths, at
+    the cost of a new geometry's input); else the cautious numpy tracker
+    (:func:`parakin.mechanisms.stewart66_homotopy.track` with :data:`START_TRACK`)."""
     from parakin import kernels
 
     if kernels.enabled():
-        from parakin.kernels import stewart66_start
+        from parakin.kernels import stewart66_lanes as lanes
 
-        return stewart66_start.track(hom, x0, **START_TRACK)
-    return hc.track(hom, x0, **START_TRACK)
+        par = np.zeros((1, 3, 6, 7), dtype=complex)
+        for q, (u, v) in enumerate(zip(source, target)):
+            cols = slice(6, 7) if q == 2 else slice(3 * q, 3 * q + 3)
+            u = np.asarray(u, dtype=complex).reshape(6, -1)
+            v = np.asarray(v, dtype=complex).reshape(6, -1)
+            par[0, 0, :, cols] = u
+            par[0, 1, :, cols] = v - u
+        m = len(x0)
+        x = np.empty((m, 8), dtype=complex)
+        ok = np.zeros(m, dtype=bool)
+        steps = np.zeros(m, dtype=np.int64)
+        lanes.track_queue(
+            par,
+            np.ascontiguousarray(x0, dtype=complex),
+            np.zeros(m, dtype=np.int64),
+            np.arange(m),
+            lanes.options_vector(),
+            True,
+            np.ascontiguousarray(patch, dtype=complex),
+            x,
+            ok,
+            steps,
+        )
+        return x, ok, steps
+    return hc.track(hc.GeneralHomotopy(patch, source, target), x0, **START_TRACK)
 
 
 @dataclass(frozen=True)
@@ -378,7 +414,7 @@ class Stewart66(SixLegs):
         for attempt in range(START_ATTEMPTS):
             patch, source, x0, ok0 = _start_leg(attempt)
             best = best / (best @ patch)[:, None]
-            x, ok, _ = _start_track(hc.GeneralHomotopy(patch, source, (b, p, c1)), x0)
+            x, ok, _ = _start_track(patch, source, (b, p, c1), x0)
             x = np.concatenate([best, x[ok & ok0]])
             q = np.broadcast_to(q1, (len(x), 7, 8, 8))
             x, beta, jn = hc.newton_refine(q, patch, x, iters=4)
@@ -397,9 +433,10 @@ class Stewart66(SixLegs):
         if kernel is None:
             return None
         st = self.fk_start
-        _, _, bc, pc, s = self._scaled
+        bs, ps, bc, pc, s = self._scaled
         prepared = kernel.geometry(
-            st["q0"],
+            bs,
+            ps,
             st["c"],
             st["solutions"],
             st["patch"],
@@ -421,10 +458,7 @@ class Stewart66(SixLegs):
         """What a complete answer has: 40 (the generic count) unless coincident anchors were allowed,
         then the count of that layout found by :attr:`fk_start` (16 for the 3-6). A general geometry
         whose start system found fewer than 40 reports every input incomplete rather than hide it."""
-        b, p = self.base_points, self.platform_points
-        tol = 1e-9 * max(np.ptp(b, axis=0).max(), np.ptp(p, axis=0).max())
-        special = self.allow_coincident and bool(_coincident(b, tol) or _coincident(p, tol))
-        return self.root_count if special else 40
+        return self.root_count if self._special_layout else 40
 
     def _target_c(self, q: Array) -> Array:
         b, p, *_ = self._scaled
@@ -493,9 +527,11 @@ class Stewart66(SixLegs):
         self.check_joints(q)
         batch = q.shape[:-1]
         qf = q.reshape(-1, 6)
-        compiled = self._kernel if _kernels_on() else None
-        if compiled is not None:  # parakin.kernels.stewart66_track: the whole computation compiled
-            kernel, prepared = compiled
+        compiled = _compiled_kernel(np.zeros(1)) if _kernels_on() else None
+        if compiled is not None and self._new_geometry_path(len(qf)):
+            info = self._fk_all_new(compiled, qf, retries)
+        elif compiled is not None:  # the geometry's own start system, then every input's fibre
+            kernel, prepared = self._kernel
             res = kernel.fk_all(prepared, self._target_c(qf), qf, retries=retries, alpha0=hc.ALPHA0)
             n_found = res.pop("n_found")
             info = FKAll(
@@ -506,14 +542,64 @@ class Stewart66(SixLegs):
             )
         else:
             info = self._fk_all_numpy(qf, retries)
-        if return_info:
+        if return_info:  # the fields reshaped (not dataclasses.asdict: it deep-copies every array)
+            fields = {f.name: getattr(info, f.name) for f in dataclasses.fields(info)}
             return FKAll(
                 **{
                     k: (v.reshape(batch + v.shape[1:]) if isinstance(v, np.ndarray) else v)
-                    for k, v in dataclasses.asdict(info).items()
+                    for k, v in fields.items()
                 }
             )
         return info.poses.reshape(batch + info.poses.shape[1:])
+
+    def _new_geometry_path(self, n: int) -> bool:
+        """Whether :meth:`fk_all` takes the new-geometry path for ``n`` inputs: a general layout
+        whose start system is not built yet, and at most :data:`NEW_GEOMETRY_MAX` inputs (a path
+        from the stored generic start takes about five times the steps of one from the
+        geometry's own start system, which costs as much as one input to build)."""
+        return (
+            n <= NEW_GEOMETRY_MAX and "fk_start" not in self.__dict__ and not self._special_layout
+        )
+
+    @cached_property
+    def _special_layout(self) -> bool:
+        """Coincident anchors allowed and present: the root count is the layout's, found by
+        :attr:`fk_start`, not 40."""
+        b, p = self.base_points, self.platform_points
+        tol = 1e-9 * max(np.ptp(b, axis=0).max(), np.ptp(p, axis=0).max())
+        return self.allow_coincident and bool(_coincident(b, tol) or _coincident(p, tol))
+
+    def _fk_all_new(self, kernel, qf: Array, retries: int) -> FKAll:
+        """:meth:`fk_all` on the new-geometry path: one homotopy per input from the stored
+        generic start (:func:`parakin.kernels.stewart66_track.fk_all_new`); an input still
+        incomplete after its retries is solved again from this geometry's own start system."""
+        bs, ps, bc, pc, s = self._scaled
+        n = len(qf)
+        geo = (
+            np.broadcast_to(bc, (n, 3)),
+            np.broadcast_to(pc, (n, 3)),
+            np.full(n, s),
+            np.broadcast_to(self.base_points, (n, 6, 3)),
+            np.broadcast_to(self.platform_points, (n, 6, 3)),
+        )
+        res = kernel.fk_all_new(
+            _stored_start(),
+            np.broadcast_to(bs, (n, 6, 3)),
+            np.broadcast_to(ps, (n, 6, 3)),
+            self._target_c(qf),
+            qf,
+            geo,
+            retries=retries,
+            alpha0=hc.ALPHA0,
+        )
+        bad = np.flatnonzero(res["n_found"] < 40)
+        if bad.size:  # the geometry's own start system, then its fibre (rare)
+            k, prepared = self._kernel
+            again = k.fk_all(prepared, self._target_c(qf[bad]), qf[bad], retries=retries, alpha0=hc.ALPHA0)  # fmt: skip
+            for key, value in again.items():
+                res[key][bad] = value
+        n_found = res.pop("n_found")
+        return FKAll(**res, n_found=n_found, n_expected=40, complete=n_found == 40)
 
     def _fk_all_numpy(self, qf: Array, retries: int) -> FKAll:
         """:meth:`fk_all` on flat inputs with the numpy tracker (kernels off or unavailable)."""
