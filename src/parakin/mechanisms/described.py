@@ -1076,7 +1076,7 @@ class Described(Mechanism, register=False):
             other = list(self.joint_names)
         if other:
             parts.append(f"other branch of {', '.join(other)}")
-        else:
+        elif any(leg.type != "length" for leg in self.legs):  # (a length leg has one branch)
             parts.append("legs on their branches")
         return ", ".join(parts)
 
