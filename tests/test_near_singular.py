@@ -61,8 +61,13 @@ def test_the_predicted_neighbour_exists_where_predicted(name):
     distance = np.max(np.abs(found) / width, axis=-1)
     ok = other.success & (distance > 1e-9)
     assert ok.mean() >= 0.9, ok
-    ratio = distance[ok] / c.distance[near][ok]
-    assert np.all((ratio > 0.5) & (ratio < 2)), ratio
+    # the fold's estimate of the offset in box units; where it exceeds the box threshold, the
+    # flag came from the drawn points' motion (c.distance is then in those units, not the box's)
+    predicted = np.max(np.abs(c.neighbour[near]) / width, axis=-1)
+    keep = predicted[ok] <= NEAR_SINGULAR
+    assert keep.mean() >= 0.5
+    ratio = distance[ok] / predicted[ok]
+    assert np.all((ratio[keep] > 0.5) & (ratio[keep] < 2)), ratio
     assert np.all(c.distance[near] <= NEAR_SINGULAR)
 
 

@@ -163,7 +163,10 @@ class Conditioning:
     #: estimated offset ``(..., n_pose)`` from ``x`` to the nearest other solution of the same
     #: joints, across the nearest fold (pose units); NaN where no fold is predicted
     neighbour: Array
-    #: that offset as a fraction of the pose box, ``max_k |neighbour_k| / width_k`` (inf: none)
+    #: how far that is: the smaller of the offset as a fraction of the pose box (``max_k
+    #: |neighbour_k| / width_k``) and the largest displacement of the mechanism's drawn points as
+    #: a fraction of the extent of the points that move (computed where the box fraction is
+    #: 1-10 %); inf where no fold is predicted
     distance: Array
     #: True where ``distance <= threshold``: near a singularity, another solution close by
     near_singular: NDArray[np.bool_]
