@@ -35,6 +35,7 @@ for _item in ARTEFACTS.values():
         conda:
             ENV
         shell:
+            "rm -f {log:q}; "  # a log is written anew, never through what stands at its path
             "OMP_NUM_THREADS={threads} OPENBLAS_NUM_THREADS={threads} MKL_NUM_THREADS={threads} "
             "parakin reproduce {params.study} {params.name} --module {params.module} "
             "--outdir {params.outdir:q} --config-json {params.cfg} --validated 2>&1 | tee {log:q}"

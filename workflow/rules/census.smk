@@ -30,6 +30,7 @@ if CENSUS in config["studies"]:
         conda:
             ENV
         shell:
+            "rm -f {log:q}; "  # a log is written anew, never through what stands at its path
             "OMP_NUM_THREADS={threads} OPENBLAS_NUM_THREADS={threads} MKL_NUM_THREADS={threads} "
             "NUMBA_NUM_THREADS={threads} python -m {params.module} {wildcards.scatteritem} {output:q} "
             "--config-json {params.cfg} 2>&1 | tee {log:q}"

@@ -23,6 +23,7 @@ rule report:
     conda:
         ENV
     shell:
+        "rm -f {log:q}; "  # a log is written anew, never through what stands at its path
         "parakin report --figures {params.figures:q} --out {output:q} 2>&1 | tee {log:q}"
 
 
@@ -48,5 +49,6 @@ if RECORD:
         conda:
             ENV
         shell:
+            "rm -f {log:q}; "  # a log is written anew, never through what stands at its path
             "parakin check --results {params.results:q} --record {params.record:q} --out {params.out:q} "
             "--studies {params.studies} 2>&1 | tee {log:q}"
