@@ -102,20 +102,29 @@ def reproduce(
         items = [registry.find(found, study, name)]
     paths = []
     # the process's CPU so far (interpreter, imports, config)
-    startup = time.process_time()
+    startup = _cpu()
     for item in items:
         out = Path(outdir) if outdir else Path(config["figures_dir"]) / item.study_folder
-        start = time.process_time()
+        start = _cpu()
         paths += item.make(config, out)
-        print(cpu_line(item.name, startup, time.process_time() - start), file=sys.stderr)
+        print(cpu_line(item.name, startup, _cpu() - start), file=sys.stderr)
         startup = 0.0  # paid once per process
     return paths
+
+
+def _cpu() -> float:
+    """CPU seconds of this process (every thread) and of its finished child processes (the
+    workers that run independent runs side by side, :func:`parakin.papers.runs.map_runs`)."""
+    import resource
+
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return time.process_time() + children.ru_utime + children.ru_stime
 
 
 def cpu_line(name: str, startup: float, work: float) -> str:
     """The line each pipeline job writes to its log: what its process spent on start-up (the
     interpreter, the imports, the config) and on the artefact itself, in CPU seconds (all
-    threads), and whether numba was started (its own start, about 0.5-1 s, is then part of the
+    threads, and the worker processes it started), and whether numba was started (its own start, about 0.5-1 s, is then part of the
     artefact's share). :func:`startup_share` adds them up over a run's logs."""
     numba = "numba started" if "numba" in sys.modules else "no numba"
     return f"cpu: {name}: start-up {startup:.3f} s, artefact {work:.3f} s ({numba})"
