@@ -50,6 +50,9 @@ from parakin.mechanisms.stewart66_legs import SixLegs
 
 __all__ = [
     "Stewart66",
+    "fk_all_geometries",
+    "random_platform",
+    "random_pose",
     "DIETMAIER_BASE",
     "DIETMAIER_PLATFORM",
     "DIETMAIER_LENGTHS",
@@ -724,3 +727,76 @@ class Stewart66(SixLegs):
         return hexapod_masses(
             self.platform_points, leg, 10.0, 1.5, 1.0, note="stewart66 illustrative defaults"
         )
+
+
+# ---------------------------------------------------------------------- sampling, many geometries
+def random_platform(rng: np.random.Generator) -> Stewart66:
+    """A random general 6-6 platform: base and platform anchors standard normal in 3-D."""
+    return Stewart66(base=rng.normal(size=(6, 3)), platform=rng.normal(size=(6, 3)))
+
+
+def random_pose(rng: np.random.Generator, n: int, mech: Stewart66) -> Array:
+    """``n`` random poses: uniformly random orientation (ZYX angles of a random unit quaternion),
+    origin normal around :meth:`Stewart66.home` with standard deviation ``size``."""
+    q = rng.normal(size=(n, 4))
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    ang = euler_zyx_from_matrix(hc.quat_rotation(q))
+    o = mech.home()[3:] + rng.normal(size=(n, 3)) * mech.size
+    return np.concatenate([ang, o], -1)
+
+
+def fk_all_geometries(
+    base: ArrayLike, platform: ArrayLike, joints: ArrayLike, *, retries: int = RETRIES
+) -> FKAll:
+    """Every forward solution of ``n`` inputs, each on its own geometry: ``base``, ``platform``
+    (n, 6, 3) and leg lengths ``joints`` (n, 6). The new-geometry path batched: every input
+    tracked from the stored generic start system in one homotopy (no start system of its own),
+    all inputs' paths side by side in the compiled lanes; an input still incomplete after its
+    retries is solved again from its geometry's own start system. Anchors are validated as
+    :class:`Stewart66` does (a general layout: coincident anchors are refused). Returns an
+    :class:`FKAll` with batch shape ``(n,)`` (``n_expected`` 40). Needs the compiled kernels;
+    without them each geometry's :meth:`Stewart66.fk_all` runs in turn."""
+    b = np.asarray(base, dtype=float)
+    p = np.asarray(platform, dtype=float)
+    q = np.asarray(joints, dtype=float)
+    if b.ndim != 3 or b.shape[1:] != (6, 3) or p.shape != b.shape or q.shape != (len(b), 6):
+        raise ValueError(
+            f"base and platform must be (n, 6, 3) and joints (n, 6), got {b.shape}, {p.shape}, "
+            f"{q.shape}"
+        )
+    mechs = [Stewart66(base=bi, platform=pi) for bi, pi in zip(b, p)]
+    for m, qi in zip(mechs, q):
+        m.check_joints(qi)
+    kernel = _compiled_kernel(np.zeros(1)) if _kernels_on() else None
+    if kernel is None:
+        infos = [m.fk_all(qi, return_info=True, retries=retries) for m, qi in zip(mechs, q)]
+        return _stack(infos)
+    scaled = [m._scaled for m in mechs]
+    bs = np.stack([sc[0] for sc in scaled])
+    ps = np.stack([sc[1] for sc in scaled])
+    geo = (
+        np.stack([sc[2] for sc in scaled]),
+        np.stack([sc[3] for sc in scaled]),
+        np.array([sc[4] for sc in scaled]),
+        b,
+        p,
+    )
+    c1 = np.stack([m._target_c(qi[None])[0] for m, qi in zip(mechs, q)])
+    res = kernel.fk_all_new(_stored_start(), bs, ps, c1, q, geo, retries=retries, alpha0=hc.ALPHA0)
+    for i in np.flatnonzero(res["n_found"] < 40):  # its own start system, then its fibre (rare)
+        k, prepared = mechs[i]._kernel
+        again = k.fk_all(prepared, c1[i : i + 1], q[i : i + 1], retries=retries, alpha0=hc.ALPHA0)
+        for key, value in again.items():
+            res[key][i] = value[0]
+    n_found = res.pop("n_found")
+    return FKAll(**res, n_found=n_found, n_expected=40, complete=n_found == 40)
+
+
+def _stack(infos: list[FKAll]) -> FKAll:
+    """One :class:`FKAll` of single-input results (each with batch shape ``()``)."""
+    fields = [f.name for f in dataclasses.fields(FKAll)]
+    out = {}
+    for name in fields:
+        values = [getattr(r, name) for r in infos]
+        out[name] = values[0] if name == "n_expected" else np.stack([np.asarray(v) for v in values])
+    return FKAll(**out)

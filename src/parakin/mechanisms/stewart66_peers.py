@@ -33,7 +33,7 @@ import numpy as np
 import pandas as pd
 
 from parakin.geometry import euler_zyx
-from parakin.mechanisms.stewart66 import DIETMAIER_LENGTHS, Stewart66
+from parakin.mechanisms.stewart66 import DIETMAIER_LENGTHS, Stewart66, random_pose
 from parakin.timing import one_thread
 
 __all__ = [
@@ -176,8 +176,6 @@ def _pose_key(mech: Stewart66, poses: np.ndarray) -> np.ndarray:
 
 def _inputs(mech: Stewart66, n: int, seed: int) -> np.ndarray:
     """Dietmaier's leg lengths and ``n - 1`` inputs from random poses (``studies.stewart66``)."""
-    from parakin.studies.stewart66 import random_pose
-
     rng = np.random.default_rng(seed)
     q = mech.ik(random_pose(rng, max(n - 1, 0), mech))
     return np.concatenate([np.asarray(DIETMAIER_LENGTHS)[None], q])[:n]

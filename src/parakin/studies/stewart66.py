@@ -25,7 +25,12 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from parakin.mechanisms.stewart66 import DIETMAIER_LENGTHS, Stewart66
+from parakin.mechanisms.stewart66 import (
+    DIETMAIER_LENGTHS,
+    Stewart66,
+    random_platform,
+    random_pose,
+)
 from parakin.timing import one_thread
 
 __all__ = [
@@ -44,24 +49,6 @@ DEFAULTS: dict[str, Any] = {"seed": 66, "n_platforms": 50, "n_poses": 200, "n_ti
 
 def _cfg(config: dict | None) -> dict[str, Any]:
     return {**DEFAULTS, **(config or {})}
-
-
-def random_platform(rng: np.random.Generator) -> Stewart66:
-    """A random general 6-6 platform: base and platform anchors standard normal in 3-D."""
-    return Stewart66(base=rng.normal(size=(6, 3)), platform=rng.normal(size=(6, 3)))
-
-
-def random_pose(rng: np.random.Generator, n: int, mech: Stewart66) -> np.ndarray:
-    """``n`` random poses: uniformly random orientation (ZYX angles of a random unit quaternion),
-    origin normal around :meth:`Stewart66.home` with standard deviation ``size``."""
-    from parakin.geometry import euler_zyx_from_matrix
-    from parakin.mechanisms.stewart66_homotopy import quat_rotation
-
-    q = rng.normal(size=(n, 4))
-    q /= np.linalg.norm(q, axis=-1, keepdims=True)
-    ang = euler_zyx_from_matrix(quat_rotation(q))
-    o = mech.home()[3:] + rng.normal(size=(n, 3)) * mech.size
-    return np.concatenate([ang, o], -1)
 
 
 # ------------------------------------------------------------------------------------ assemblies
