@@ -113,3 +113,19 @@ def _json(config) -> str:
     import json
 
     return json.dumps(config)
+
+
+def test_single_input_platforms_share_one_batch_with_the_same_counts(tmp_path):
+    """With one input per platform a chunk solves its inputs together on the new-geometry path
+    (every input from the stored generic start, no start system per platform); the rows are those
+    of each platform's own start system and fibre, timing aside: the counts are properties of the
+    inputs, not of the homotopy that found the solutions."""
+    section = census._section(_config(tmp_path, 1, platforms=6, inputs_per_platform=1))
+    batched = census.chunk_data(section, 1).drop(columns="wall_s")
+    rows = []
+    for k in range(6):
+        mech, legs = census._platform(section["seed"], k, section)
+        assert mech.root_count == 40  # its own start system: fk_all then takes the fibre
+        rows.append(census._row(k, len(legs), mech.fk_all(legs, return_info=True), 0.0))
+    pd.testing.assert_frame_equal(batched, pd.DataFrame(rows).drop(columns="wall_s"))
+    assert (batched["complete"] == 1).all() and (batched["root_count"] == 40).all()

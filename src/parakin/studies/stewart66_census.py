@@ -20,6 +20,7 @@ any chunk that is missing (a resumed run loses nothing a finished chunk wrote).
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from pathlib import Path
 from typing import Any
@@ -27,7 +28,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from parakin.mechanisms.stewart66 import Stewart66
+from parakin.mechanisms.stewart66 import Stewart66, fk_all_geometries
 
 __all__ = [
     "chunk_name",
@@ -63,7 +64,7 @@ def chunk_platforms(section: dict[str, Any], i: int) -> range:
 
 def _platform(seed: int, index: int, section: dict[str, Any]) -> tuple[Stewart66, np.ndarray]:
     """Platform ``index`` of the census and the leg lengths of its inputs (its own random stream)."""
-    from parakin.studies.stewart66 import random_platform, random_pose
+    from parakin.mechanisms.stewart66 import random_platform, random_pose
 
     rng = np.random.default_rng([seed, index])
     mech = random_platform(rng)
@@ -82,28 +83,63 @@ def platform_row(seed: int, index: int, section: dict[str, Any]) -> dict[str, An
     t0 = time.perf_counter()
     mech, legs = _platform(seed, index, section)
     r = mech.fk_all(legs, return_info=True)
-    real = np.asarray(r.n_real)
-    undecided = np.asarray(r.n_undecided) > 0
-    done = np.asarray(r.complete)
+    return _row(index, len(legs), r, time.perf_counter() - t0)
+
+
+def _row(index: int, inputs: int, r, wall: float) -> dict[str, Any]:
+    """A platform's row from its inputs' :class:`parakin.mechanisms.stewart66.FKAll` (batch
+    shape ``(inputs,)``); ``root_count`` the count a complete input has (40: the layouts are
+    general)."""
+    real = np.asarray(r.n_real).reshape(-1)
+    undecided = np.asarray(r.n_undecided).reshape(-1) > 0
+    done = np.asarray(r.complete).reshape(-1)
     # an input enters the histogram when complete and every solution's reality is decided
     counts = np.bincount(real[done & ~undecided], minlength=ROOTS + 1)
     return {
         "platform": index,
-        "root_count": int(mech.root_count),
-        "inputs": len(legs),
+        "root_count": int(r.n_expected),
+        "inputs": inputs,
         "complete": int(done.sum()),
         "undecided": int((done & undecided).sum()),
         "incomplete_real_found": int(real[~done].sum()),
         "max_real": int(real.max()),
         **dict(zip(COUNT_COLUMNS, counts.tolist())),
-        "wall_s": time.perf_counter() - t0,
+        "wall_s": wall,
     }
 
 
+#: platforms with at most this many inputs are solved together, every input from the stored
+#: generic start in one homotopy (:func:`parakin.mechanisms.stewart66.fk_all_geometries`); a
+#: platform with more inputs first moves that start to its own geometry by the same homotopy
+#: (its start system, about the cost of one such input) and then takes each input along its
+#: fibre, about five times shorter (docs/census.md)
+SHARED_START_INPUTS = 1
+
+
 def chunk_data(section: dict[str, Any], i: int) -> pd.DataFrame:
-    """Chunk ``i`` (1-based) of the census: one row per platform (:func:`platform_row`)."""
+    """Chunk ``i`` (1-based) of the census: one row per platform (:func:`platform_row`); with at
+    most :data:`SHARED_START_INPUTS` inputs per platform, the chunk's inputs in one batch on the
+    new-geometry path (each row then carries an equal share of the batch's wall time)."""
     seed = int(section["seed"])
-    return pd.DataFrame([platform_row(seed, k, section) for k in chunk_platforms(section, i)])
+    platforms = chunk_platforms(section, i)
+    if int(section["inputs_per_platform"]) > SHARED_START_INPUTS:
+        return pd.DataFrame([platform_row(seed, k, section) for k in platforms])
+    t0 = time.perf_counter()
+    drawn = [_platform(seed, k, section) for k in platforms]
+    r = fk_all_geometries(
+        np.concatenate([np.broadcast_to(m.base_points, (len(q), 6, 3)) for m, q in drawn]),
+        np.concatenate([np.broadcast_to(m.platform_points, (len(q), 6, 3)) for m, q in drawn]),
+        np.concatenate([q for _, q in drawn]),
+    )
+    wall = (time.perf_counter() - t0) / max(1, len(drawn))
+    rows, start = [], 0
+    for k, (_, q) in zip(platforms, drawn):
+        part = slice(start, start + len(q))
+        start += len(q)
+        sub = {f.name: getattr(r, f.name) for f in dataclasses.fields(r)}
+        sub = {f: (v[part] if isinstance(v, np.ndarray) else v) for f, v in sub.items()}
+        rows.append(_row(k, len(q), type(r)(**sub), wall))
+    return pd.DataFrame(rows)
 
 
 def write_chunk(config: dict, i: int, path: str | Path) -> Path:
