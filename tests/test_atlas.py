@@ -194,8 +194,8 @@ def test_committed_atlas_covers_every_solver_and_mechanism():
     assert df[df["mechanism"] == "stewart12"]["home_cond"].iloc[0] > 1e12
 
 
-def test_readme_quotes_the_generated_benchmark_block():
-    readme = (ROOT / "README.md").read_text()
+def test_results_page_quotes_the_generated_benchmark_block():
+    readme = (ROOT / "docs" / "results.md").read_text()
     bench = (ROOT / "figures" / "benchmarks.md").read_text()
     assert extras.readme_block(readme) == extras.readme_block(bench)
     res = subprocess.run(

@@ -170,13 +170,13 @@ def test_report_csv_beside_report(tmp_path):
     assert "consistent after fitting or assuming" in text and "## At a glance" in text
 
 
-def test_readme_status_and_glance_blocks_match_report():
+def test_results_page_status_and_glance_blocks_match_report():
     from parakin.report import readme_blocks_match
 
     report_csv = ROOT / "figures" / "report.csv"
     if not report_csv.exists():
         pytest.skip("figures/report.csv is written by the next recorded run")
-    assert readme_blocks_match((ROOT / "README.md").read_text(), report_csv)
+    assert readme_blocks_match((ROOT / "docs" / "results.md").read_text(), report_csv)
 
 
 def test_every_item_of_every_paper_is_drawn_or_says_why_not():

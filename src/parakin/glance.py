@@ -1,5 +1,5 @@
-"""What each paper contains and what we made of it: the item table of ``REPORT.md`` and README's
-"Results at a glance" block, generated from ``figures/report.csv``, the files in ``figures/`` and
+"""What each paper contains and what we made of it: the item table of ``REPORT.md`` and the
+"At a glance" block of the results page (``docs/results.md``), generated from ``figures/report.csv``, the files in ``figures/`` and
 ``data/reference/items.csv`` (the paper's tables and figures, transcribed from its captions).
 
 An item's status is derived, never typed: from the verdicts of its published numbers in
@@ -155,7 +155,7 @@ def _headline(report: pd.DataFrame, key: str) -> list[str]:
             continue
         seen.add(q)
         unit = f" {r.unit}" if r.unit not in ("", "1") else ""
-        evidence = f" ([evidence](figures/{r.evidence}))" if r.evidence else ""
+        evidence = f" ([evidence](../figures/{r.evidence}))" if r.evidence else ""  # from docs/
         # the paper value as printed; what kind of claim it is comes from the tolerance column
         how = _BOUND_WORDS.get(str(r.tolerance).split(":")[0], "")
         out.append(

@@ -14,15 +14,20 @@ from parakin.cli.common import (
 )
 from parakin.io import read_text
 
+#: the page whose generated blocks ``parakin readme`` writes (README links to it)
+RESULTS_PAGE = "docs/results.md"
+
 
 def cmd_readme(args) -> int:
-    """Copy the "at a glance" block of ``figures/benchmarks.md`` into README (``--check``: only compare)."""
+    """Write the generated blocks of the results page (``docs/results.md``): the verdict counts
+    and the glance block from ``figures/report.csv``, the speed summary from
+    ``figures/benchmarks.md`` (``--check``: only compare)."""
     from parakin.config import ROOT
     from parakin.glance import GLANCE_BEGIN, GLANCE_END
     from parakin.report import STATUS_BEGIN, STATUS_END, readme_blocks_match, sync_status
     from parakin.studies.solver_atlas import BEGIN, END, readme_block, sync_readme
 
-    readme = Path(args.readme) if args.readme is not None else ROOT / "README.md"
+    readme = Path(args.readme) if args.readme is not None else ROOT / RESULTS_PAGE
     bench = (
         Path(args.benchmarks) if args.benchmarks is not None else ROOT / "figures" / "benchmarks.md"
     )
@@ -139,10 +144,10 @@ def cmd_report(args) -> int:
 def add_readme(sub) -> None:
     p = sub.add_parser(
         "readme",
-        help="copy the benchmark summary block of figures/benchmarks.md into README.md",
+        help="write the record's verdict counts, glance and speed blocks into docs/results.md",
         func=cmd_readme,
     )
-    _text_option(p, "--readme", help="README file (default: the project's)")
+    _text_option(p, "--readme", help=f"the page to write (default: {RESULTS_PAGE})")
     _text_option(
         p,
         "--benchmarks",
@@ -240,7 +245,7 @@ def add_record(sub) -> None:
         "--no-readme",
         dest="readme",
         action="store_false",
-        help="do not copy the benchmark block into README",
+        help=f"do not write the generated blocks into {RESULTS_PAGE}",
     )
 
 
