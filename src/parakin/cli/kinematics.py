@@ -168,7 +168,10 @@ def _write_fk(path: str, mech, pu, pose: np.ndarray, res, near: np.ndarray) -> N
         "status": [_status_name(v) for v in np.atleast_1d(res.status)],
         "nit": np.atleast_1d(res.nit),
         "residual": np.atleast_1d(res.residual).astype(float),
-        "joint_error_m": np.atleast_1d(res.joint_error).astype(float),
+        # in the joints' units: metres where every joint is a length (the column's old name)
+        ("joint_error_m" if set(mech.joint_units) == {"m"} else "joint_error"): np.atleast_1d(
+            res.joint_error
+        ).astype(float),
         "near_singular": np.atleast_1d(near),
     }
     write_rows(path, mech.pose_names, pu, flat, extra=extra)
