@@ -9,7 +9,14 @@ torch = pytest.importorskip("torch")
 
 from parakin.errors import ShapeError  # noqa: E402
 from parakin.mechanisms import P3P4S  # noqa: E402
-from parakin.nn import BPNetwork, residual_jacobian, residuals, torch_forward, train_lm  # noqa: E402
+from parakin.nn import (  # noqa: E402
+    BPNetwork,
+    residual_jacobian,
+    residual_jacobian_autograd,
+    residuals,
+    torch_forward,
+    train_lm,
+)
 from parakin.nn.bp import nguyen_widrow_init  # noqa: E402
 from parakin.workspace import sample_reachable  # noqa: E402
 
@@ -113,6 +120,20 @@ def test_jacobian_matches_finite_differences():
         rtol=0,
         atol=1e-15,
     )
+
+
+@pytest.mark.parametrize("hidden, n_in, n_out", [(10, 3, 3), (4, 2, 5)])
+def test_closed_form_jacobian_equals_automatic_differentiation(hidden, n_in, n_out):
+    """The closed-form Jacobian the training uses is reverse-mode AD's, to rounding, on random
+    weights and on the saturated weights of a trained network (h near +-1)."""
+    gen = torch.Generator().manual_seed(11)
+    x = 2 * torch.rand(200, n_in, generator=gen, dtype=torch.float64) - 1
+    t = 2 * torch.rand(200, n_out, generator=gen, dtype=torch.float64) - 1
+    for scale in (1.0, 20.0):
+        w = scale * nguyen_widrow_init(n_in, hidden, n_out, gen)
+        J, ref = residual_jacobian(w, x, t, hidden), residual_jacobian_autograd(w, x, t, hidden)
+        assert J.shape == ref.shape == (200 * n_out, w.numel())
+        assert torch.max(torch.abs(J - ref)) <= 1e-15 * max(1.0, float(torch.max(torch.abs(ref))))
 
 
 def test_same_seed_same_weights_different_seed_different(p3p4s_data, small):
