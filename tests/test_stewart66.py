@@ -413,16 +413,16 @@ def test_compiled_start_tracker_follows_the_numpy_paths(random_mechs):
 # ------------------------------------------------------------------------- peers
 def test_peer_bench_with_bertini():
     """``parakin bench --peers``: Bertini 2 (optional wheel) tracks the same parameter homotopy to
-    the same 40 solutions on Dietmaier's input; our rows report complete inputs."""
+    the same 40 solutions on Dietmaier's input, timed input by input against ours."""
     pytest.importorskip("bertini")
     pytest.importorskip("numba")
     from parakin.mechanisms import stewart66_peers as peers
 
     df = peers.bench_peers(n_inputs=2, n_bertini=1, double=False)
-    assert list(df["solver"].str.contains("parakin")) == [True, True, False]
-    assert df.loc[0, "agree"] == 2 and df.loc[2, "agree"] == 1 and df.loc[2, "inputs"] == 1
-    assert "finite solutions per input: [40]" in df.loc[2, "note"]
-    assert "| Bertini 2 parameter homotopy, adaptive precision |" in peers.format_peers(df)
+    row = df[df["peer"].str.contains("Bertini")].iloc[0]
+    assert row["inputs"] == 1 and row["agree"] == 1 and "40 (1x)" in row["note"]
+    assert row["case"] == "same geometry, one input per call" and row["ratio_median"] > 1
+    assert "Bertini 2 parameter homotopy, adaptive precision" in peers.format_peers(df)
 
 
 def test_peer_elimination_template_needs_its_repository(tmp_path):
@@ -430,3 +430,63 @@ def test_peer_elimination_template_needs_its_repository(tmp_path):
 
     with pytest.raises(FileNotFoundError, match="martyushev/fkSGP"):
         peers.martyushev_solver(tmp_path)
+
+
+#: a stand-in for the elimination template's repository (python/solver66.py, python/genSGP.py):
+#: its solver returns our own real postures as rotations and translations, its generator draws
+#: anchors and a pose from numpy's global generator as the real one does
+_STAND_IN = {
+    "solver66.py": """
+import numpy as np
+from parakin.geometry import euler_zyx
+from parakin.mechanisms.stewart66 import Stewart66
+
+def solver66(X, x, L, realOnly):
+    poses = Stewart66(base=X, platform=x).fk_all(np.sqrt(L))
+    poses = poses[np.isfinite(poses[:, 0])]
+    r = euler_zyx(poses[:, 0], poses[:, 1], poses[:, 2])
+    return np.concatenate([r, poses[:, 3:, None]], -1), np.zeros(len(poses))
+""",
+    "genSGP.py": """
+import numpy as np
+
+def genSGP(sgpType, motionType):
+    X = np.vstack([np.zeros((1, 3)), 4 * np.random.rand(5, 3) - 2])
+    x = np.vstack([np.zeros((1, 3)), 4 * np.random.rand(5, 3) - 2])
+    t = np.random.randn(3)
+    L = np.sum((x + t - X) ** 2, axis=1)
+    return {"X": X, "x": x, "L": L, "solver": "solver66"}
+""",
+}
+
+
+def test_peer_bench_times_input_by_input_and_compares_the_solutions(tmp_path):
+    """The per-input comparison with a stand-in elimination template (our own real poses): every
+    case and origin of inputs has its row, every input agrees, the ratios are medians and
+    quartiles of per-input ratios, and the order of the two sides alternates."""
+    pytest.importorskip("numba")
+    from parakin.mechanisms import stewart66_peers as peers
+
+    (tmp_path / "python").mkdir()
+    for name, text in _STAND_IN.items():
+        (tmp_path / "python" / name).write_text(text)
+    df = peers.bench_peers(n_inputs=3, n_bertini=0, fksgp=tmp_path)
+    rows = df[df["peer"].str.startswith("Martyushev")]
+    assert sorted(zip(rows["case"], rows["inputs_from"])) == sorted(
+        [
+            ("same geometry, one input per call", "parakin: Dietmaier's platform"),
+            ("same geometry, one input per call", "fkSGP genSGP"),
+            ("new geometry per call (everything timed)", "parakin: random platforms"),
+            ("new geometry per call (everything timed)", "fkSGP genSGP"),
+        ]
+    )
+    assert (rows["agree"] == rows["inputs"]).all()
+    assert (rows["ratio_q1"] <= rows["ratio_median"]).all()
+    assert (rows["ratio_median"] <= rows["ratio_q3"]).all()
+    batch = df[df["case"].str.startswith("batched")]
+    assert len(batch) == 3 and (batch["agree"] == batch["inputs"]).all()
+    text = peers.format_peers(df)
+    assert "peer / parakin, per input: median [IQR]" in text and "machine:" in text
+    order = []
+    peers.interleaved(lambda i: order.append(("A", i)), lambda i: order.append(("B", i)), 3)
+    assert order == [("A", 0), ("B", 0), ("B", 1), ("A", 1), ("A", 2), ("B", 2)]
