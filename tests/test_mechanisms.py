@@ -141,11 +141,11 @@ def test_geometry_file_solves_ones_own_6_6_platform(tmp_path):
     ("argv", "message"),
     [
         (["--param", "base=[[0, 0, 0]]"], "expected an array of shape (6, 3), got shape (1, 3)"),
-        (["--param", "base=[[0, 0"], "is not a YAML/JSON list"),
+        (["--param", "base=[[0, 0"], "is not valid YAML"),
         (["--param", "base=[[1e9, 0, 0]" + ", [0, 0, 0]" * 5 + "]"], "finite numbers <= 1e+06"),
         (["--param", "allow_coincident=1"], "unknown parameter(s) ['allow_coincident']"),
         (["--geometry", "GEOM"], "unknown parameter(s) ['legs']"),
-        (["--geometry", "MISSING"], "No such file or directory"),
+        (["--geometry", "MISSING"], "does not exist"),
     ],
 )
 def test_bad_parameters_get_one_line(argv, message, tmp_path):

@@ -203,7 +203,7 @@ def from_dict(data: Any, source: str = "description") -> Described:
     if not isinstance(name, str) or not name.strip():
         raise DescriptionError(f"{source}: name: expected a non-empty text, got {name!r:.60}")
     platform = data.get("platform")
-    if platform not in PLATFORMS:
+    if not isinstance(platform, str) or platform not in PLATFORMS:
         raise DescriptionError(
             f"{source}: platform: expected one of {', '.join(PLATFORMS)}, got {platform!r:.60}"
         )
@@ -309,7 +309,7 @@ def _leg(data: Any, where: str) -> Leg:
     if not isinstance(data, dict):
         raise DescriptionError(f"{where}: expected a mapping with a type, got {data!r:.60}")
     kind = data.get("type")
-    if kind not in LEG_TYPES:
+    if not isinstance(kind, str) or kind not in LEG_TYPES:
         raise DescriptionError(
             f"{where}.type: expected one of {', '.join(LEG_TYPES)}, got {kind!r:.60}"
         )
