@@ -64,8 +64,9 @@ __all__ = [
 ]
 
 _O = dict(cache=True, error_model="numpy", nogil=True)
-#: paths side by side: the lanes, the last axis of every array
-LANES = 32
+#: paths side by side: the lanes, the last axis of every array (a single input's 40 paths fill
+#: them: no second pass of its queue)
+LANES = 40
 #: from this many active lanes on, the loops run over the lanes innermost (vectorised); below,
 #: one lane at a time (a vector loop's set-up costs more than a few lanes' work)
 VECTOR_LANES = 8
@@ -265,6 +266,149 @@ def _theta_leg(PAR, t, TH, leg, ln, series):
         _store_s(TH, 2, leg, ln, db, dp)  # M''/2 = b_1 p_1^T
 
 
+@njit(inline="always", **_O)
+def _bp(PAR, leg, t, ln):
+    """A leg's anchors at ``t``: ``b, p`` as ``(x_r, x_i, y_r, y_i, z_r, z_i)``."""
+    b0r, b0i = _anchor(PAR, leg, 0, t, ln)
+    b1r, b1i = _anchor(PAR, leg, 1, t, ln)
+    b2r, b2i = _anchor(PAR, leg, 2, t, ln)
+    p0r, p0i = _anchor(PAR, leg, 3, t, ln)
+    p1r, p1i = _anchor(PAR, leg, 4, t, ln)
+    p2r, p2i = _anchor(PAR, leg, 5, t, ln)
+    return (b0r, b0i, b1r, b1i, b2r, b2i), (p0r, p0i, p1r, p1i, p2r, p2i)
+
+
+@njit(inline="always", **_O)
+def _slopes(PAR, leg, ln):
+    """A leg's anchors' slopes ``b_1, p_1`` as ``(x_r, x_i, y_r, y_i, z_r, z_i)``."""
+    return (
+        (PAR[1, 0, leg, 0, ln], PAR[1, 1, leg, 0, ln], PAR[1, 0, leg, 1, ln],
+         PAR[1, 1, leg, 1, ln], PAR[1, 0, leg, 2, ln], PAR[1, 1, leg, 2, ln]),
+        (PAR[1, 0, leg, 3, ln], PAR[1, 1, leg, 3, ln], PAR[1, 0, leg, 4, ln],
+         PAR[1, 1, leg, 4, ln], PAR[1, 0, leg, 5, ln], PAR[1, 1, leg, 5, ln]),
+    )  # fmt: skip
+
+
+@njit(inline="always", **_O)
+def _m(b, p, j, k):
+    """``M_jk = b_j p_k`` (complex)."""
+    return _mul(b[2 * j], b[2 * j + 1], p[2 * k], p[2 * k + 1])
+
+
+@njit(inline="always", **_O)
+def _s_group(b, p, g):
+    """Entries of ``S'(b p^T)`` (:func:`_s_of_m`'s formulas, the same operations) by group ``g``,
+    a constant at each call: 0 the diagonal (ww, xx, yy, zz), 1 (wx, yz), 2 (wy, xz), 3 (wz,
+    xy); ``(re, im)`` of up to four entries (0 padding)."""
+    if g == 0:
+        m00, m11, m22 = _m(b, p, 0, 0), _m(b, p, 1, 1), _m(b, p, 2, 2)
+        return (
+            -2.0 * (m00[0] + m11[0] + m22[0]),
+            -2.0 * (m00[1] + m11[1] + m22[1]),
+            -2.0 * (m00[0] - m11[0] - m22[0]),
+            -2.0 * (m00[1] - m11[1] - m22[1]),
+            -2.0 * (m11[0] - m00[0] - m22[0]),
+            -2.0 * (m11[1] - m00[1] - m22[1]),
+            -2.0 * (m22[0] - m00[0] - m11[0]),
+            -2.0 * (m22[1] - m00[1] - m11[1]),
+        )
+    if g == 1:
+        u, v = _m(b, p, 1, 2), _m(b, p, 2, 1)  # wx = -2 (m21 - m12), yz = -2 (m12 + m21)
+        return (-2.0 * (v[0] - u[0]), -2.0 * (v[1] - u[1]), -2.0 * (u[0] + v[0]), -2.0 * (u[1] + v[1]), 0.0, 0.0, 0.0, 0.0)  # fmt: skip
+    if g == 2:
+        u, v = _m(b, p, 0, 2), _m(b, p, 2, 0)  # wy = -2 (m02 - m20), xz = -2 (m02 + m20)
+        return (-2.0 * (u[0] - v[0]), -2.0 * (u[1] - v[1]), -2.0 * (u[0] + v[0]), -2.0 * (u[1] + v[1]), 0.0, 0.0, 0.0, 0.0)  # fmt: skip
+    u, v = _m(b, p, 0, 1), _m(b, p, 1, 0)  # wz = -2 (m10 - m01), xy = -2 (m01 + m10)
+    return (-2.0 * (v[0] - u[0]), -2.0 * (v[1] - u[1]), -2.0 * (u[0] + v[0]), -2.0 * (u[1] + v[1]), 0.0, 0.0, 0.0, 0.0)  # fmt: skip
+
+
+#: where each group of :func:`_s_group` goes among theta's entries (two for groups 1..3)
+_SG = ((7, 8, 9, 10), (11, 16, 0, 0), (12, 15, 0, 0), (13, 14, 0, 0))
+
+
+@njit(inline="always", **_O)
+def _put_s(TH, lev, leg, ln, g, e):
+    """Write group ``g``'s entries ``e`` into level ``lev`` of a leg's theta."""
+    cols = _SG[g]
+    for k in range(4 if g == 0 else 2):
+        TH[lev, 0, leg, cols[k], ln] = e[2 * k]
+        TH[lev, 1, leg, cols[k], ln] = e[2 * k + 1]
+
+
+@njit(inline="always", **_O)
+def _series_s(PAR, tt, TH, leg, ln, g):
+    """Group ``g`` of ``S'`` in levels 1 and 2: ``S'(M') = S'(b dp^T) + S'(db p^T)`` (added in the
+    order :func:`_theta_leg` adds them) and ``S'(M''/2) = S'(db dp^T)``."""
+    b, p = _bp(PAR, leg, tt[ln], ln)
+    db, dp = _slopes(PAR, leg, ln)
+    e1 = _s_group(db, p, g)
+    e2 = _s_group(b, dp, g)
+    _put_s(TH, 1, leg, ln, g, (
+        e2[0] + e1[0], e2[1] + e1[1], e2[2] + e1[2], e2[3] + e1[3],
+        e2[4] + e1[4], e2[5] + e1[5], e2[6] + e1[6], e2[7] + e1[7],
+    ))  # fmt: skip
+    _put_s(TH, 2, leg, ln, g, _s_group(db, dp, g))
+
+
+@njit(**_O)
+def _theta_lanes(PAR, tt, TH, series, n):
+    """:func:`_theta_leg` of every leg with the lanes innermost (vectorised): the same values,
+    written by entry groups."""
+    for leg in range(6):
+        for ln in range(n):
+            t = tt[ln]
+            for a in range(2):
+                TH[0, a, leg, 0, ln] = PAR[0, a, leg, 6, ln] + t * (
+                    PAR[1, a, leg, 6, ln] + t * PAR[2, a, leg, 6, ln]
+                )
+        for ln in range(n):
+            b, p = _bp(PAR, leg, tt[ln], ln)
+            for a in range(3):
+                TH[0, 0, leg, 1 + a, ln] = p[2 * a] - b[2 * a]
+                TH[0, 1, leg, 1 + a, ln] = p[2 * a + 1] - b[2 * a + 1]
+                TH[0, 0, leg, 4 + a, ln] = p[2 * a] + b[2 * a]
+                TH[0, 1, leg, 4 + a, ln] = p[2 * a + 1] + b[2 * a + 1]
+        # one loop per group, the group a constant in each (so that every branch folds away)
+        for ln in range(n):
+            b, p = _bp(PAR, leg, tt[ln], ln)
+            _put_s(TH, 0, leg, ln, 0, _s_group(b, p, 0))
+        for ln in range(n):
+            b, p = _bp(PAR, leg, tt[ln], ln)
+            _put_s(TH, 0, leg, ln, 1, _s_group(b, p, 1))
+        for ln in range(n):
+            b, p = _bp(PAR, leg, tt[ln], ln)
+            _put_s(TH, 0, leg, ln, 2, _s_group(b, p, 2))
+        for ln in range(n):
+            b, p = _bp(PAR, leg, tt[ln], ln)
+            _put_s(TH, 0, leg, ln, 3, _s_group(b, p, 3))
+        if not series:
+            continue
+        for ln in range(n):
+            t = tt[ln]
+            for a in range(2):
+                TH[1, a, leg, 0, ln] = PAR[1, a, leg, 6, ln] + 2.0 * t * PAR[2, a, leg, 6, ln]
+                TH[2, a, leg, 0, ln] = PAR[2, a, leg, 6, ln]
+        for ln in range(n):
+            db, dp = _slopes(PAR, leg, ln)
+            for a in range(3):
+                TH[1, 0, leg, 1 + a, ln] = dp[2 * a] - db[2 * a]
+                TH[1, 1, leg, 1 + a, ln] = dp[2 * a + 1] - db[2 * a + 1]
+                TH[1, 0, leg, 4 + a, ln] = dp[2 * a] + db[2 * a]
+                TH[1, 1, leg, 4 + a, ln] = dp[2 * a + 1] + db[2 * a + 1]
+                TH[2, 0, leg, 1 + a, ln] = 0.0
+                TH[2, 1, leg, 1 + a, ln] = 0.0
+                TH[2, 0, leg, 4 + a, ln] = 0.0
+                TH[2, 1, leg, 4 + a, ln] = 0.0
+        for ln in range(n):
+            _series_s(PAR, tt, TH, leg, ln, 0)
+        for ln in range(n):
+            _series_s(PAR, tt, TH, leg, ln, 1)
+        for ln in range(n):
+            _series_s(PAR, tt, TH, leg, ln, 2)
+        for ln in range(n):
+            _series_s(PAR, tt, TH, leg, ln, 3)
+
+
 @njit(**_O)
 def theta(PAR, tt, TH, series, moving, n):
     """The leg coefficients ``theta(t)`` of every lane at its ``tt[ln]`` into ``TH[0]``; with
@@ -285,8 +429,11 @@ def theta(PAR, tt, TH, series, moving, n):
                         TH[1, a, leg, 0, ln] = c1 + 2.0 * t * c2
                         TH[2, a, leg, 0, ln] = c2
         return
-    for leg in range(6):
-        for ln in range(n):
+    if n >= VECTOR_LANES:
+        _theta_lanes(PAR, tt, TH, series, n)
+        return
+    for ln in range(n):
+        for leg in range(6):
             _theta_leg(PAR, tt[ln], TH, leg, ln, series)
 
 

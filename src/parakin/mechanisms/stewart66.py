@@ -159,6 +159,14 @@ def _as_points(value: Any, what: str) -> tuple[tuple[float, float, float], ...]:
     return tuple(tuple(float(v) for v in row) for row in a)
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a x b`` over the last axis: numpy's ``cross`` formula without its axis handling, which
+    costs more than the products for the few poses a geometry's check takes (same values)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], -1)
+
+
 def _coincident(a: np.ndarray, tol: float) -> list[tuple[int, int]]:
     d = np.linalg.norm(a[:, None] - a[None], axis=-1)
     return [(i, j) for i in range(6) for j in range(i + 1, 6) if d[i, j] <= tol]
@@ -383,7 +391,7 @@ class Stewart66(SixLegs):
         r = euler_zyx(x[..., 0], x[..., 1], x[..., 2])
         w = self.platform_points @ np.swapaxes(r, -1, -2)
         v = x[..., None, 3:] + w - self.base_points
-        c = np.cross(w, v)
+        c = _cross(w, v)
         ca, sa = np.cos(x[..., 0])[..., None], np.sin(x[..., 0])[..., None]
         tx = r[..., :, 0]
         cols = (c[..., 2], ca * c[..., 1] - sa * c[..., 0], np.einsum("...j,...ij->...i", tx, c))
