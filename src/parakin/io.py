@@ -393,7 +393,9 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> Path:
 def markdown_table(df: pd.DataFrame, floatfmt: str | dict[str, str] = ".6g") -> str:
     """A GitHub-flavoured Markdown table of ``df`` (index dropped), floats formatted by ``floatfmt``.
 
-    ``floatfmt`` is a format spec for every float column, or a dict column -> spec.
+    ``floatfmt`` is a format spec for every float column, or a dict column -> spec. Written here
+    rather than ``DataFrame.to_markdown``: that needs ``tabulate``, whose padding and float
+    formats changed between releases, and the record's tables must be the same bytes everywhere.
     """
 
     def fmt(col: str, v) -> str:
