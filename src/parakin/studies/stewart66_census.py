@@ -195,15 +195,19 @@ def census_data(config: dict) -> pd.DataFrame:
     complete inputs per real count (0..40), their parity, and platforms by their largest count;
     complete inputs with an undecided solution (``undecided_inputs``) are counted apart."""
     rows = _gather(config)
-    complete = rows[COUNT_COLUMNS].sum().to_numpy()
+    counts = rows[COUNT_COLUMNS].to_numpy()
+    complete = counts.sum(axis=0)
     peak = np.bincount(rows["max_real"], minlength=ROOTS + 1)
     k = np.arange(ROOTS + 1)
+    low, high = share_intervals(counts, _section(config)["seed"])
     return pd.DataFrame(
         {
             "real_solutions": k,
             "parity": np.where(k % 2, "odd", "even"),
             "complete_inputs": complete,
             "fraction": complete / max(1, complete.sum()),
+            "fraction_low": low,
+            "fraction_high": high,
             "platforms_with_max": peak,
             "incomplete_inputs": np.where(
                 k == 0, int((rows["inputs"] - rows["complete"]).sum()), 0
@@ -213,6 +217,24 @@ def census_data(config: dict) -> pd.DataFrame:
             "inputs_per_s": np.where(k == 0, rows["inputs"].sum() / rows["wall_s"].sum(), np.nan),
         }
     )
+
+
+#: bootstrap resamples of the platforms behind each share's interval, and its coverage
+RESAMPLES, COVERAGE = 2000, 0.95
+
+
+def share_intervals(counts: np.ndarray, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """The 95 % interval of each real count's share of the complete inputs, by a bootstrap over the
+    platforms (``counts``: one row per platform, one column per real count): the inputs of one
+    platform are not independent draws (its geometry favours some counts), so the platforms are
+    what is resampled; percentile interval of :data:`RESAMPLES` resamples, seeded from the
+    study's seed (integer counts: the same bounds on every machine)."""
+    rng = np.random.default_rng([seed, RESAMPLES])
+    picks = rng.integers(0, len(counts), size=(RESAMPLES, len(counts)))
+    totals = np.stack([counts[p].sum(axis=0) for p in picks])  # (RESAMPLES, ROOTS + 1)
+    shares = totals / np.maximum(totals.sum(axis=1, keepdims=True), 1)
+    tail = (1 - COVERAGE) / 2
+    return np.quantile(shares, tail, axis=0), np.quantile(shares, 1 - tail, axis=0)
 
 
 def census_draw(frame: pd.DataFrame, path: str | Path) -> Path:
@@ -235,6 +257,13 @@ def census_draw(frame: pd.DataFrame, path: str | Path) -> Path:
         ax, bx = fig.subplots(2, 1, sharex=True)
         ax.bar(k[~odd], n[~odd], color="tab:blue", label="even counts")
         ax.bar(k[odd], n[odd], color="tab:red", label=f"odd counts ({int(n[odd].sum())} inputs)")
+        if "fraction_low" in frame:  # each share's 95 % interval (bootstrap over the platforms)
+            seen = n > 0
+            lo, hi = (frame[c].to_numpy() * total for c in ("fraction_low", "fraction_high"))
+            ax.errorbar(
+                k[seen], n[seen], yerr=[n[seen] - lo[seen], hi[seen] - n[seen]], fmt="none",
+                ecolor="0.2", elinewidth=0.8, capsize=2, label="95 % interval (platforms resampled)",
+            )  # fmt: skip
         ax.set_yscale("log")
         ax.set_ylim(0.5, max(2.0, float(n.max())) * 5)
         ax.set_ylabel("complete inputs")
@@ -272,6 +301,8 @@ def _declare():
         "real-solution counts of certified solutions are properties of the inputs: compared exactly",
         columns=Tolerance.exactly(
             "complete_inputs",
+            "fraction_low",
+            "fraction_high",
             "platforms_with_max",
             "incomplete_inputs",
             "undecided_inputs",
