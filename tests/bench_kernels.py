@@ -58,10 +58,10 @@ def test_stewart36_all_solutions(benchmark):
 
 @pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "numpy"])
 def test_stewart66_start_on_a_new_geometry(benchmark, compiled):
-    """``Stewart66.fk_start`` on a geometry not seen before: the cost of the first ``fk_all`` on a
-    user's own 6-6, with the start system's paths tracked compiled or in numpy. The detour a retry
-    takes is tracked once per process, before the timing."""
-    from parakin.studies.stewart66 import random_platform
+    """``Stewart66.fk_start`` on a geometry not seen before: what a geometry's start system costs
+    (built where it takes more than one input), its paths tracked compiled (the lane tracker) or in
+    numpy. The detour a retry takes is tracked once per process, before the timing."""
+    from parakin.mechanisms.stewart66 import random_platform
 
     rng = np.random.default_rng(3)
     with kernels.interpreted(not compiled):
@@ -73,6 +73,28 @@ def test_stewart66_start_on_a_new_geometry(benchmark, compiled):
             iterations=1,
         )
     assert len(res["solutions"]) == 40
+
+
+def test_stewart66_new_geometry_per_call(benchmark):
+    """One input on a new geometry, everything timed: the mechanism built from its anchors
+    (validated), then its first ``fk_all``, which takes the new-geometry path (the stored generic
+    start moved to the input's anchors and leg lengths in one homotopy). One numba thread."""
+    from parakin.mechanisms.stewart66 import Stewart66, random_platform, random_pose
+    from parakin.timing import one_thread
+
+    rng = np.random.default_rng(4)
+
+    def setup():
+        m = random_platform(rng)
+        return (m.base_points, m.platform_points, m.ik(random_pose(rng, 1, m))[0]), {}
+
+    def call(base, platform, legs):
+        return Stewart66(base=base, platform=platform).fk_all(legs, return_info=True)
+
+    call(*setup()[0])  # compiles
+    with one_thread():
+        res = benchmark.pedantic(call, setup=setup, rounds=20, iterations=1)
+    assert res.complete and res.n_found == 40
 
 
 def _iteration_parts():
