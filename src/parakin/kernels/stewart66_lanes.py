@@ -110,16 +110,6 @@ def _mul(ar, ai, br, bi):
 
 
 @njit(inline="always", **_O)
-def _load8(Xr, Xi, ln):
-    """The 8 coordinates of lane ``ln`` (re tuple, im tuple)."""
-    return (
-        (Xr[0, ln], Xr[1, ln], Xr[2, ln], Xr[3, ln], Xr[4, ln], Xr[5, ln], Xr[6, ln], Xr[7, ln]),
-        (Xi[0, ln], Xi[1, ln], Xi[2, ln], Xi[3, ln], Xi[4, ln], Xi[5, ln], Xi[6, ln], Xi[7, ln]),
-    )
-
-
-# ------------------------------------------------------------------------------ coefficients
-@njit(inline="always", **_O)
 def _s_of_m(m00, m01, m02, m10, m11, m12, m20, m21, m22):
     """``S' = -2 S(M)`` (ww, xx, yy, zz, wx, wy, wz, xy, xz, yz) with ``e^T S(M) e =
     sum_jk M_jk R_jk(e)``, ``R(e)`` the unnormalised rotation (``R_00 = w^2 + x^2 - y^2 - z^2``,
@@ -177,264 +167,70 @@ def _store_s(TH, lev, leg, ln, b, p):
 
 
 @njit(inline="always", **_O)
-def _anchor(PAR, leg, q, t, ln):
-    """Coordinate ``q`` (0..2 base, 3..5 platform) of a leg's anchor at ``t``: ``(re, im)``."""
+def _vec3(par, k, o, leg, q0):
+    """Anchor ``q0 .. q0 + 2`` of a leg, coefficient of ``t^o``: ``(x_r, x_i, y_r, y_i, z_r, z_i)``."""
     return (
-        PAR[0, 0, leg, q, ln] + t * PAR[1, 0, leg, q, ln],
-        PAR[0, 1, leg, q, ln] + t * PAR[1, 1, leg, q, ln],
+        par[k, o, leg, q0].real,
+        par[k, o, leg, q0].imag,
+        par[k, o, leg, q0 + 1].real,
+        par[k, o, leg, q0 + 1].imag,
+        par[k, o, leg, q0 + 2].real,
+        par[k, o, leg, q0 + 2].imag,
     )
-
-
-@njit(inline="always", **_O)
-def _theta_leg(PAR, t, TH, leg, ln, series):
-    """Leg ``leg``'s coefficients ``theta(t)`` in lane ``ln`` into ``TH[0]``; with ``series``
-    also ``theta'(t)`` into ``TH[1]`` and ``theta''/2`` into ``TH[2]``."""
-    b0r, b0i = _anchor(PAR, leg, 0, t, ln)
-    b1r, b1i = _anchor(PAR, leg, 1, t, ln)
-    b2r, b2i = _anchor(PAR, leg, 2, t, ln)
-    p0r, p0i = _anchor(PAR, leg, 3, t, ln)
-    p1r, p1i = _anchor(PAR, leg, 4, t, ln)
-    p2r, p2i = _anchor(PAR, leg, 5, t, ln)
-    TH[0, 0, leg, 0, ln] = PAR[0, 0, leg, 6, ln] + t * (
-        PAR[1, 0, leg, 6, ln] + t * PAR[2, 0, leg, 6, ln]
-    )
-    TH[0, 1, leg, 0, ln] = PAR[0, 1, leg, 6, ln] + t * (
-        PAR[1, 1, leg, 6, ln] + t * PAR[2, 1, leg, 6, ln]
-    )
-    TH[0, 0, leg, 1, ln] = p0r - b0r
-    TH[0, 0, leg, 2, ln] = p1r - b1r
-    TH[0, 0, leg, 3, ln] = p2r - b2r
-    TH[0, 1, leg, 1, ln] = p0i - b0i
-    TH[0, 1, leg, 2, ln] = p1i - b1i
-    TH[0, 1, leg, 3, ln] = p2i - b2i
-    TH[0, 0, leg, 4, ln] = p0r + b0r
-    TH[0, 0, leg, 5, ln] = p1r + b1r
-    TH[0, 0, leg, 6, ln] = p2r + b2r
-    TH[0, 1, leg, 4, ln] = p0i + b0i
-    TH[0, 1, leg, 5, ln] = p1i + b1i
-    TH[0, 1, leg, 6, ln] = p2i + b2i
-    _store_s(TH, 0, leg, ln, (b0r, b0i, b1r, b1i, b2r, b2i), (p0r, p0i, p1r, p1i, p2r, p2i))
-    if series:
-        b0r, b0i = _anchor(PAR, leg, 0, t, ln)
-        b1r, b1i = _anchor(PAR, leg, 1, t, ln)
-        b2r, b2i = _anchor(PAR, leg, 2, t, ln)
-        p0r, p0i = _anchor(PAR, leg, 3, t, ln)
-        p1r, p1i = _anchor(PAR, leg, 4, t, ln)
-        p2r, p2i = _anchor(PAR, leg, 5, t, ln)
-        # the anchors' slopes
-        db = (
-            PAR[1, 0, leg, 0, ln],
-            PAR[1, 1, leg, 0, ln],
-            PAR[1, 0, leg, 1, ln],
-            PAR[1, 1, leg, 1, ln],
-            PAR[1, 0, leg, 2, ln],
-            PAR[1, 1, leg, 2, ln],
-        )
-        dp = (
-            PAR[1, 0, leg, 3, ln],
-            PAR[1, 1, leg, 3, ln],
-            PAR[1, 0, leg, 4, ln],
-            PAR[1, 1, leg, 4, ln],
-            PAR[1, 0, leg, 5, ln],
-            PAR[1, 1, leg, 5, ln],
-        )
-        # c' = c_1 + 2 t c_2, c''/2 = c_2
-        TH[1, 0, leg, 0, ln] = PAR[1, 0, leg, 6, ln] + 2.0 * t * PAR[2, 0, leg, 6, ln]
-        TH[1, 1, leg, 0, ln] = PAR[1, 1, leg, 6, ln] + 2.0 * t * PAR[2, 1, leg, 6, ln]
-        TH[2, 0, leg, 0, ln] = PAR[2, 0, leg, 6, ln]
-        TH[2, 1, leg, 0, ln] = PAR[2, 1, leg, 6, ln]
-        for a in range(3):  # d' = p_1 - b_1, s' = p_1 + b_1; d'' = s'' = 0
-            TH[1, 0, leg, 1 + a, ln] = dp[2 * a] - db[2 * a]
-            TH[1, 1, leg, 1 + a, ln] = dp[2 * a + 1] - db[2 * a + 1]
-            TH[1, 0, leg, 4 + a, ln] = dp[2 * a] + db[2 * a]
-            TH[1, 1, leg, 4 + a, ln] = dp[2 * a + 1] + db[2 * a + 1]
-            TH[2, 0, leg, 1 + a, ln] = 0.0
-            TH[2, 1, leg, 1 + a, ln] = 0.0
-            TH[2, 0, leg, 4 + a, ln] = 0.0
-            TH[2, 1, leg, 4 + a, ln] = 0.0
-        # S'(M') with M' = b_1 p^T + b p_1^T = S'(b_1 p^T) + S'(b p_1^T) (S' is linear)
-        b = (b0r, b0i, b1r, b1i, b2r, b2i)
-        p = (p0r, p0i, p1r, p1i, p2r, p2i)
-        _store_s(TH, 1, leg, ln, db, p)
-        for j in range(7, 17):
-            TH[2, 0, leg, j, ln] = TH[1, 0, leg, j, ln]
-            TH[2, 1, leg, j, ln] = TH[1, 1, leg, j, ln]
-        _store_s(TH, 1, leg, ln, b, dp)
-        for j in range(7, 17):
-            TH[1, 0, leg, j, ln] += TH[2, 0, leg, j, ln]
-            TH[1, 1, leg, j, ln] += TH[2, 1, leg, j, ln]
-        _store_s(TH, 2, leg, ln, db, dp)  # M''/2 = b_1 p_1^T
-
-
-@njit(inline="always", **_O)
-def _bp(PAR, leg, t, ln):
-    """A leg's anchors at ``t``: ``b, p`` as ``(x_r, x_i, y_r, y_i, z_r, z_i)``."""
-    b0r, b0i = _anchor(PAR, leg, 0, t, ln)
-    b1r, b1i = _anchor(PAR, leg, 1, t, ln)
-    b2r, b2i = _anchor(PAR, leg, 2, t, ln)
-    p0r, p0i = _anchor(PAR, leg, 3, t, ln)
-    p1r, p1i = _anchor(PAR, leg, 4, t, ln)
-    p2r, p2i = _anchor(PAR, leg, 5, t, ln)
-    return (b0r, b0i, b1r, b1i, b2r, b2i), (p0r, p0i, p1r, p1i, p2r, p2i)
-
-
-@njit(inline="always", **_O)
-def _slopes(PAR, leg, ln):
-    """A leg's anchors' slopes ``b_1, p_1`` as ``(x_r, x_i, y_r, y_i, z_r, z_i)``."""
-    return (
-        (PAR[1, 0, leg, 0, ln], PAR[1, 1, leg, 0, ln], PAR[1, 0, leg, 1, ln],
-         PAR[1, 1, leg, 1, ln], PAR[1, 0, leg, 2, ln], PAR[1, 1, leg, 2, ln]),
-        (PAR[1, 0, leg, 3, ln], PAR[1, 1, leg, 3, ln], PAR[1, 0, leg, 4, ln],
-         PAR[1, 1, leg, 4, ln], PAR[1, 0, leg, 5, ln], PAR[1, 1, leg, 5, ln]),
-    )  # fmt: skip
-
-
-@njit(inline="always", **_O)
-def _m(b, p, j, k):
-    """``M_jk = b_j p_k`` (complex)."""
-    return _mul(b[2 * j], b[2 * j + 1], p[2 * k], p[2 * k + 1])
-
-
-@njit(inline="always", **_O)
-def _s_group(b, p, g):
-    """Entries of ``S'(b p^T)`` (:func:`_s_of_m`'s formulas, the same operations) by group ``g``,
-    a constant at each call: 0 the diagonal (ww, xx, yy, zz), 1 (wx, yz), 2 (wy, xz), 3 (wz,
-    xy); ``(re, im)`` of up to four entries (0 padding)."""
-    if g == 0:
-        m00, m11, m22 = _m(b, p, 0, 0), _m(b, p, 1, 1), _m(b, p, 2, 2)
-        return (
-            -2.0 * (m00[0] + m11[0] + m22[0]),
-            -2.0 * (m00[1] + m11[1] + m22[1]),
-            -2.0 * (m00[0] - m11[0] - m22[0]),
-            -2.0 * (m00[1] - m11[1] - m22[1]),
-            -2.0 * (m11[0] - m00[0] - m22[0]),
-            -2.0 * (m11[1] - m00[1] - m22[1]),
-            -2.0 * (m22[0] - m00[0] - m11[0]),
-            -2.0 * (m22[1] - m00[1] - m11[1]),
-        )
-    if g == 1:
-        u, v = _m(b, p, 1, 2), _m(b, p, 2, 1)  # wx = -2 (m21 - m12), yz = -2 (m12 + m21)
-        return (-2.0 * (v[0] - u[0]), -2.0 * (v[1] - u[1]), -2.0 * (u[0] + v[0]), -2.0 * (u[1] + v[1]), 0.0, 0.0, 0.0, 0.0)  # fmt: skip
-    if g == 2:
-        u, v = _m(b, p, 0, 2), _m(b, p, 2, 0)  # wy = -2 (m02 - m20), xz = -2 (m02 + m20)
-        return (-2.0 * (u[0] - v[0]), -2.0 * (u[1] - v[1]), -2.0 * (u[0] + v[0]), -2.0 * (u[1] + v[1]), 0.0, 0.0, 0.0, 0.0)  # fmt: skip
-    u, v = _m(b, p, 0, 1), _m(b, p, 1, 0)  # wz = -2 (m10 - m01), xy = -2 (m01 + m10)
-    return (-2.0 * (v[0] - u[0]), -2.0 * (v[1] - u[1]), -2.0 * (u[0] + v[0]), -2.0 * (u[1] + v[1]), 0.0, 0.0, 0.0, 0.0)  # fmt: skip
-
-
-#: where each group of :func:`_s_group` goes among theta's entries (two for groups 1..3)
-_SG = ((7, 8, 9, 10), (11, 16, 0, 0), (12, 15, 0, 0), (13, 14, 0, 0))
-
-
-@njit(inline="always", **_O)
-def _put_s(TH, lev, leg, ln, g, e):
-    """Write group ``g``'s entries ``e`` into level ``lev`` of a leg's theta."""
-    cols = _SG[g]
-    for k in range(4 if g == 0 else 2):
-        TH[lev, 0, leg, cols[k], ln] = e[2 * k]
-        TH[lev, 1, leg, cols[k], ln] = e[2 * k + 1]
-
-
-@njit(inline="always", **_O)
-def _series_s(PAR, tt, TH, leg, ln, g):
-    """Group ``g`` of ``S'`` in levels 1 and 2: ``S'(M') = S'(b dp^T) + S'(db p^T)`` (added in the
-    order :func:`_theta_leg` adds them) and ``S'(M''/2) = S'(db dp^T)``."""
-    b, p = _bp(PAR, leg, tt[ln], ln)
-    db, dp = _slopes(PAR, leg, ln)
-    e1 = _s_group(db, p, g)
-    e2 = _s_group(b, dp, g)
-    _put_s(TH, 1, leg, ln, g, (
-        e2[0] + e1[0], e2[1] + e1[1], e2[2] + e1[2], e2[3] + e1[3],
-        e2[4] + e1[4], e2[5] + e1[5], e2[6] + e1[6], e2[7] + e1[7],
-    ))  # fmt: skip
-    _put_s(TH, 2, leg, ln, g, _s_group(db, dp, g))
 
 
 @njit(**_O)
-def _theta_lanes(PAR, tt, TH, series, n):
-    """:func:`_theta_leg` of every leg with the lanes innermost (vectorised): the same values,
-    written by entry groups."""
+def path_coefficients(par, k, POLY, ln):
+    """Lane ``ln``'s leg coefficients as polynomials in ``t`` (``POLY`` (3, 2, 6, 17, L): the
+    coefficients of ``t^0, t^1, t^2``, real and imaginary parts) from input ``k``'s parameter path
+    ``par[k]`` (3, 6, 7): with ``b(t) = b_0 + t b_1``, ``p(t) = p_0 + t p_1`` and
+    ``c(t) = c_0 + t c_1 + t^2 c_2``, ``d = p - b`` and ``s = p + b`` are linear and ``S'(b p^T)``
+    is quadratic (``S'`` is linear in ``M = b p^T``: ``S'(b_0 p_0^T) + t (S'(b_1 p_0^T) +
+    S'(b_0 p_1^T)) + t^2 S'(b_1 p_1^T)``). Formed once per path, so that a step only evaluates
+    polynomials."""
     for leg in range(6):
-        for ln in range(n):
-            t = tt[ln]
-            for a in range(2):
-                TH[0, a, leg, 0, ln] = PAR[0, a, leg, 6, ln] + t * (
-                    PAR[1, a, leg, 6, ln] + t * PAR[2, a, leg, 6, ln]
-                )
-        for ln in range(n):
-            b, p = _bp(PAR, leg, tt[ln], ln)
-            for a in range(3):
-                TH[0, 0, leg, 1 + a, ln] = p[2 * a] - b[2 * a]
-                TH[0, 1, leg, 1 + a, ln] = p[2 * a + 1] - b[2 * a + 1]
-                TH[0, 0, leg, 4 + a, ln] = p[2 * a] + b[2 * a]
-                TH[0, 1, leg, 4 + a, ln] = p[2 * a + 1] + b[2 * a + 1]
-        # one loop per group, the group a constant in each (so that every branch folds away)
-        for ln in range(n):
-            b, p = _bp(PAR, leg, tt[ln], ln)
-            _put_s(TH, 0, leg, ln, 0, _s_group(b, p, 0))
-        for ln in range(n):
-            b, p = _bp(PAR, leg, tt[ln], ln)
-            _put_s(TH, 0, leg, ln, 1, _s_group(b, p, 1))
-        for ln in range(n):
-            b, p = _bp(PAR, leg, tt[ln], ln)
-            _put_s(TH, 0, leg, ln, 2, _s_group(b, p, 2))
-        for ln in range(n):
-            b, p = _bp(PAR, leg, tt[ln], ln)
-            _put_s(TH, 0, leg, ln, 3, _s_group(b, p, 3))
-        if not series:
-            continue
-        for ln in range(n):
-            t = tt[ln]
-            for a in range(2):
-                TH[1, a, leg, 0, ln] = PAR[1, a, leg, 6, ln] + 2.0 * t * PAR[2, a, leg, 6, ln]
-                TH[2, a, leg, 0, ln] = PAR[2, a, leg, 6, ln]
-        for ln in range(n):
-            db, dp = _slopes(PAR, leg, ln)
-            for a in range(3):
-                TH[1, 0, leg, 1 + a, ln] = dp[2 * a] - db[2 * a]
-                TH[1, 1, leg, 1 + a, ln] = dp[2 * a + 1] - db[2 * a + 1]
-                TH[1, 0, leg, 4 + a, ln] = dp[2 * a] + db[2 * a]
-                TH[1, 1, leg, 4 + a, ln] = dp[2 * a + 1] + db[2 * a + 1]
-                TH[2, 0, leg, 1 + a, ln] = 0.0
-                TH[2, 1, leg, 1 + a, ln] = 0.0
-                TH[2, 0, leg, 4 + a, ln] = 0.0
-                TH[2, 1, leg, 4 + a, ln] = 0.0
-        for ln in range(n):
-            _series_s(PAR, tt, TH, leg, ln, 0)
-        for ln in range(n):
-            _series_s(PAR, tt, TH, leg, ln, 1)
-        for ln in range(n):
-            _series_s(PAR, tt, TH, leg, ln, 2)
-        for ln in range(n):
-            _series_s(PAR, tt, TH, leg, ln, 3)
+        b0, p0 = _vec3(par, k, 0, leg, 0), _vec3(par, k, 0, leg, 3)
+        b1, p1 = _vec3(par, k, 1, leg, 0), _vec3(par, k, 1, leg, 3)
+        for o in range(3):
+            POLY[o, 0, leg, 0, ln] = par[k, o, leg, 6].real
+            POLY[o, 1, leg, 0, ln] = par[k, o, leg, 6].imag
+        for a in range(3):
+            for ri in range(2):
+                POLY[0, ri, leg, 1 + a, ln] = p0[2 * a + ri] - b0[2 * a + ri]
+                POLY[0, ri, leg, 4 + a, ln] = p0[2 * a + ri] + b0[2 * a + ri]
+                POLY[1, ri, leg, 1 + a, ln] = p1[2 * a + ri] - b1[2 * a + ri]
+                POLY[1, ri, leg, 4 + a, ln] = p1[2 * a + ri] + b1[2 * a + ri]
+                POLY[2, ri, leg, 1 + a, ln] = 0.0
+                POLY[2, ri, leg, 4 + a, ln] = 0.0
+        _store_s(POLY, 0, leg, ln, b0, p0)
+        _store_s(POLY, 1, leg, ln, b1, p0)
+        _store_s(POLY, 2, leg, ln, b0, p1)  # level 2 as scratch for the second term
+        for j in range(7, 17):
+            for ri in range(2):
+                POLY[1, ri, leg, j, ln] = POLY[1, ri, leg, j, ln] + POLY[2, ri, leg, j, ln]
+        _store_s(POLY, 2, leg, ln, b1, p1)
 
 
 @njit(**_O)
-def theta(PAR, tt, TH, series, moving, n):
-    """The leg coefficients ``theta(t)`` of every lane at its ``tt[ln]`` into ``TH[0]``; with
-    ``series`` also ``theta'(t)`` into ``TH[1]`` and ``theta''/2`` into ``TH[2]`` (the Taylor
-    coefficients of ``theta(t + s)``). ``PAR`` (3, 2, 6, 7, L): per lane, the coefficients of
-    ``t^0, t^1, t^2`` of each leg's ``(b, p, c)`` (the anchors are linear: their ``t^2`` rows are
-    not read); ``TH`` (3, 2, 6, 17, L). Where no anchor moves (``moving`` False: the fibre
-    homotopy) only the leg constants' entries change with ``t``; the others were set when the
-    lane took its path (:func:`_load`)."""
-    if not moving:
+def theta(POLY, tt, TH, series, n):
+    """The leg coefficients ``theta(t)`` of every lane at its ``tt[ln]`` into ``TH[0]`` (3, 2, 6,
+    17, L) from their polynomials ``POLY`` (:func:`path_coefficients`); with ``series`` also
+    ``theta'(t)`` into ``TH[1]`` and ``theta''/2`` into ``TH[2]`` (the Taylor coefficients of
+    ``theta(t + s)``). Where only ``c`` moves, the others' higher coefficients are 0 and they keep
+    their values exactly. One short loop over the lanes per coefficient."""
+    for ri in range(2):
         for leg in range(6):
-            for ln in range(n):
-                t = tt[ln]
-                for a in range(2):
-                    c0, c1, c2 = PAR[0, a, leg, 6, ln], PAR[1, a, leg, 6, ln], PAR[2, a, leg, 6, ln]
-                    TH[0, a, leg, 0, ln] = c0 + t * (c1 + t * c2)
-                    if series:
-                        TH[1, a, leg, 0, ln] = c1 + 2.0 * t * c2
-                        TH[2, a, leg, 0, ln] = c2
-        return
-    if n >= VECTOR_LANES:
-        _theta_lanes(PAR, tt, TH, series, n)
-        return
-    for ln in range(n):
-        for leg in range(6):
-            _theta_leg(PAR, tt[ln], TH, leg, ln, series)
+            for j in range(NTH):
+                for ln in range(n):
+                    t = tt[ln]
+                    a1, a2 = POLY[1, ri, leg, j, ln], POLY[2, ri, leg, j, ln]
+                    TH[0, ri, leg, j, ln] = POLY[0, ri, leg, j, ln] + t * (a1 + t * a2)
+                if series:
+                    for ln in range(n):
+                        t = tt[ln]
+                        a1, a2 = POLY[1, ri, leg, j, ln], POLY[2, ri, leg, j, ln]
+                        TH[1, ri, leg, j, ln] = a1 + 2.0 * t * a2
+                        TH[2, ri, leg, j, ln] = a2
 
 
 # ------------------------------------------------------------------------------ features
@@ -1210,7 +1006,7 @@ def next_step(S, tau, err, acc, opts, n):
 
 # ------------------------------------------------------------------------------ a queue of paths
 @njit(**_O)
-def _load(S, T, flag, PAR, TH, ln, p, item_k, item_j, starts, par, opts):
+def _load(S, T, flag, POLY, ln, p, item_k, item_j, starts, par, opts):
     """Lane ``ln`` takes queue entry ``p``: start solution ``item_j[p]`` (scaled to norm 1) on
     input ``item_k[p]``'s parameter path ``par[k]`` (3, 6, 7), at ``t = 0`` with a zero step."""
     k, j = item_k[p], item_j[p]
@@ -1225,13 +1021,7 @@ def _load(S, T, flag, PAR, TH, ln, p, item_k, item_j, starts, par, opts):
         for o in range(1, 5):
             T[o, 0, i, ln] = 0.0
             T[o, 1, i, ln] = 0.0
-    for o in range(3):
-        for leg in range(6):
-            for q in range(7):
-                PAR[o, 0, leg, q, ln] = par[k, o, leg, q].real
-                PAR[o, 1, leg, q, ln] = par[k, o, leg, q].imag
-    for leg in range(6):  # all of theta at t = 0: where only c moves, the rest stays
-        _theta_leg(PAR, 0.0, TH, leg, ln, True)
+    path_coefficients(par, k, POLY, ln)
     S[_T, ln] = 0.0
     S[_DT, ln] = 0.0
     S[_OM, ln] = opts[4]
@@ -1256,7 +1046,7 @@ def _finish(S, T, ln, ok, patch, out_x, out_ok, out_steps):
 
 
 @njit(**_O)
-def _move(S, T, flag, PAR, TH, src, dst):
+def _move(S, T, flag, POLY, src, dst):
     """Lane ``src``'s path (its state, Taylor coefficients, flags and parameters) into lane
     ``dst``: the active lanes stay ``0 .. n - 1``, so that the loops run over them only."""
     for r in range(_NS):
@@ -1270,10 +1060,8 @@ def _move(S, T, flag, PAR, TH, src, dst):
     for o in range(3):
         for a in range(2):
             for leg in range(6):
-                for q in range(7):
-                    PAR[o, a, leg, q, dst] = PAR[o, a, leg, q, src]
                 for j in range(NTH):
-                    TH[o, a, leg, j, dst] = TH[o, a, leg, j, src]
+                    POLY[o, a, leg, j, dst] = POLY[o, a, leg, j, src]
 
 
 @njit(**_O)
@@ -1295,7 +1083,7 @@ def track_queue(par, starts, item_k, item_j, opts, moving, patch, out_x, out_ok,
     T = np.zeros((5, 2, 8, W))
     T2 = np.zeros((5, 2, 8, W))
     flag = np.zeros((8, W))
-    PAR = np.zeros((3, 2, 6, 7, W))
+    POLY = np.zeros((3, 2, 6, NTH, W))
     TH = np.zeros((3, 2, 6, NTH, W))
     X = np.zeros((2, 8, W))
     CH = np.zeros((2, 8, W))
@@ -1315,7 +1103,7 @@ def track_queue(par, starts, item_k, item_j, opts, moving, patch, out_x, out_ok,
     err = np.zeros(W)
     n = min(W, P)
     for ln in range(n):
-        _load(S, T, flag, PAR, TH, ln, ln, item_k, item_j, starts, par, opts)
+        _load(S, T, flag, POLY, ln, ln, item_k, item_j, starts, par, opts)
     nxt = n
     while n > 0:
         predict(T, S, flag, X, CH, n)
@@ -1323,7 +1111,7 @@ def track_queue(par, starts, item_k, item_j, opts, moving, patch, out_x, out_ok,
         for ln in range(n):
             t1[ln] = min(S[_T, ln] + S[_DT, ln], 1.0)
             final |= t1[ln] >= 1.0
-        theta(PAR, t1, TH, True, moving, n)
+        theta(POLY, t1, TH, True, n)
         jacobian(TH, X, CH, A, n)
         rows_half(A, X, H, n)
         chart_row(CH, X, H, n)
@@ -1368,12 +1156,12 @@ def track_queue(par, starts, item_k, item_j, opts, moving, patch, out_x, out_ok,
                 continue
             _finish(S, T, ln, done, patch, out_x, out_ok, out_steps)
             if nxt < P:
-                _load(S, T, flag, PAR, TH, ln, nxt, item_k, item_j, starts, par, opts)
+                _load(S, T, flag, POLY, ln, nxt, item_k, item_j, starts, par, opts)
                 nxt += 1
             else:
                 n -= 1
                 if ln != n:
-                    _move(S, T, flag, PAR, TH, n, ln)
+                    _move(S, T, flag, POLY, n, ln)
 
 
 # ------------------------------------------------------------------------------ Newton in lanes
@@ -1429,7 +1217,7 @@ def newton_queue(par, x, item_k, charts, iters, out_x, out_beta, out_jn, out_qn)
     quadrics' norm (:func:`qnorm`)."""
     P = len(item_k)
     W = LANES
-    PAR = np.zeros((3, 2, 6, 7, W))
+    POLY = np.zeros((3, 2, 6, NTH, W))
     TH = np.zeros((3, 2, 6, NTH, W))
     X = np.zeros((2, 8, W))
     CH = np.zeros((2, 8, W))
@@ -1454,11 +1242,8 @@ def newton_queue(par, x, item_k, charts, iters, out_x, out_beta, out_jn, out_qn)
             for i in range(8):
                 X[0, i, ln], X[1, i, ln] = x[p, i].real, x[p, i].imag
                 CH[0, i, ln], CH[1, i, ln] = charts[p, i].real, charts[p, i].imag
-            for leg in range(6):
-                for q in range(7):
-                    PAR[0, 0, leg, q, ln] = par[k, 0, leg, q].real
-                    PAR[0, 1, leg, q, ln] = par[k, 0, leg, q].imag
-        theta(PAR, tt, TH, False, True, n)
+            path_coefficients(par, k, POLY, ln)  # the target: par[k]'s t^0 (the rest is 0)
+        theta(POLY, tt, TH, False, n)
         for it in range(iters + 1):
             jacobian(TH, X, CH, A, n)
             rows_half(A, X, H, n)
