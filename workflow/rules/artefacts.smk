@@ -1,10 +1,11 @@
-# One rule per registered artefact. Inputs: the source files it runs (its module and every parakin
-# module that imports), its paper's reference CSV and the outputs of the artefacts it needs.
-# Scattered studies (the 6-6 census) also gather their chunk files (workflow/rules/census.smk).
-# Params: only the config sections it declares and the seed, so editing one section reruns only
-# the artefacts that read it. group: the small jobs share a cluster submission (common.smk). threads/resources: what the artefact declares (the long jobs:
-# training, GA, NSGA-II, PSO, the solver atlas); every figure and table goes into the report
-# (snakemake --report) with its one-line caption from the registry.
+# One rule per registered artefact. Inputs: its paper's reference CSV and the outputs of the
+# artefacts it needs; scattered studies (the 6-6 census) also gather their chunk files
+# (workflow/rules/census.smk). Params: a digest of the source files it runs (its module and every
+# parakin module that imports: editing one reruns it, common.smk code_digest), and only the config
+# sections it declares and the seed, so editing one section reruns only the artefacts that read
+# it. group: the small jobs share a cluster submission (common.smk). threads/resources: what the
+# artefact declares (the long jobs: training, GA, NSGA-II, PSO, the solver atlas); every figure
+# and table goes into the report (snakemake --report) with its one-line caption from the registry.
 
 for _item in ARTEFACTS.values():
 
@@ -12,7 +13,6 @@ for _item in ARTEFACTS.values():
         name:
             _item.rule
         input:
-            sources=sources(_item),
             reference=reference(_item),
             upstream=upstream(_item),
             chunks=scattered(_item),
@@ -21,6 +21,7 @@ for _item in ARTEFACTS.values():
         log:
             f"{LOGS}/{_item.study}/{_item.name}.log",
         params:
+            code=code_digest(_item),
             cfg=shlex.quote(json.dumps(registry.prune_config(config, _item), sort_keys=True)),
             study=_item.study,
             name=_item.name,

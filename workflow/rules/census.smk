@@ -12,13 +12,12 @@ if CENSUS in config["studies"]:
         census=config["stewart66_census"]["chunks"],
 
     rule stewart66_census_chunk:
-        input:
-            sources=sources(ARTEFACTS["stewart66_census:census"]),
         output:
             f"{GEN}/stewart66_census/{{scatteritem}}.csv",
         log:
             f"{LOGS}/stewart66_census/chunk_{{scatteritem}}.log",
         params:
+            code=code_digest(ARTEFACTS["stewart66_census:census"]),
             module=CENSUS,
             cfg=shlex.quote(
                 json.dumps(registry.prune_config(config, ARTEFACTS["stewart66_census:census"]), sort_keys=True)

@@ -2,6 +2,8 @@
 # parakin.config.validate, i.e. the schema config/schema.yaml plus the orderings a schema cannot
 # express; one short line per bad key), load the artefact registry of the config's studies (each
 # checked: parakin.pipeline.check_studies).
+import functools
+import hashlib
 import json
 import os
 import shlex
@@ -50,9 +52,20 @@ def relative(path):
     return path if rel.startswith("..") else rel
 
 
-def sources(item):
-    """The parakin source files the artefact runs (its module and all it imports)."""
-    return [relative(p) for p in item.sources()]
+@functools.cache
+def _file_digest(path):
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def code_digest(item):
+    """One digest of the parakin source files the artefact runs (its module and all it imports,
+    by path and content). It is a param of the artefact's rule, so that editing any of them reruns
+    the artefact (Snakemake's params trigger) without making every one of those files an input:
+    ~50 inputs per rule cost the scheduler millions of stat calls a run."""
+    h = hashlib.sha256()
+    for path in item.sources():
+        h.update(f"{relative(path)}\0{_file_digest(path)}\n".encode())
+    return h.hexdigest()
 
 
 def scattered(item):
