@@ -376,10 +376,6 @@ class Stewart36(SixLegs):
         info["ik_error"][rows] = np.where(fin.any(-1), np.where(fin, e, -np.inf).max(-1), np.nan)
         info["homotopy"][rows] = True
 
-    def assembly_label(self, pose: ArrayLike, joints: ArrayLike) -> str:
-        """Above or below the base (``Z > 0``: the papers' assembly, the mirror image below)."""
-        return "above the base" if float(as_batch(pose, 6, "pose")[5]) > 0 else "below the base"
-
     def pose_from_points(self, pts: ArrayLike) -> Array:
         """Pose (..., 6) of the platform whose vertices A1, A2, A3 are ``pts`` (..., 3, 3) (docs/li2017_stewart36.md#s1.5):
         ``O_A`` the centroid, ``y = (A1 - A2)/|.|``, ``x`` along ``A3 - (A1 + A2)/2``, ``z = x cross y``."""

@@ -518,6 +518,12 @@ class Stewart66(SixLegs):
         q[:, 1:, :4, :4] += c1[:, :, None, None] * np.eye(4)
         return q
 
+    def real_solutions(self, joints: ArrayLike) -> tuple[Array, np.ndarray]:
+        """Every certified real solution (N, 40, 6) and, per input, the homotopy's certificate that
+        none is missing (:attr:`FKAll.complete`)."""
+        info = self.fk_all(joints, return_info=True)
+        return info.poses, np.asarray(info.complete)
+
     def fk_all(self, joints: ArrayLike, *, return_info: bool = False, retries: int = RETRIES):
         """Every forward solution of leg lengths ``joints`` (..., 6).
 

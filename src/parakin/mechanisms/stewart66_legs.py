@@ -49,6 +49,10 @@ class SixLegs(Mechanism, register=False):
         x = as_batch(pose, 6, "pose")
         return euler_zyx(x[..., 0], x[..., 1], x[..., 2])
 
+    def assembly_label(self, pose: ArrayLike, joints: ArrayLike) -> str:
+        """Above or below the base (``Z > 0``: the papers' assembly, the mirror image below)."""
+        return "above the base" if float(as_batch(pose, 6, "pose")[5]) > 0 else "below the base"
+
     def jacobian_joints(self, pose: ArrayLike, joints: ArrayLike) -> Array:
         """``d f / d L = -2 diag(L)``."""
         q = as_batch(joints, 6, "joints")
