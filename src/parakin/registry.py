@@ -237,6 +237,9 @@ class Artefact:
     #: figures drawn from one saved table: (png, csv, draw(frame, path)); a test redraws each
     #: from the committed CSV and compares it with the committed PNG (see :func:`figure`)
     draws: tuple[tuple[str, str, Callable], ...] = ()
+    #: files of the repository it reads besides its code, config and reference CSV (paths from the
+    #: repository's root, e.g. ``examples/delta.yaml``): inputs of its rule, so an edit reruns it
+    files: tuple[str, ...] = ()
 
     @property
     def key(self) -> str:
@@ -306,6 +309,7 @@ def artefact(
     resources: dict[str, int | str] | None = None,
     caption: str = "",
     draws: Sequence[tuple[str, str, Callable]] = (),
+    files: Sequence[str] = (),
 ) -> Callable:
     """Declare the decorated ``make(config, outdir) -> list[Path]`` as one artefact.
 
@@ -314,7 +318,8 @@ def artefact(
     artefact's inputs); ``config`` the dotted config sections it reads (with ``seed`` always);
     ``reference``: whether it reads ``data/reference/<study>.csv``; ``threads`` and ``resources``
     (e.g. ``{"runtime": 60, "mem_mb": 4000}``, minutes and MB) what its Snakemake job reserves (a
-    long job says so: the SLURM profile schedules by them); ``caption``: its one line in the report.
+    long job says so: the SLURM profile schedules by them); ``caption``: its one line in the report;
+    ``files``: repository files it reads besides code, config and reference (its rule's inputs).
     """
 
     def register(make: Callable) -> Callable:
@@ -337,6 +342,7 @@ def artefact(
             tuple(sorted((resources or {}).items())),
             caption,
             tuple(draws),
+            tuple(files),
         )
         old = REGISTRY.get(item.key)
         if old is not None and (old.module, old.make.__qualname__) != (

@@ -16,6 +16,7 @@ for _item in ARTEFACTS.values():
             reference=reference(_item),
             upstream=upstream(_item),
             chunks=scattered(_item),
+            files=list(_item.files),
         output:
             report_outputs(_item),
         log:

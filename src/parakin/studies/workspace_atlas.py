@@ -340,6 +340,7 @@ def table(config: dict, outdir: Path) -> list[Path]:
     config=[KEY, "zhao2017_3p4s.indices"],
     tolerance=CHECKS,
     reference=False,
+    files=["examples/delta.yaml"],
 )
 def checks(config: dict, outdir: Path) -> list[Path]:
     """The workspace module against Zhao's atlases and a closed-form Delta workspace test."""
