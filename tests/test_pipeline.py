@@ -32,7 +32,7 @@ AGAIN = (
 
 
 def _copy_workflow(workdir: Path) -> None:
-    for item in ("Snakefile", "workflow", "config"):
+    for item in ("Snakefile", "workflow", "config", "examples"):
         src = ROOT / item
         (shutil.copytree if src.is_dir() else shutil.copy)(src, workdir / item)
     shutil.copytree(ROOT / "data" / "reference", workdir / "data" / "reference")

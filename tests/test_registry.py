@@ -165,7 +165,7 @@ def test_check_statuses(tmp_path):
 
 
 def _workdir(tmp_path: Path) -> Path:
-    for item in ("Snakefile", "workflow", "config"):
+    for item in ("Snakefile", "workflow", "config", "examples"):
         src = ROOT / item
         (shutil.copytree if src.is_dir() else shutil.copy)(src, tmp_path / item)
     shutil.copytree(ROOT / "data" / "reference", tmp_path / "data" / "reference")

@@ -497,7 +497,7 @@ def _known_answer(fn: Any, args: tuple) -> str | None:
     on Python floats: microseconds, once per entry and process."""
     import numpy as np
 
-    from parakin.kernels import _scalar_namespace
+    from parakin.kernels._math import rebind, scalar_names
     from parakin.kernels.methods import VECTOR
 
     py = fn.py_func
@@ -506,7 +506,9 @@ def _known_answer(fn: Any, args: tuple) -> str | None:
     module = sys.modules.get(getattr(getattr(res, "py_func", None), "__module__", ""))
     if name not in _PROBED or module is None:
         return None
-    ns = _scalar_namespace(module)
+    ns = rebind(
+        module, scalar_names()
+    )  # the kernels on Python floats (parakin.kernels._scalar_namespace)
     batched = name in _BATCHED
     p = np.asarray(args[0])
     x = np.array(args[2][0] if batched else args[2], dtype=float)

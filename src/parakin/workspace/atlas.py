@@ -288,6 +288,7 @@ def _slice_panel(ax, df: pd.DataFrame, meta: dict, k: int) -> None:
     from matplotlib.colors import ListedColormap
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
+    from matplotlib.ticker import MaxNLocator
 
     cells = df[(df.part == "cell") & (df.plane == k)]
     n = int(cells["i"].max()) + 1
@@ -318,6 +319,9 @@ def _slice_panel(ax, df: pd.DataFrame, meta: dict, k: int) -> None:
     u, v = meta["planes"][k]
     ax.set_xlabel(_label(meta["axes"][u], meta["units"][u]))
     ax.set_ylabel(_label(meta["axes"][v], meta["units"][v]))
+    ax.xaxis.set_major_locator(
+        MaxNLocator(5)
+    )  # long labels (-0.0075) of a small workspace stay apart
     if len(meta["axes"]) == 3:
         w = 3 - u - v
         at = meta["at"][w]
