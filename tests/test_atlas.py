@@ -215,14 +215,17 @@ def test_sync_readme_replaces_only_the_block(tmp_path):
         extras.readme_block("nothing here")
 
 
-def test_bench_cli_atlas_quick_json(tmp_path):
+def test_bench_cli_quick_json(tmp_path):
+    """``parakin bench NAME --quick --json``: the benchmark's rows as JSON records, its files in
+    ``--outdir``. (The atlas itself runs in the quick pipeline, tests/test_pipeline.py: every
+    registered mechanism in it.)"""
     res = subprocess.run(
         [
             sys.executable,
             "-m",
             "parakin.cli",
             "bench",
-            "atlas",
+            "fk-3p4s",
             "--quick",
             "--json",
             "--outdir",
@@ -233,9 +236,10 @@ def test_bench_cli_atlas_quick_json(tmp_path):
         timeout=600,
     )
     assert res.returncode == 0, res.stderr[-2000:]
-    rows = json.loads(res.stdout)["atlas"]
-    assert {r["mechanism"] for r in rows} == set(mechanisms.REGISTRY)  # a new one by itself
-    assert (tmp_path / "extra_solver_atlas.png").exists()
+    rows = json.loads(res.stdout)["fk-3p4s"]
+    assert {"solver", "method", "success_rate"} <= set(rows[0])
+    assert any(r["method"] == "scipy-root" for r in rows)  # the baseline of every ratio
+    assert (tmp_path / "zhao2017_3p4s" / "fk_benchmark.csv").exists()
     bad = subprocess.run(
         [sys.executable, "-m", "parakin.cli", "bench", "nonsense"], capture_output=True, text=True
     )

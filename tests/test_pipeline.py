@@ -169,6 +169,16 @@ def test_two_runs_are_byte_identical(two_runs):
     assert not different
 
 
+def test_the_atlas_covers_every_registered_mechanism(quick_run):
+    """The solver atlas runs on every registered mechanism (a new one by itself), its figure drawn."""
+    from parakin import mechanisms
+
+    figures, _ = quick_run
+    atlas = pd.read_csv(figures / "extra_solver_atlas.csv")
+    assert set(atlas["mechanism"]) == set(mechanisms.REGISTRY)
+    assert (figures / "extra_solver_atlas.png").stat().st_size > 0
+
+
 def test_quick_table1_agrees_with_committed(quick_run):
     """Table 1 does not depend on the quick sizes: the committed full-config table agrees."""
     quick = pd.read_csv(quick_run[0] / "zhao2017_3p4s" / "table1.csv", dtype={"paper": str})
