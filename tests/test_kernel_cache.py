@@ -171,6 +171,7 @@ def test_read_only_filled_cache_falls_back_with_a_notice(warm, tmp_path):
 
 
 @pytest.mark.parametrize("what", ["index", "data"])
+@pytest.mark.slow  # fresh processes that compile
 def test_corrupt_cache_file_is_rebuilt_with_a_notice(warm, tmp_path, what):
     """A numba index (.nbi) or data file (.nbc) of the build overwritten with garbage: the solve
     rebuilds that entry (one notice line) and answers right; the next process is quiet again."""
@@ -188,6 +189,7 @@ def test_corrupt_cache_file_is_rebuilt_with_a_notice(warm, tmp_path, what):
     assert not _notices(again.stderr)
 
 
+@pytest.mark.slow  # fresh processes that compile
 def test_a_kernel_edited_on_disk_is_never_served_stale(warm, tmp_path):
     """The kernel module changed after its build was cached (its assembly test now rejects every
     pose below y = 5 m): the edited source gets a build of its own (a new hash), and the answer is
@@ -300,6 +302,7 @@ def _raced(proc: subprocess.Popen, rounds: int) -> None:
         assert flags == "True" and float(error) < 1e-12 and kept == "True", stdout
 
 
+@pytest.mark.slow  # fresh processes that compile
 def test_processes_sharing_a_cache_never_pull_a_build_from_under_each_other(tmp_path):
     """Re-clones and checkouts beside running processes (issue 30's CI flake): three processes,
     each with its own copy of the kernel's sources, share a cache; each changes its sources before

@@ -51,8 +51,9 @@ def run_pipeline(workdir: Path, marker: str, targets: tuple[str, ...] = ()) -> P
             "2",
             "--configfile",
             "config/quick.yaml",
-            "-q",
             *targets,
+            "--quiet",  # after the targets: it takes optional values of its own
+            "rules",
         ],
         cwd=workdir,
         env={**os.environ, MARKER: marker},
@@ -106,6 +107,7 @@ def _quick_config() -> dict:
     return load_run_config([QUICK_CONFIG])
 
 
+@pytest.mark.slow  # the quick pipeline (about 2-4 min of two cores)
 def test_no_process_outlives_the_run(quick_run):
     """No process of the pipeline's jobs is left once snakemake has returned (no server, no
     background worker): none carries the marker the run's jobs inherited."""
@@ -115,6 +117,7 @@ def test_no_process_outlives_the_run(quick_run):
     assert not left, f"processes left behind by the quick run: {left}"
 
 
+@pytest.mark.slow  # the quick pipeline (about 2-4 min of two cores)
 def test_pipeline_writes_table1_and_report(quick_run):
     figures, _ = quick_run
     for name in (
@@ -157,6 +160,7 @@ def _same(a: Path, b: Path) -> bool:
     return filecmp.cmp(a, b, shallow=False)
 
 
+@pytest.mark.slow  # the quick pipeline (about 2-4 min of two cores)
 def test_two_runs_are_byte_identical(two_runs):
     """Same config, same seeds -> the same bytes (timing columns aside): every file the second,
     smaller run made (its targets and their upstream, network weights included) equals the
@@ -169,6 +173,7 @@ def test_two_runs_are_byte_identical(two_runs):
     assert not different
 
 
+@pytest.mark.slow  # the quick pipeline (about 2-4 min of two cores)
 def test_the_atlas_covers_every_registered_mechanism(quick_run):
     """The solver atlas runs on every registered mechanism (a new one by itself), its figure drawn."""
     from parakin import mechanisms
@@ -179,6 +184,7 @@ def test_the_atlas_covers_every_registered_mechanism(quick_run):
     assert (figures / "extra_solver_atlas.png").stat().st_size > 0
 
 
+@pytest.mark.slow  # the quick pipeline (about 2-4 min of two cores)
 def test_quick_table1_agrees_with_committed(quick_run):
     """Table 1 does not depend on the quick sizes: the committed full-config table agrees."""
     quick = pd.read_csv(quick_run[0] / "zhao2017_3p4s" / "table1.csv", dtype={"paper": str})
@@ -188,6 +194,7 @@ def test_quick_table1_agrees_with_committed(quick_run):
     assert np.allclose(quick["fit"], full["fit"], atol=1e-6)  # the fit's seed grid differs
 
 
+@pytest.mark.slow  # parses the whole workflow (~10 s)
 def test_snakemake_lint_is_clean():
     """`snakemake --lint` passes: log per rule, software env, no hard-coded path params (issue 18)."""
     res = subprocess.run(
@@ -200,6 +207,7 @@ def test_snakemake_lint_is_clean():
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
 
 
+@pytest.mark.slow  # the quick pipeline (about 2-4 min of two cores)
 def test_report_has_every_figure_with_its_caption(quick_run):
     """`snakemake --report` on the finished quick run: every figure and table marked, captioned."""
     workdir = quick_run[0].parents[2]

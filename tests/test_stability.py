@@ -11,6 +11,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 #: the artefacts whose claims rest on chaotic runs or timings (with their upstream inputs)
@@ -102,6 +104,7 @@ def _verdicts(proc: subprocess.Popen) -> dict[str, str]:
     return json.loads(line.removeprefix("VERDICTS "))
 
 
+@pytest.mark.slow  # nine artefacts twice in fresh processes: ~2 min of two cores
 def test_chaotic_and_timing_verdicts_do_not_depend_on_the_machine(tmp_path):
     """The same verdict for every such claim under Haswell / Sandybridge kernels, 1 / 2 threads and
     another seed base (quick scale: 30 GA and PSO runs, 10 trainings per region)."""
