@@ -22,3 +22,11 @@ def rng() -> np.random.Generator:
 @pytest.fixture(params=["stated", "optimised"])
 def p3p4s(request) -> P3P4S:
     return P3P4S.zhao2017() if request.param == "stated" else P3P4S.zhao2017_optimised()
+
+
+def pytest_collection_modifyitems(config, items):
+    """The notebooks (collected by nbmake from notebooks/) are slow: each runs a paper's walk-through
+    in a kernel of its own."""
+    for item in items:
+        if item.nodeid.endswith(".ipynb"):
+            item.add_marker(pytest.mark.slow)

@@ -115,6 +115,7 @@ _PY_FILES = sorted(
 )
 
 
+@pytest.mark.slow  # a fresh interpreter per page or command
 @pytest.mark.parametrize("path", _PY_FILES, ids=lambda p: str(p.relative_to(ROOT)))
 def test_python_blocks_run(path, tmp_path):
     """The file's Python blocks, in order, as one script: exit status 0."""
@@ -162,6 +163,7 @@ def test_bash_blocks_run_parakin_only_or_say_why():
     assert not other
 
 
+@pytest.mark.slow  # a fresh interpreter per page or command
 @pytest.mark.parametrize("block, command", _COMMANDS, ids=lambda v: getattr(v, "name", v)[:60])
 def test_parakin_commands_run(block, command, tmp_path):
     res = subprocess.run(

@@ -25,7 +25,9 @@ RECORD = ROOT / "figures"
 IMAGE_TOL = 2.0  # RMS over 0-255 grey levels: font hinting may differ between machines, a moved line does not
 ARTEFACTS = artefacts()
 
-pytestmark = pytest.mark.reproduction
+#: slow too: each regenerates an artefact at full scale (.ci/run runs them again under other BLAS
+#: kernels and thread counts)
+pytestmark = [pytest.mark.reproduction, pytest.mark.slow]
 
 #: (paper, artefact, prerequisite artefacts) regenerated here; expensive artefacts (training,
 #: optimisation) are checked by their own reproduction tests on the quick config instead (Fig. 14
