@@ -47,12 +47,12 @@ def run_pipeline(workdir: Path, marker: str, targets: tuple[str, ...] = ()) -> P
             sys.executable,
             "-m",
             "snakemake",
+            *targets,  # first: --configfile and --quiet take several values each
             "--cores",
             "2",
             "--configfile",
             "config/quick.yaml",
-            *targets,
-            "--quiet",  # after the targets: it takes optional values of its own
+            "--quiet",
             "rules",
         ],
         cwd=workdir,
