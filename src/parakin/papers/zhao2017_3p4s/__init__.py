@@ -8,8 +8,7 @@ paper; each has ``ARTEFACTS``, ``claims(figdir, ref)`` and ``summary(figdir, ref
 
 from __future__ import annotations
 
-import importlib
-
+from parakin.papers import lazy_sections
 from parakin.papers.zhao2017_3p4s.common import KEY, TITLE
 
 #: the sections of the reproduction, in the paper's order
@@ -23,15 +22,5 @@ SECTION_NAMES = (
 __all__ = ["KEY", "TITLE", "ARTEFACTS", "SECTIONS", "claims", "summary"]
 
 
-def __getattr__(name: str):
-    """``SECTIONS`` (the section modules), ``ARTEFACTS`` (artefact name -> function(config,
-    outdir)), ``claims`` and ``summary``, on first use: a pipeline job imports the one section
-    its artefact lives in, not the others (and not what they import)."""
-    if name not in ("SECTIONS", "ARTEFACTS", "claims", "summary"):
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    from parakin.papers.sections import combine
-
-    sections = [importlib.import_module(f"{__name__}.{s}") for s in SECTION_NAMES]
-    artefacts, claims, summary = combine(sections)
-    globals().update(SECTIONS=sections, ARTEFACTS=artefacts, claims=claims, summary=summary)
-    return globals()[name]
+#: SECTIONS, ARTEFACTS, claims, summary: built on first use (parakin.papers.lazy_sections)
+__getattr__ = lazy_sections(__name__, SECTION_NAMES)
