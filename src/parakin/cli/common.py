@@ -436,7 +436,8 @@ def _file_args(p, what: str) -> None:
     )
 
 
-def _config_args(p) -> None:
+def _config_overlays(p) -> None:
+    """``--config YAML`` (repeatable): overlays on config/config.yaml."""
     p.add_argument(
         "--config",
         action="append",
@@ -446,6 +447,10 @@ def _config_args(p) -> None:
         help="config overlay(s) merged onto config/config.yaml in order, as snakemake "
         "--configfile (e.g. config/quick.yaml)",
     )
+
+
+def _config_args(p) -> None:
+    _config_overlays(p)
     _text_option(
         p,
         "--config-json",

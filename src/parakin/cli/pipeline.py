@@ -9,8 +9,8 @@ from pathlib import Path
 from parakin.cli.common import (
     EXIT_NOT_CONVERGED,
     _config_args,
+    _config_overlays,
     _text_option,
-    nonempty,
 )
 from parakin.io import read_text
 
@@ -204,14 +204,7 @@ def add_check(sub) -> None:
     p.add_argument(
         "--studies", nargs="*", default=None, help="study modules (default: the config's)"
     )
-    p.add_argument(
-        "--config",
-        action="append",
-        type=nonempty,
-        default=None,
-        metavar="YAML",
-        help="config overlay(s) merged onto config/config.yaml (e.g. config/quick.yaml)",
-    )
+    _config_overlays(p)
     p.add_argument("--strict", action="store_true", help="exit 1 if anything differs or is missing")
 
 
