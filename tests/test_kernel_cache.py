@@ -317,3 +317,69 @@ def test_processes_sharing_a_cache_never_pull_a_build_from_under_each_other(tmp_
     _raced(_racer(3, 1, cache, tmp_path), 1)  # round 0's sources again, nobody else running
     builds = [p.name for p in cache.iterdir() if p.name.startswith("toy_kernels-")]
     assert len(builds) == 1, builds
+
+
+#: one method's compiled single solve of the toy kernel, its counters printed (argv: methods)
+COUNTERS = textwrap.dedent(
+    """
+    import sys
+    import numpy as np
+    from parakin import kernels
+    from parakin.solvers import solve_fk
+    from toy_mechanism import KernelTwoLeg as Toy
+
+    m = Toy()
+    q = m.ik(np.array([0.1, 0.9]))
+    for method in sys.argv[1:]:
+        assert kernels.kernel_of(m) is not None
+        got = solve_fk(m, q, [0.2, 0.7], method=method)
+        with kernels.interpreted():
+            ref = solve_fk(m, q, [0.2, 0.7], method=method)
+        print(method, *(int(getattr(r, f)) for r in (got, ref) for f in ("nit", "nfev", "njev")))
+    """
+)
+
+
+def test_entries_built_by_separate_processes_keep_their_own_loops(tmp_path):
+    """Every method's entries share their source (``parakin.kernels.entries``) and differ only in
+    the loop bound into them. Each built by a fresh process (where numba numbers its functions
+    alike), then loaded together by a third: each method still runs its own loop (the counters of
+    the numpy path), not the loop of the build that another entry of the same name linked first."""
+    cache = tmp_path / "cache"
+    env = _env(cache)
+    env["PYTHONPATH"] = os.pathsep.join([str(DATA), env["PYTHONPATH"]])
+    methods = ["newton", "dogleg", "broyden"]
+    for method in methods:  # each group compiled first thing in its own process
+        _run(COUNTERS.replace("sys.argv[1:]", repr([method])), env, tmp_path)
+    out = _run(COUNTERS.replace("sys.argv[1:]", repr(methods)), env, tmp_path)
+    rows = [line.split() for line in out.stdout.splitlines()]
+    assert [r[0] for r in rows] == methods, out.stdout
+    for method, *counts in rows:
+        assert counts[:3] == counts[3:], (
+            f"{method}: compiled (nit, nfev, njev) {counts[:3]} != numpy {counts[3:]}"
+        )
+
+
+def test_kernel_functions_compiled_outside_an_entry_are_tagged(tmp_path):
+    """A loop that calls a kernel's compiled functions directly (the workspace's do) may compile
+    them first: what it writes carries the build's tags, so the entries load it after, with no
+    notice and no rebuild (untagged, the next solve found "an entry without tags" and rebuilt)."""
+    cache = tmp_path / "cache"
+    env = _env(cache)
+    direct = textwrap.dedent(
+        """
+        import numpy as np
+        import toy_kernels
+        from parakin import kernels
+
+        nb = kernels.compiled(toy_kernels)
+        out = np.empty(2)
+        nb.residual(np.array([0.5]), np.array([0.1, 0.9]), np.array([1.0, 1.0]), out)
+        print(np.isfinite(out).all())
+        """
+    )
+    first = _run(direct, env, tmp_path)
+    assert first.stdout.split() == ["True"] and not _notices(first.stderr), first.stderr
+    out = _run(SOLVE, env, tmp_path)
+    _solved(out)
+    assert not _notices(out.stderr), out.stderr

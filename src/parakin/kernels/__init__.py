@@ -323,11 +323,15 @@ def _build(module: types.ModuleType) -> tuple[Any, Any]:
 @cache
 def compiled(module: types.ModuleType) -> Any:
     """The kernel functions of ``module`` under ``numba.njit`` (one pose, scalar math), as a
-    namespace; cached on disk in the kernel's directory."""
+    namespace; cached on disk in the kernel's directory, tagged as the entries expect
+    (:func:`parakin.kernels.store.guard`) whoever compiles them first."""
     numba = _numba()
     path, _ = _build(module)
     with _store.numba_cache(path / "kernel"):
-        return _math.rebind(module, _math.numba_names(numba.njit), numba.njit(**_NJIT))
+        out = _math.rebind(module, _math.numba_names(numba.njit), numba.njit(**_NJIT))
+    for fn in vars(out).values():
+        _store.guard(fn, path)
+    return out
 
 
 #: entry groups: name -> (the entries of parakin.kernels.entries compiled in it, its ROW loop);
@@ -396,11 +400,13 @@ def entries_of(module: types.ModuleType, group: str) -> types.SimpleNamespace:
         for name in names:
             fn = getattr(entries, name)
             copy = types.FunctionType(fn.__code__, glob, fn.__name__, fn.__defaults__)
-            # a name of its own per kernel: numba names a compiled function by its qualified name
-            # and a per-process counter, so two kernels' cached copies of one entry can carry the
-            # same symbol, and a process that loads both links one kernel's calls to the other's
-            # (the 3-6's single solves verified by the 6-6's assembly test)
-            copy.__qualname__ = f"{fn.__qualname__}__{module.__name__.replace('.', '_')}"
+            # a name of its own per kernel and group: numba names a compiled function by its
+            # qualified name and a per-process counter, so two cached copies of one entry built by
+            # different processes can carry the same symbol, and a process that loads both links
+            # one's calls to the other's (the 3-6's single solves verified by the 6-6's assembly
+            # test; the dog leg's single call running Newton's loop, loaded after Newton's)
+            kernel_name = module.__name__.replace(".", "_")
+            copy.__qualname__ = f"{fn.__qualname__}__{kernel_name}__{group}"
             copy.__module__ = fn.__module__
             glob[name] = numba.njit(parallel=name.endswith("parallel"), **_NJIT)(copy)
             out[name] = _Entry(glob[name], path)  # an unreadable file: the whole build is rebuilt

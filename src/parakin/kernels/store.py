@@ -62,15 +62,17 @@ try:
 except ImportError:  # no advisory locks (Windows): builds are made and removed without them
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["clear", "digest", "first_call", "kernel_dir", "numba_cache", "root", "status"]
+__all__ = ["clear", "digest", "first_call", "guard", "kernel_dir", "numba_cache", "root", "status"]
 
 log = logging.getLogger("parakin.kernels")
 
 #: what a kernel's directory name ends in: ``-`` and this many hex digits of its hash
 HASH_DIGITS = 16
 #: the layout of a build's files, part of its hash: 2 = every cached function tagged with its
-#: build, group and name (:class:`_TaggedCache`); builds of format 1 are never loaded
-FORMAT = 2
+#: build, group and name (:class:`_TaggedCache`); 3 = an entry's compiled name carries its group
+#: (format 2's entries of two groups could share a symbol and link each other's loops); builds of
+#: an older format are never loaded
+FORMAT = 3
 _LOCK = threading.RLock()
 #: the directory of ``<root>`` that holds the lock files
 LOCKS = ".locks"
@@ -398,7 +400,7 @@ def _what(key: Any) -> str:
 @cache
 def _tagged_cache() -> type:
     """numba's ``FunctionCache`` that tags what it writes and refuses what is not tagged as its
-    own (``_parakin_tag``: build, group, function; set by :func:`_guard`)."""
+    own (``_parakin_tag``: build, group, function; set by :func:`guard`)."""
     from numba.core.caching import FunctionCache
 
     class TaggedCache(FunctionCache):
@@ -449,10 +451,12 @@ def _tagged_cache() -> type:
     return TaggedCache
 
 
-def _guard(fn: Any, where: Path) -> list[Any]:
+def guard(fn: Any, where: Path) -> list[Any]:
     """Give every cached numba function that ``fn`` reaches through its globals (the entry, the
     entries it calls, the kernel's functions) and whose cache lies in build ``where`` a
-    :func:`_tagged_cache` tagged ``(build, group, name)``, before anything is loaded. Returns them."""
+    :func:`_tagged_cache` tagged ``(build, group, name)``, before anything is loaded or compiled:
+    whichever caller compiles a function first (an entry, or a loop that calls the kernel's
+    functions directly, as the workspace's do), what it writes is tagged. Returns them."""
     from numba.core.caching import FunctionCache
     from numba.core.dispatcher import Dispatcher
 
@@ -570,7 +574,7 @@ def _forget(dispatchers: list[Any]) -> None:
 
 def first_call(fn: Callable[..., Any], where: Path, *args: Any) -> Any:
     """``fn(*args)`` for the first time: numba loads ``fn`` from its cache in build ``where`` (or
-    compiles it), the files tagged and checked (:func:`_guard`), then its known answer is asked
+    compiles it), the files tagged and checked (:func:`guard`), then its known answer is asked
     (:func:`_known_answer`) before the call itself. Where any of that fails and another process
     rebuilt ``where`` meanwhile (a new directory), it is tried again; where ``where`` is unchanged
     and holds cached files, an entry could not be read (truncated, garbage), is not what it claims
@@ -579,7 +583,7 @@ def first_call(fn: Callable[..., Any], where: Path, *args: Any) -> Any:
     made once more, with a one-line notice. A failure with an empty build (a genuine compile
     error) is raised; so is a failure of the fresh build. A fresh build that answers its probe
     wrong (numba's own error, never seen) is used with a notice."""
-    guarded = _guard(fn, where)
+    guarded = guard(fn, where)
     before, seen = _inode(where), len(_MISMATCHES)
     cause: BaseException | None = None
     try:
