@@ -383,3 +383,33 @@ def test_kernel_functions_compiled_outside_an_entry_are_tagged(tmp_path):
     out = _run(SOLVE, env, tmp_path)
     _solved(out)
     assert not _notices(out.stderr), out.stderr
+
+
+def test_two_processes_on_an_empty_cache_compile_an_entry_once(tmp_path):
+    """Two processes that need the same entries at once: one compiles them, the other waits and
+    loads what it wrote (numba's cache statistics of the single-call entry: one miss between the
+    two, where both compiled beside each other before the group lock)."""
+    cache = tmp_path / "cache"
+    env = _env(cache)
+    code = textwrap.dedent(
+        """
+        import numpy as np
+        from parakin import kernels
+        from parakin.solvers import solve_fk
+        from toy_mechanism import KernelTwoLeg as Toy
+
+        m = Toy()
+        res = solve_fk(m, m.ik(np.array([0.1, 0.9])), method="lm")
+        entry = kernels.entries_of(kernels.kernel_of(m).module, "lm").one.fn
+        print(bool(res.success), len(entry.stats.cache_misses), len(entry.stats.cache_hits))
+        """
+    )
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", code], env=env, cwd=tmp_path, stdout=subprocess.PIPE, text=True
+        )
+        for _ in range(2)
+    ]
+    outs = [p.communicate(timeout=900)[0].split() for p in procs]
+    assert all(p.returncode == 0 for p in procs), outs
+    assert sorted(outs) == [["True", "0", "1"], ["True", "1", "0"]], outs

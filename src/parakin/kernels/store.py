@@ -320,7 +320,8 @@ def _prune(base: Path, name: str, keep: str | None = None) -> None:
     for old in base.glob(f"{name}-*"):
         if _is_build(old, name) and old.name != keep and not _in_use(base, old.name):
             _discard(old)
-            (base / LOCKS / f"{old.name}.use").unlink(missing_ok=True)
+            for lock in (base / LOCKS).glob(f"{old.name}.*"):  # its use and its groups' locks
+                lock.unlink(missing_ok=True)
 
 
 def _in_use(base: Path, build: str) -> bool:
@@ -582,7 +583,29 @@ def first_call(fn: Callable[..., Any], where: Path, *args: Any) -> Any:
     (:func:`_discard`: a fresh directory of the same name), under the kernel's lock, and the call
     made once more, with a one-line notice. A failure with an empty build (a genuine compile
     error) is raised; so is a failure of the fresh build. A fresh build that answers its probe
-    wrong (numba's own error, never seen) is used with a notice."""
+    wrong (numba's own error, never seen) is used with a notice.
+
+    One process at a time makes the first call of a group's entries (:func:`_group_lock`): a process
+    that finds another compiling them waits and loads what it wrote, rather than compiling the same
+    code beside it (the pipeline's jobs and the test workers start on an empty cache together)."""
+    with _group_lock(fn, where):
+        return _first_call(fn, where, *args)
+
+
+@contextmanager
+def _group_lock(fn: Any, where: Path) -> Iterator[None]:
+    """The exclusive lock of the group of build ``where`` whose cache holds entry ``fn``."""
+    cached = getattr(getattr(fn, "_cache", None), "_cache_path", None)
+    try:
+        group = Path(cached).relative_to(where).parts[0]
+    except (TypeError, ValueError, IndexError):
+        yield  # not cached in the build: nothing to share
+        return
+    with _locked(where.parent, f"{where.name}.{group}"):
+        yield
+
+
+def _first_call(fn: Callable[..., Any], where: Path, *args: Any) -> Any:
     guarded = guard(fn, where)
     before, seen = _inode(where), len(_MISMATCHES)
     cause: BaseException | None = None
