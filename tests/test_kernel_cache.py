@@ -340,6 +340,7 @@ COUNTERS = textwrap.dedent(
 )
 
 
+@pytest.mark.slow  # fresh processes that compile
 def test_entries_built_by_separate_processes_keep_their_own_loops(tmp_path):
     """Every method's entries share their source (``parakin.kernels.entries``) and differ only in
     the loop bound into them. Each built by a fresh process (where numba numbers its functions
@@ -360,6 +361,7 @@ def test_entries_built_by_separate_processes_keep_their_own_loops(tmp_path):
         )
 
 
+@pytest.mark.slow  # fresh processes that compile
 def test_kernel_functions_compiled_outside_an_entry_are_tagged(tmp_path):
     """A loop that calls a kernel's compiled functions directly (the workspace's do) may compile
     them first: what it writes carries the build's tags, so the entries load it after, with no
@@ -385,6 +387,7 @@ def test_kernel_functions_compiled_outside_an_entry_are_tagged(tmp_path):
     assert not _notices(out.stderr), out.stderr
 
 
+@pytest.mark.slow  # fresh processes that compile
 def test_two_processes_on_an_empty_cache_compile_an_entry_once(tmp_path):
     """Two processes that need the same entries at once: one compiles them, the other waits and
     loads what it wrote (numba's cache statistics of the single-call entry: one miss between the

@@ -304,7 +304,7 @@ def warm(tmp_path_factory) -> tuple[Path, Path]:
 
 def _entry(cache: Path, kernel: str) -> Path:
     """The index file of ``kernel``'s compiled ``verify_serial`` in ``cache``."""
-    (index,) = cache.glob(f"{kernel}-*/verify/*/entries.verify_serial__{kernel}-*.nbi")
+    (index,) = cache.glob(f"{kernel}-*/verify/*/entries.verify_serial__{kernel}__verify-*.nbi")
     return index
 
 
