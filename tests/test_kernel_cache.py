@@ -416,3 +416,55 @@ def test_two_processes_on_an_empty_cache_compile_an_entry_once(tmp_path):
     outs = [p.communicate(timeout=900)[0].split() for p in procs]
     assert all(p.returncode == 0 for p in procs), outs
     assert sorted(outs) == [["True", "0", "1"], ["True", "1", "0"]], outs
+
+
+#: the workspace's compiled classification of rpr3 against its numpy path (prints: equal?)
+CLASSIFY = textwrap.dedent(
+    """
+    import numpy as np
+    from parakin.mechanisms import get
+    from parakin.workspace import classify, make_region
+
+    region = make_region(get("rpr3")())
+    x = np.random.default_rng(1).uniform(region.lo, region.hi, size=(300, region.dim))
+    a = classify(region, x, compiled=True, cond=False)
+    b = classify(region, x, compiled=False, cond=False)
+    print(type(a).__name__, bool(np.array_equal(a.member, b.member)))
+    """
+)
+
+#: a kernel function of rpr3 compiled into its build without the tags (as a foreign file would be)
+UNTAGGED = textwrap.dedent(
+    """
+    import numba
+    import numpy as np
+    import parakin.kernels.rpr3 as mod
+    from parakin import kernels
+    from parakin.kernels import _math, store
+    from parakin.mechanisms import get
+
+    path, _ = kernels._build(mod)
+    with store.numba_cache(path / "kernel"):
+        ns = _math.rebind(mod, _math.numba_names(numba.njit), numba.njit(cache=True))
+    q = np.empty(3)
+    print(ns.ik(kernels.kernel_of(get("rpr3")()).params, np.array([0.0, 0.0, 0.0]), q))
+    """
+)
+
+
+@pytest.mark.slow  # fresh processes that compile
+def test_a_loop_that_meets_a_foreign_kernel_file_rebuilds_the_kernels_build(tmp_path):
+    """The workspace's loops live in a build of their own and call the kernel's functions: a
+    foreign (untagged) file of a kernel function met through them makes the kernel's build again,
+    with one notice, and the classification is right; the next process is quiet (it was refused
+    with CacheMismatch on every call, since only the loop's own build was remade)."""
+    cache = tmp_path / "cache"
+    env = _env(cache)
+    _run(UNTAGGED, env, tmp_path)
+    out = _run(CLASSIFY, env, tmp_path)
+    notes = _notices(out.stderr)
+    assert len(notes) == 1 and "without tags" in notes[0] and notes[0].endswith("rebuilt"), notes
+    assert "parakin.kernels.rpr3-" in notes[0] and ".workspace-" not in notes[0], notes
+    assert out.stdout.split()[-1] == "True", out.stdout
+    again = _run(CLASSIFY, env, tmp_path)
+    assert not _notices(again.stderr) and again.stdout.split()[-1] == "True", again.stderr

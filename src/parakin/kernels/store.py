@@ -386,8 +386,11 @@ class CacheMismatch(Exception):
 
 
 #: every mismatch met in this process (numba may report the failed load of a callee, met while
-#: compiling its caller, as an error of its own: :func:`first_call` reads the reason here)
+#: compiling its caller, as an error of its own: :func:`first_call` reads the reason here), and
+#: the build that held each (a loop cached in a build of its own, the workspace's, meets the
+#: kernel's build through the kernel functions it calls)
 _MISMATCHES: list[str] = []
+_MISMATCHED_BUILDS: list[Path | None] = []
 
 
 def _what(key: Any) -> str:
@@ -414,6 +417,9 @@ def _tagged_cache() -> type:
 
         def _refuse(self, why: str) -> None:
             _MISMATCHES.append(f"{self._cache_file._index_name} {why}")
+            build = self._parakin_tag[0]
+            parents = Path(self._cache_path).parents
+            _MISMATCHED_BUILDS.append(next((p for p in parents if p.name == build), None))
             raise CacheMismatch(_MISMATCHES[-1])
 
         def _load_overload(self, sig: Any, target_context: Any) -> Any:
@@ -615,8 +621,17 @@ def _first_call(fn: Callable[..., Any], where: Path, *args: Any) -> Any:
             return fn(*args)
     except Exception as exc:
         cause, wrong = exc, None
+    # a mismatch in the build of the kernel a loop calls (the workspace's loops live in a build of
+    # their own): that build is made again, not the loop's
+    others = [b for b in dict.fromkeys(_MISMATCHED_BUILDS[seen:]) if b not in (None, where)]
+    for other in others:
+        with _locked(other.parent, other.name.rpartition("-")[0]):
+            _notice(f"kernel cache {other} {_fault(None, None, _MISMATCHES[seen:])}; rebuilt")
+            _discard(other, remake=True)
+        guarded += guard(fn, other)
     with _locked(where.parent, where.name.rpartition("-")[0]):
-        if _inode(where) == before:  # not rebuilt by another process meanwhile: rebuild it
+        # unless another process rebuilt it meanwhile (or the fault lay in another build)
+        if not others and _inode(where) == before:
             if cause is not None and (before is None or not any(where.rglob("*.nb*"))):
                 raise cause
             _notice(f"kernel cache {where} {_fault(cause, wrong, _MISMATCHES[seen:])}; rebuilt")
