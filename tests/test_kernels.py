@@ -330,8 +330,9 @@ def test_single_call_verification_rules():
     assert isinstance(one, FKResult)
 
 
-def test_threads_get_the_serial_driver_and_same_results():
-    """Calls from other threads run the serial driver (numba's workqueue layer is not re-entrant)."""
+def test_solves_from_several_threads_give_the_same_results():
+    """Solves started from several threads at once (each split into blocks on the shared pool)
+    give the results of one solve from the main thread."""
     import threading
 
     mech = P3P4S()

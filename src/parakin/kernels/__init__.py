@@ -15,8 +15,9 @@ parameter vector may be named (``PARAMS``, a :class:`parakin.kernels._math.Layou
 * :func:`compiled` / :func:`entries_of`: the functions under ``numba.njit``, and the solver loops
   of :mod:`parakin.kernels.drivers` (Newton, Levenberg-Marquardt, Broyden, BFGS, verification,
   particle swarm; written once for every mechanism, the kernel passed as their first arguments)
-  compiled over them, each in a serial and a ``prange``-parallel entry (identical results),
-  cached on disk under a hash of every source that went in (:mod:`parakin.kernels.store`);
+  compiled over them, serial loops over a batch's rows that run on every core as blocks on
+  threads (:mod:`parakin.kernels.threads`: identical results whatever the thread count), cached
+  on disk under a hash of every source that went in (:mod:`parakin.kernels.store`);
 * :func:`torch_kernel`: the functions on torch tensors (CPU or CUDA), the residual and analytic
   Jacobian of :mod:`parakin.solvers.torch_newton`.
 
@@ -34,7 +35,6 @@ import dataclasses
 import importlib.util
 import os
 import sys
-import threading
 import time
 import types
 from collections.abc import Iterator
@@ -44,11 +44,10 @@ from typing import Any
 
 import numpy as np
 
-from parakin.kernels import _math, methods
+from parakin.kernels import _math, methods, threads
 from parakin.kernels import store as _store
 
 __all__ = [
-    "PARALLEL_MIN_ROWS",
     "SCALAR_MAX_ROWS",
     "Kernel",
     "compiled",
@@ -60,12 +59,9 @@ __all__ = [
     "load_seconds",
     "torch_kernel",
     "use_interpreted",
-    "use_parallel",
     "verify_hooks",
 ]
 
-#: rows from which a batch runs on every core (below: the serial driver, no thread start-up)
-PARALLEL_MIN_ROWS = 64
 #: batches up to this size run row by row on Python floats (:func:`_scalar_namespace`): a
 #: vectorised call costs ~1 us per numpy operation whatever the size, a scalar row ~50 ns
 SCALAR_MAX_ROWS = 4
@@ -151,15 +147,6 @@ def kernel_of(mech: Any) -> Kernel | None:
     if k is not None and k.home is None:
         k = dataclasses.replace(k, home=np.asarray(mech.home(), dtype=float))
     return k
-
-
-def use_parallel(n: int, parallel: bool | None) -> bool:
-    """Whether a batch of ``n`` rows runs on the prange driver: large batches, from the main thread
-    only (numba's ``workqueue`` layer, chosen because it is fork-safe, must not be entered from two
-    threads at once; other threads get the serial driver, same results)."""
-    if parallel is None:
-        parallel = n >= PARALLEL_MIN_ROWS
-    return parallel and threading.current_thread() is threading.main_thread()
 
 
 # ---------------------------------------------------------------------------- numpy and scalars
@@ -337,9 +324,9 @@ def compiled(module: types.ModuleType) -> Any:
 #: entry groups: name -> (the entries of parakin.kernels.entries compiled in it, its ROW loop);
 #: the first names are helpers the others call (compiled once, linked into each)
 _GROUPS = {
-    **{m: (("row", "one", "serial", "parallel"), m) for m in methods.COMPILED},
-    "verify": (("check", "verify_serial", "verify_parallel"), None),
-    "pso": (("swarm", "pso_serial", "pso_parallel"), None),
+    **{m: (("row", "one", "serial"), m) for m in methods.COMPILED},
+    "verify": (("check", "verify_serial"), None),
+    "pso": (("swarm", "pso_serial"), None),
 }
 
 
@@ -408,7 +395,7 @@ def entries_of(module: types.ModuleType, group: str) -> types.SimpleNamespace:
             kernel_name = module.__name__.replace(".", "_")
             copy.__qualname__ = f"{fn.__qualname__}__{kernel_name}__{group}"
             copy.__module__ = fn.__module__
-            glob[name] = numba.njit(parallel=name.endswith("parallel"), **_NJIT)(copy)
+            glob[name] = numba.njit(**_NJIT)(copy)
             out[name] = _Entry(glob[name], path)  # an unreadable file: the whole build is rebuilt
     return types.SimpleNamespace(**out)
 
@@ -424,12 +411,9 @@ def verify_hooks(mech: Any, joints: np.ndarray, x: np.ndarray, *, parallel: bool
     n = len(joints)
     flags = np.zeros((n, 2), dtype=np.int64)
     err = np.empty(n)
-    fn = group.verify_parallel if use_parallel(n, parallel) else group.verify_serial
-    fn(
-        kernel.params,
-        np.ascontiguousarray(joints, dtype=float),
-        np.ascontiguousarray(x, dtype=float),
-        flags,
-        err,
+    q = np.ascontiguousarray(joints, dtype=float)
+    x = np.ascontiguousarray(x, dtype=float)
+    threads.rows(
+        group.verify_serial, (kernel.params, q, x, flags, err), (1, 2, 3, 4), parallel=parallel
     )
     return flags[:, 0] == 1, err, flags[:, 1] == 1

@@ -12,11 +12,12 @@ never a stale build. Unbound here (``None``): this module is never compiled as i
 Arguments: ``p`` the parameter vector, ``q``/``Q`` joints (one row / ``(N, m)``), ``x0``/``X0``
 starts, ``opts`` the options vector (:mod:`parakin.kernels.methods`), ``x``/``X`` the solutions
 (written), ``info`` ``(status, nit, nfev, njev, ...)`` per row, ``out`` the residual norms.
+
+The batched entries are serial loops over rows; a large batch runs on every core as blocks of rows
+on threads (:func:`parakin.kernels.threads.rows`: the entries release the GIL).
 """
 
 from __future__ import annotations
-
-from numba import prange
 
 from parakin.kernels.drivers import finite, pso_iterations, verify
 from parakin.kernels.methods import BAD_INPUT
@@ -51,22 +52,10 @@ def serial(p, Q, X0, opts, X, info, out):
         out[i] = row(p, Q[i], X0[i], opts, X[i], info[i])
 
 
-def parallel(p, Q, X0, opts, X, info, out):
-    """Every row of a batch, on every core (the same per-row code as :func:`serial`)."""
-    for i in prange(Q.shape[0]):
-        out[i] = row(p, Q[i], X0[i], opts, X[i], info[i])
-
-
 def verify_serial(p, Q, X, flags, err):
     """``err[i]`` = joint error of pose ``X[i]`` for joints ``Q[i]``; ``flags[i]`` = in domain, on
     assembly."""
     for i in range(Q.shape[0]):
-        err[i] = check(p, Q[i], X[i], flags[i])
-
-
-def verify_parallel(p, Q, X, flags, err):
-    """:func:`verify_serial` on every core."""
-    for i in prange(Q.shape[0]):
         err[i] = check(p, Q[i], X[i], flags[i])
 
 
@@ -78,12 +67,5 @@ def swarm(p, q, x, v, pb, pf, gb, gf, rnd, w, k0, lo, hi, vmax, coef, state, his
 def pso_serial(p, Q, X, V, PB, PF, GB, GF, RND, W, k0, lo, hi, vmax, coef, STATE, HIST):
     """A block of iterations of every run."""
     for i in range(Q.shape[0]):
-        swarm(p, Q[i], X[i], V[i], PB[i], PF[i], GB[i], GF[i], RND[i], W[i], k0, lo, hi, vmax,
-              coef, STATE[i], HIST[i])  # fmt: skip
-
-
-def pso_parallel(p, Q, X, V, PB, PF, GB, GF, RND, W, k0, lo, hi, vmax, coef, STATE, HIST):
-    """:func:`pso_serial` on every core (runs are independent: own random numbers and weights)."""
-    for i in prange(Q.shape[0]):
         swarm(p, Q[i], X[i], V[i], PB[i], PF[i], GB[i], GF[i], RND[i], W[i], k0, lo, hi, vmax,
               coef, STATE[i], HIST[i])  # fmt: skip

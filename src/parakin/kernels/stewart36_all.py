@@ -26,7 +26,9 @@ import os
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from parakin.kernels import threads
 
 if "NUMBA_THREADING_LAYER" not in os.environ:  # fork-safe, as parakin.kernels.build
     numba.config.THREADING_LAYER = "workqueue"
@@ -770,12 +772,6 @@ def _sorted_out(p, q, poses, out, iinfo, finfo, fr, jr, lengths):
         finfo[0] = ik_err
 
 
-@njit(parallel=True, **_O)
-def fk_all_parallel(p, Q, ts, tw, steps, out, iinfo, finfo):
-    for i in prange(Q.shape[0]):
-        fk_all_row(p, Q[i], ts, tw, steps, out[i], iinfo[i], finfo[i])
-
-
 @njit(**_O)
 def fk_all_serial(p, Q, ts, tw, steps, out, iinfo, finfo):
     for i in range(Q.shape[0]):
@@ -786,16 +782,17 @@ _TS = np.exp(2j * np.pi * np.arange(SAMPLES) / SAMPLES)  # as Stewart36.fk_poly
 _TW = np.exp(-2j * np.pi * np.arange(SAMPLES) / SAMPLES)
 
 
-def fk_all(p: np.ndarray, joints: np.ndarray, steps: int = 8, parallel: bool = True):
+def fk_all(p: np.ndarray, joints: np.ndarray, steps: int = 8, parallel: bool | None = None):
     """``(poses (N, 16, 6), info)`` for the flat batch ``joints (N, 6)``: the compiled
-    ``Stewart36.fk_all`` (``info`` as there)."""
+    ``Stewart36.fk_all`` (``info`` as there). ``parallel``: blocks of rows on every core (None: by
+    batch size, :func:`parakin.kernels.threads.rows`)."""
     q = np.ascontiguousarray(joints, dtype=np.float64).reshape(-1, 6)
     n = len(q)
     out = np.empty((n, 16, 6))
     iinfo = np.zeros((n, 4), dtype=np.int64)
     finfo = np.empty((n, 2))
-    fn = fk_all_parallel if parallel else fk_all_serial
-    fn(np.ascontiguousarray(p, dtype=np.float64), q, _TS, _TW, int(steps), out, iinfo, finfo)
+    args = (np.ascontiguousarray(p, dtype=np.float64), q, _TS, _TW, int(steps), out, iinfo, finfo)
+    threads.rows(fk_all_serial, args, (1, 5, 6, 7), parallel=parallel)
     info = {
         "n_complex": iinfo[:, 0].copy(),
         "n_real": iinfo[:, 1].copy(),

@@ -24,7 +24,6 @@ from __future__ import annotations
 import cmath
 import math
 import os
-from concurrent.futures import ThreadPoolExecutor
 from functools import lru_cache
 
 import numba
@@ -32,6 +31,7 @@ import numpy as np
 from numba import njit
 
 from parakin.kernels import stewart66_lanes as lanes
+from parakin.kernels.threads import side_by_side
 
 if "NUMBA_THREADING_LAYER" not in os.environ:  # fork-safe, as parakin.kernels.build: the thread
     numba.config.THREADING_LAYER = "workqueue"  # count read below launches numba's thread pool
@@ -295,26 +295,10 @@ def _decide(y, beta, jn, qn, decision):
 
 
 # ------------------------------------------------------------------------------ the batch
-_POOL: list = [None, None]  # [executor, pid]: the block threads, recreated after a fork
-
-
-def _threads_pool(workers: int) -> ThreadPoolExecutor:
-    pool, pid = _POOL
-    if pool is None or pid != os.getpid() or pool._max_workers < workers:
-        pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="stewart66")
-        _POOL[:] = [pool, os.getpid()]
-    return pool
-
-
 def _side_by_side(P: int, threads: int, run) -> None:
-    """``run(lo, hi)`` over ``P`` items split into at most ``threads`` contiguous blocks of at
-    least :data:`MIN_BLOCK`, run side by side (the compiled code releases the GIL)."""
-    nb = max(1, min(threads, P // MIN_BLOCK))
-    bounds = (P * np.arange(nb + 1)) // nb
-    if nb == 1:
-        run(0, P)
-    else:
-        list(_threads_pool(nb).map(lambda b: run(bounds[b], bounds[b + 1]), range(nb)))
+    """``run(lo, hi)`` over ``P`` items in at most ``threads`` blocks of at least
+    :data:`MIN_BLOCK` (:func:`parakin.kernels.threads.side_by_side`)."""
+    side_by_side(P, run, threads=threads, min_block=MIN_BLOCK)
 
 
 def _target(bs, ps, c1) -> np.ndarray:

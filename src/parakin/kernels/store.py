@@ -490,9 +490,9 @@ def guard(fn: Any, where: Path) -> list[Any]:
 
 #: the entries of :mod:`parakin.kernels.entries` a known answer is asked of (the particle swarm's,
 #: random by design, are checked by their tags alone)
-_BATCHED = ("serial", "parallel", "verify_serial", "verify_parallel")
-_VERIFY = ("check", "verify_serial", "verify_parallel")
-_PROBED = ("row", "one", "serial", "parallel", *_VERIFY)
+_BATCHED = ("serial", "verify_serial")
+_VERIFY = ("check", "verify_serial")
+_PROBED = ("row", "one", "serial", *_VERIFY)
 
 
 def _known_answer(fn: Any, args: tuple) -> str | None:

@@ -258,7 +258,6 @@ class Stewart36(SixLegs):
         q = as_batch(joints, 6, "joints")
         batch = q.shape[:-1]
         qf = q.reshape(-1, 6)
-        n = len(qf)
         from parakin import kernels
 
         if type(self) is Stewart36 and kernels.enabled():  # compiled: parakin.kernels.stewart36_all
@@ -267,8 +266,7 @@ class Stewart36(SixLegs):
             p = stewart36_all.params(
                 self.top_points[LEG_TOP], self.base_points, self.a, self.home()
             )
-            par = kernels.use_parallel(n, None)
-            out, info = stewart36_all.fk_all(p, qf, int(newton_steps), parallel=par)
+            out, info = stewart36_all.fk_all(p, qf, int(newton_steps))
             unresolved = np.flatnonzero(info.pop("unresolved"))
         else:
             out, info, unresolved = self._fk_all_numpy(qf, newton_steps)

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from parakin.kernels import entries_of, kernel_of, methods, use_parallel
+from parakin.kernels import entries_of, kernel_of, methods, threads
 from parakin.solvers.result import FKResult, summarize
 from parakin.solvers.verify import default_joint_tol, judge_one
 
@@ -37,7 +37,7 @@ def solve(
 ):
     """The compiled solve of the flat batch (``joints (N, m)``, ``x0 (N, n)``) as an
     :class:`~parakin.solvers.result.FKResult` (not yet verified), or ``None`` where the compiled
-    path does not apply. ``parallel``: None = by batch size (:data:`PARALLEL_MIN_ROWS`)."""
+    path does not apply. ``parallel``: None = by batch size (:data:`parakin.kernels.threads.MIN_ROWS`)."""
     options = _without_callback(options)
     opts = None if options is None else methods.pack(method, tol, maxiter, options)
     kernel = None if opts is None else kernel_of(mech)
@@ -51,8 +51,8 @@ def solve(
     x = np.empty_like(x0)
     info = np.zeros((n, 4), dtype=np.int64)
     res = np.empty(n)
-    run = group.parallel if use_parallel(n, parallel) else group.serial
-    run(kernel.params, q, x0, opts, x, info, res)
+    args = (kernel.params, q, x0, opts, x, info, res)
+    threads.rows(group.serial, args, (1, 2, 4, 5, 6), parallel=parallel)
     status = info[:, 0].copy()
     return FKResult(
         x=x,

@@ -447,10 +447,14 @@ def _compiled(mech: Mechanism, inertia: Any, x: Array, joints: Array):
     return kernel, entries_of(kernel.module, "pso")
 
 
+#: the arguments of ``pso_serial`` that hold one row per run (the rest are shared)
+_PSO_RUN_ARGS = (1, 2, 3, 4, 5, 6, 7, 8, 9, 15, 16)
+
+
 def _compiled_loop(
     kernel, loops, joints: Array, sw: _Swarm, gens: list[np.random.Generator], fl: _Flight
 ) -> None:
-    """The iterations of :func:`pso` by ``loops.pso_parallel``, block by block of :data:`_BLOCK`
+    """The iterations of :func:`pso` by ``loops.pso_serial``, block by block of :data:`_BLOCK`
     iterations: the random numbers are drawn here exactly as in the numpy loop (one block per
     running run at iterations 1, 1 + _BLOCK, ...), the weights of a block asked of the schedule for
     every run, then every run advances independently (in parallel). Fills the arrays in place."""
@@ -467,10 +471,8 @@ def _compiled_loop(
     every = np.arange(n_runs)
     coef = np.array([c1, c2, ftol, 0.0 if vmax is None else 1.0], dtype=float)
     vm = np.zeros(n) if vmax is None else np.asarray(vmax, dtype=float)
-    from parakin.kernels import use_parallel
+    from parakin.kernels import threads
 
-    # several runs: every core (main thread only, see use_parallel); one run: no thread start-up
-    run_block = loops.pso_parallel if use_parallel(n_runs, n_runs > 1) else loops.pso_serial
     k = 1
     while k <= maxiter:
         rows = np.flatnonzero(state[:, 0])
@@ -483,25 +485,9 @@ def _compiled_loop(
         w = np.empty((n_runs, nk))
         for s in range(nk):
             w[:, s] = np.broadcast_to(np.asarray(schedule(k + s, maxiter, every), float), n_runs)
-        run_block(
-            kernel.params,
-            q,
-            x,
-            v,
-            pbest,
-            pf,
-            gbest,
-            best,
-            rand,
-            w,
-            k,
-            lo,
-            hi,
-            vm,
-            coef,
-            state,
-            history,
-        )
+        args = (kernel.params, q, x, v, pbest, pf, gbest, best, rand, w, k, lo, hi, vm, coef, state, history)  # fmt: skip
+        # several runs: blocks of runs on every core; one run: no thread start-up
+        threads.rows(loops.pso_serial, args, _PSO_RUN_ARGS, parallel=n_runs > 1)
         for s in range(nk):  # the mean weight over the runs going at each iteration
             going = history[:, k + s - 1] > ftol
             if going.any():

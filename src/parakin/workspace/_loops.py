@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import prange
 
 IK = JAC = RES = None  # bound per kernel (parakin.workspace.compiled)
 
@@ -144,13 +143,8 @@ def row(p, x, jlo, jhi, want_cond, q, flags):
     return svd_cond(a)
 
 
-def rows_parallel(p, X, jlo, jhi, want_cond, Q, F, C):
-    """Every pose of a batch, on every core."""
-    for i in prange(X.shape[0]):
-        C[i] = row(p, X[i], jlo, jhi, want_cond, Q[i], F[i])
-
-
 def rows_serial(p, X, jlo, jhi, want_cond, Q, F, C):
-    """Every pose of a batch, one after the other (same per-row code)."""
+    """Every pose of a batch, one after the other (blocks of a batch run side by side:
+    :func:`parakin.kernels.threads.rows`)."""
     for i in range(X.shape[0]):
         C[i] = row(p, X[i], jlo, jhi, want_cond, Q[i], F[i])

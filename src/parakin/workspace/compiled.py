@@ -1,5 +1,5 @@
 """The compiled workspace classifier: the loops of :mod:`parakin.workspace._loops` bound to one
-mechanism's kernels and compiled by numba (``prange`` over the poses: every core), cached on disk
+mechanism's kernels and compiled by numba (blocks of poses on threads: every core), cached on disk
 beside the kernels (:mod:`parakin.kernels.store`) under a hash of the kernel's sources and of the
 loops'. Used by :func:`parakin.workspace.classify` for batches of at least :data:`MIN_ROWS` poses
 where the compiled path is on (:func:`parakin.kernels.enabled`) and the mechanism runs its kernel
@@ -25,7 +25,7 @@ __all__ = ["MIN_ROWS", "classifier", "loops_of"]
 MIN_ROWS = 20_000
 #: rows per call of the compiled loop (bounds the memory of one call)
 CHUNK = 1 << 18
-_FUNCTIONS = ("joint_jacobian", "solve_in_place", "svd_cond", "row", "rows_parallel", "rows_serial")
+_FUNCTIONS = ("joint_jacobian", "solve_in_place", "svd_cond", "row", "rows_serial")
 
 
 def _sources(module: types.ModuleType) -> list[types.ModuleType]:
@@ -59,10 +59,10 @@ def loops_of(module: types.ModuleType) -> types.SimpleNamespace:
             # a name per kernel: numba names a cached function by its qualified name
             copy.__qualname__ = f"{fn.__qualname__}__{module.__name__.replace('.', '_')}"
             copy.__module__ = fn.__module__
-            glob[name] = numba.njit(
-                parallel=name == "rows_parallel", cache=True, error_model="numpy", nogil=True
-            )(copy)
+            glob[name] = numba.njit(cache=True, error_model="numpy", nogil=True)(copy)
             out[name] = glob[name]
+    # the batch loop, loaded (or compiled) on its first call through the cache's checks
+    out["rows"] = kernels._Entry(out["rows_serial"], path)
     return types.SimpleNamespace(path=path, **out)
 
 
@@ -86,13 +86,10 @@ def classifier(region: Region, n: int, compiled: bool | None) -> Callable | None
         q = np.empty((len(x), m))
         flags = np.zeros((len(x), 2), dtype=np.int8)
         cond = np.empty(len(x))
-        parallel = kernels.use_parallel(len(x), None)
-        fn = loops.rows_parallel if parallel else loops.rows_serial
         for s in range(0, len(x), CHUNK):
             sl = slice(s, s + CHUNK)
-            kernels.store.first_call(
-                fn, loops.path, params, x[sl], jlo, jhi, bool(want_cond), q[sl], flags[sl], cond[sl]
-            )
+            args = (params, x[sl], jlo, jhi, bool(want_cond), q[sl], flags[sl], cond[sl])
+            kernels.threads.rows(loops.rows, args, (1, 5, 6, 7))
         domain = flags[:, 0] == 1
         q[~domain] = np.nan
         return q, domain, flags[:, 1] == 1, cond
