@@ -418,6 +418,89 @@ def test_two_processes_on_an_empty_cache_compile_an_entry_once(tmp_path):
     assert sorted(outs) == [["True", "0", "1"], ["True", "1", "0"]], outs
 
 
+#: a module of plain ``cache=True`` functions (a caller and its callee), shared as parakin's are
+SHARED_MODULE = textwrap.dedent(
+    """
+    import numpy as np
+    from numba import njit
+
+    from parakin.kernels import store
+
+    @njit(cache=True)
+    def inner(a):
+        s = 0.0
+        for i in range(a.shape[0]):
+            for j in range(a.shape[1]):
+                s += np.sin(a[i, j]) * np.cos(a[j, i]) if i != j else np.sqrt(abs(a[i, j]))
+        return s
+
+    @njit(cache=True)
+    def outer(a):
+        return inner(a) + inner(a.T.copy()) + np.linalg.norm(a)
+
+    store.share_compiles(vars())
+    """
+)
+#: both processes announce themselves, wait for each other, then call (prints misses, hits)
+SHARED_CALL = textwrap.dedent(
+    """
+    import os, sys, time
+    from pathlib import Path
+    import numpy as np
+    import shared_module as m
+
+    Path(f"ready-{os.getpid()}").touch()
+    while len(list(Path(".").glob("ready-*"))) < 2:
+        time.sleep(0.01)
+    m.outer(np.ones((3, 3)))
+    print(len(m.outer.stats.cache_misses), len(m.outer.stats.cache_hits))
+    """
+)
+
+
+@pytest.mark.slow  # fresh processes that compile
+def test_two_processes_compile_a_shared_numba_function_once(tmp_path):
+    """A plain ``cache=True`` function (numba's part of the cache, as the 6-6 tracker's) needed by
+    two processes at the same moment on an empty cache: one compiles it, the other waits for it
+    and loads it (one miss between the two; both compiled it without the lock)."""
+    (tmp_path / "shared_module.py").write_text(SHARED_MODULE)
+    env = _env(tmp_path / "cache")
+    env["PYTHONPATH"] = os.pathsep.join([str(tmp_path), env["PYTHONPATH"]])
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", SHARED_CALL],
+            env=env,
+            cwd=tmp_path,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )  # fmt: skip
+        for _ in range(2)
+    ]
+    outs = [p.communicate(timeout=900) for p in procs]
+    assert all(p.returncode == 0 for p in procs), outs
+    assert sorted(o[0].split() for o in outs) == [["0", "1"], ["1", "0"]], outs
+
+
+def test_a_failed_compile_releases_its_lock(tmp_path, monkeypatch):
+    """A shared function whose compile raises (a type error) holds no lock afterwards: another
+    process would otherwise wait on it for as long as this one lives."""
+    import numba
+
+    from parakin.kernels import store
+
+    monkeypatch.setattr(store, "root", lambda: tmp_path)
+
+    @numba.njit(cache=True)
+    def half(x):
+        return x / 2
+
+    store.share_compiles({"half": half})
+    with pytest.raises(numba.TypingError):
+        half("text")
+    assert store._COMPILING == {}
+
+
 #: the workspace's compiled classification of rpr3 against its numpy path (prints: equal?)
 CLASSIFY = textwrap.dedent(
     """

@@ -16,6 +16,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from parakin.kernels import (
+    store,
+)  # numba's cache directory (parakin.kernels.store), set before any @njit
+
 __all__ = ["replay", "forces", "accelerations"]
 
 
@@ -260,3 +264,7 @@ def accelerations(mass, jac, bias, force, extra, out, cond):
             out[s] = np.linalg.solve(mass[s], rhs)
         else:
             out[s] = np.nan
+
+
+# one process at a time compiles each of these functions; the others wait and load it
+store.share_compiles(vars())

@@ -28,7 +28,7 @@ import numba
 import numpy as np
 from numba import njit
 
-from parakin.kernels import threads
+from parakin.kernels import store, threads
 
 if "NUMBA_THREADING_LAYER" not in os.environ:  # fork-safe, as parakin.kernels.build
     numba.config.THREADING_LAYER = "workqueue"
@@ -802,3 +802,7 @@ def fk_all(p: np.ndarray, joints: np.ndarray, steps: int = 8, parallel: bool | N
         "unresolved": iinfo[:, 3] == 1,
     }
     return out, info
+
+
+# one process at a time compiles each of these functions; the others wait and load it
+store.share_compiles(vars())

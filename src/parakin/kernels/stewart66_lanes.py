@@ -46,6 +46,8 @@ import math
 import numpy as np
 from numba import njit
 
+from parakin.kernels import store
+
 __all__ = [
     "LANES",
     "NTH",
@@ -1273,3 +1275,7 @@ def newton_queue(par, x, item_k, charts, iters, out_x, out_beta, out_jn, out_qn)
             out_beta[p] = nrm[ln] if good else math.inf
             out_jn[p] = jn[ln] if good else math.inf
             out_qn[p] = qn[ln]
+
+
+# one process at a time compiles each of these functions; the others wait and load it
+store.share_compiles(vars())

@@ -31,6 +31,7 @@ import numpy as np
 from numba import njit
 
 from parakin.kernels import stewart66_lanes as lanes
+from parakin.kernels import store
 from parakin.kernels.threads import side_by_side
 
 if "NUMBA_THREADING_LAYER" not in os.environ:  # fork-safe, as parakin.kernels.build: the thread
@@ -562,3 +563,7 @@ def _bends(retries: int) -> np.ndarray:
     """One fixed random complex direction per retry (the same for every input and batch)."""
     rng = np.random.default_rng(1000)
     return rng.normal(size=(retries, 6)) + 1j * rng.normal(size=(retries, 6))
+
+
+# one process at a time compiles each of these functions; the others wait and load it
+store.share_compiles(vars())

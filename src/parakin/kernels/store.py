@@ -38,6 +38,11 @@ data file, beside the signature numba keys it by; a file of another kernel, grou
 source gives on Python floats. Either failure rebuilds the build, with one line. Numba's own cache
 directory (``NUMBA_CACHE_DIR``) is pointed at ``<root>/numba`` when this module is imported,
 before any parakin module decorates a function, so no cache lands beside the sources.
+
+One process compiles a thing at a time: the first calls of a build's entry group
+(:func:`first_call`) and each function of numba's part (:func:`share_compiles`) hold a lock, so a
+process that needs what another is compiling waits and loads it, rather than compiling it beside
+it (the pipeline's jobs and the test workers start on an empty cache together).
 """
 
 from __future__ import annotations
@@ -62,7 +67,17 @@ try:
 except ImportError:  # no advisory locks (Windows): builds are made and removed without them
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["clear", "digest", "first_call", "guard", "kernel_dir", "numba_cache", "root", "status"]
+__all__ = [
+    "clear",
+    "digest",
+    "first_call",
+    "guard",
+    "kernel_dir",
+    "numba_cache",
+    "root",
+    "share_compiles",
+    "status",
+]
 
 log = logging.getLogger("parakin.kernels")
 
@@ -456,6 +471,79 @@ def _tagged_cache() -> type:
             self._cache_file.save(key, (label, self._impl.reduce(data)))
 
     return TaggedCache
+
+
+#: id(cache) -> the descriptor of the compile lock this process holds for it (:func:`_shared_cache`)
+_COMPILING: dict[int, int] = {}
+
+
+def _release(cache_: Any) -> None:
+    fd = _COMPILING.pop(id(cache_), None)
+    if fd is not None:
+        os.close(fd)  # releases the lock
+
+
+@cache
+def _shared_cache() -> type:
+    """numba's ``FunctionCache`` where a miss is compiled by one process at a time: a process that
+    misses takes the function's lock (``<root>/.locks/numba.<index>.lock``) and looks again
+    (another process may have written it meanwhile); it holds the lock while it compiles, until
+    the function is saved (or its compile failed)."""
+    import numba.core.event as ev
+    from numba.core.caching import FunctionCache
+
+    class SharedCache(FunctionCache):
+        def load_overload(self, sig: Any, target_context: Any) -> Any:
+            got = super().load_overload(sig, target_context)
+            base = root()
+            if got is not None or not self._enabled or base is None or id(self) in _COMPILING:
+                return got
+            index = self._cache_file._index_path
+            name = hashlib.sha256(index.encode()).hexdigest()[:HASH_DIGITS]
+            fd = _lock_fd(base / LOCKS / f"numba.{Path(index).stem}.{name}.lock")
+            if fd is None:
+                return None
+            fcntl.flock(fd, fcntl.LOCK_EX)
+            got = super().load_overload(sig, target_context)
+            if got is None:
+                _COMPILING[id(self)] = fd  # held while this process compiles it
+            else:
+                os.close(fd)
+            return got
+
+        def save_overload(self, sig: Any, data: Any) -> None:
+            try:
+                super().save_overload(sig, data)
+            finally:
+                _release(self)
+
+    class FailedCompile(ev.Listener):
+        """Releases the lock of a compile that raised (nothing will be saved)."""
+
+        def on_start(self, event: Any) -> None:
+            pass
+
+        def on_end(self, event: Any) -> None:
+            disp = event.data["dispatcher"]
+            if tuple(event.data["args"]) not in disp.overloads:  # it raised: nothing to save
+                _release(disp._cache)
+
+    ev.register("numba:compile", FailedCompile())
+    return SharedCache
+
+
+def share_compiles(namespace: dict[str, Any]) -> None:
+    """Let every ``cache=True`` numba function of ``namespace`` (a module's ``vars()``) that lies
+    in numba's part of the cache be compiled by one process at a time (:func:`_shared_cache`):
+    the pipeline's jobs and the test workers start on an empty cache together, and the 6-6
+    tracker alone takes over a CPU-minute to compile."""
+    from numba.core.caching import FunctionCache
+    from numba.core.dispatcher import Dispatcher
+
+    shared = _shared_cache()
+    for disp in namespace.values():
+        if isinstance(disp, Dispatcher) and type(getattr(disp, "_cache", None)) is FunctionCache:
+            disp._cache.__class__ = shared  # same fields, same files: only a miss changes
 
 
 def guard(fn: Any, where: Path) -> list[Any]:
