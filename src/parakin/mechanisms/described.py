@@ -55,7 +55,12 @@ from parakin.mechanisms.base import (
 
 if TYPE_CHECKING:  # the dynamics are imported where they are used: a solve does not need them
     from parakin.dynamics.jet import Jet
-    from parakin.dynamics.model import Bodies, MassModel, RigidBody
+    from parakin.dynamics.model import Bodies, BodyGroup, Closure, MassModel, RigidBody
+
+    #: what :meth:`Described.bodies` gathers by leg index: its joint as a jet and the body that
+    #: drives it; the rods' lower ends: (leg, point as a jet, the body the rod hangs on)
+    _Drives = dict[int, tuple[Jet, str]]
+    _Ends = list[tuple[int, Jet, str]]
 
 __all__ = [
     "LEG_TYPES",
@@ -1171,18 +1176,9 @@ class Described(Mechanism, register=False):
         its arm), and the rods of both, S-S links to the platform (:func:`rods`). The joints are
         the IK's, on each leg's branch, as jets."""
         import parakin.dynamics.jet as dj
-        from parakin.dynamics.model import Bodies, BodyGroup, frame_with_z, rods, strut
+        from parakin.dynamics.model import Bodies, BodyGroup
 
-        batch = pose.shape[:-1]
-        if self.platform == "spatial":
-            origin = pose[..., :3]
-            rotation = dj.euler_zyx(pose[..., 3], pose[..., 4], pose[..., 5])
-        elif self.platform == "planar":
-            origin = dj.stack([pose[..., 0], pose[..., 1], 0.0 * pose[..., 0]])
-            rotation = dj.rotations([pose[..., 2]], "z")
-        else:
-            origin = pose
-            rotation = dj.constant_like(np.broadcast_to(np.eye(3), (*batch, 3, 3)), pose)
+        origin, rotation = self._platform_jets(pose)
         tops = origin[..., None, :] + dj.matvec(rotation[..., None, :, :], self.anchor_points)
         groups = [
             BodyGroup(
@@ -1195,98 +1191,168 @@ class Described(Mechanism, register=False):
             )  # fmt: skip
         ]
         closures = []
-        joints: list[Any] = [None] * self.n_joints
-        actuators = [""] * self.n_joints
+        drives: _Drives = {}
+        ends: _Ends = []
         types = self._types
         length = np.flatnonzero(types == "length")
         if length.size:
-            labels = [str(i + 1) for i in length]
-            (cyl, pis), closure, lengths = strut(
-                self.base_points[length], tops[..., length, :], ("platform",) * len(length),
-                labels=labels,
-            )  # fmt: skip
-            groups += [cyl, pis]
+            struts, closure, more = self._strut_bodies(tops, length)
+            groups += struts
             closures.append(closure)
-            for j, i in enumerate(length):
-                joints[i], actuators[i] = lengths[..., j], pis.names[j]
-        bottoms, bottom_bodies, rod_legs = [], [], []
+            drives.update(more)
         slider = np.flatnonzero(types == "slider-rod")
         if slider.size:
-            points = []
-            for i in slider:
-                u, rod, br = self._axes[i], self._rods[i], self.legs[i].branch
-                w = tops[..., i, :] - self.base_points[i]
-                b = dj.dot(w, u)
-                q = b + br * dj.sqrt(rod * rod - (dj.dot(w, w) - b * b))
-                point = q[..., None] * u + self.base_points[i]
-                points.append(point)
-                joints[i], actuators[i] = q, f"slider{i + 1}"
-                bottoms.append(point)
-                bottom_bodies.append(f"slider{i + 1}")
-                rod_legs.append(i)
-            frames = frame_with_z(self._axes[slider])
-            groups.append(
-                BodyGroup(
-                    "slider",
-                    tuple(f"slider{i + 1}" for i in slider),
-                    ("world",) * len(slider),
-                    "slide",
-                    dj.stack(points, axis=-2),
-                    rotation=dj.constant_like(
-                        np.broadcast_to(frames, (*batch, *frames.shape)), pose
-                    ),
-                    joint_axis=np.broadcast_to(self._axes[slider], (*batch, len(slider), 3)),
-                )
-            )
+            group, more, lower = self._slider_bodies(pose, tops, slider)
+            groups.append(group)
+            drives.update(more)
+            ends += lower
         crank = np.flatnonzero(types == "crank-rod")
         if crank.size:
-            frames, tips = [], []
-            for i in crank:
-                r, rod, br = self._cranks[i], self._rods[i], self.legs[i].branch
-                z, s, axis = self._zeros[i], self._sides[i], self._axes[i]
-                w = tops[..., i, :] - self.base_points[i]
-                wu, wv = dj.dot(w, z), dj.dot(w, s)
-                big_k = (dj.dot(w, w) + (r * r - rod * rod)) * (1.0 / (2.0 * r))
-                root = dj.sqrt(wu * wu + wv * wv - big_k * big_k)
-                inv = 1.0 / (wu * wu + wv * wv)
-                cos_q = (wu * big_k - br * (wv * root)) * inv
-                sin_q = (wv * big_k + br * (wu * root)) * inv
-                arm = cos_q[..., None] * z + sin_q[..., None] * s
-                tip = r * arm + self.base_points[i]
-                # the angle's jet: its value by atan2, its rates from d(theta) = cos d(sin) - sin d(cos)
-                c0, s0 = cos_q.value, sin_q.value
-                joints[i] = (c0 * sin_q - s0 * cos_q) + np.arctan2(s0, c0)
-                actuators[i] = f"crank{i + 1}"
-                axis_jet = dj.constant_like(np.broadcast_to(axis, (*batch, 3)), pose)
-                frames.append(dj.stack([axis_jet, dj.cross(arm, axis), arm], axis=-1))
-                tips.append(tip)
-                bottoms.append(tip)
-                bottom_bodies.append(f"crank{i + 1}")
-                rod_legs.append(i)
-            base = dj.constant_like(
-                np.broadcast_to(self.base_points[crank], (*batch, len(crank), 3)), pose
-            )
-            groups.append(
-                BodyGroup(
-                    "crank",
-                    tuple(f"crank{i + 1}" for i in crank),
-                    ("world",) * len(crank),
-                    "hinge",
-                    base,
-                    rotation=dj.stack(frames, axis=-3),
-                    joint_axis=np.broadcast_to(self._axes[crank], (*batch, len(crank), 3)),
-                )
-            )
-        if rod_legs:
-            order = np.argsort(rod_legs, kind="stable")
-            rod_group, closure = rods(
-                "rod",
-                dj.stack([bottoms[k] for k in order], axis=-2),
-                tops[..., sorted(rod_legs), :],
-                [bottom_bodies[k] for k in order],
-                ("platform",) * len(rod_legs),
-                [str(i + 1) for i in sorted(rod_legs)],
-            )
+            group, more, lower = self._crank_bodies(pose, tops, crank)
+            groups.append(group)
+            drives.update(more)
+            ends += lower
+        if ends:
+            rod_group, closure = self._rod_bodies(tops, ends)
             groups.append(rod_group)
             closures.append(closure)
+        joints: list[Any] = [None] * self.n_joints
+        actuators = [""] * self.n_joints
+        for i, (q, actuator) in drives.items():
+            joints[i], actuators[i] = q, actuator
         return Bodies(tuple(groups), dj.stack(joints, axis=-1), tuple(actuators), tuple(closures))
+
+    def _platform_jets(self, pose: Jet) -> tuple[Jet, Jet]:
+        """The platform's origin (..., 3) and rotation (..., 3, 3) as jets: :meth:`platform_frame`
+        of a pose that moves, which every body's motion derives from."""
+        import parakin.dynamics.jet as dj
+
+        if self.platform == "spatial":
+            return pose[..., :3], dj.euler_zyx(pose[..., 3], pose[..., 4], pose[..., 5])
+        if self.platform == "planar":
+            origin = dj.stack([pose[..., 0], pose[..., 1], 0.0 * pose[..., 0]])
+            return origin, dj.rotations([pose[..., 2]], "z")
+        batch = pose.shape[:-1]
+        return pose, dj.constant_like(np.broadcast_to(np.eye(3), (*batch, 3, 3)), pose)
+
+    def _strut_bodies(
+        self, tops: Jet, legs: NDArray[np.intp]
+    ) -> tuple[list[BodyGroup], Closure, _Drives]:
+        """The length legs' cylinders and pistons (S-P-S struts, closing loops at the platform)
+        and their joints: each leg's length, driven by its piston's slide."""
+        from parakin.dynamics.model import strut
+
+        labels = [str(i + 1) for i in legs]
+        (cyl, pis), closure, lengths = strut(
+            self.base_points[legs], tops[..., legs, :], ("platform",) * len(legs), labels=labels
+        )
+        return [cyl, pis], closure, {i: (lengths[..., j], pis.names[j]) for j, i in enumerate(legs)}
+
+    def _slider_leg(self, tops: Jet, i: int) -> tuple[Jet, Jet]:
+        """Slider ``i``'s position along its axis (its joint, on the leg's branch: where the rod
+        reaches the platform anchor) and the slider's point, where the rod hangs."""
+        import parakin.dynamics.jet as dj
+
+        u, rod, br = self._axes[i], self._rods[i], self.legs[i].branch
+        w = tops[..., i, :] - self.base_points[i]
+        b = dj.dot(w, u)
+        q = b + br * dj.sqrt(rod * rod - (dj.dot(w, w) - b * b))
+        return q, q[..., None] * u + self.base_points[i]
+
+    def _slider_bodies(
+        self, pose: Jet, tops: Jet, legs: NDArray[np.intp]
+    ) -> tuple[BodyGroup, _Drives, _Ends]:
+        """The sliders on their guides (slide joints, frames fixed), their joints and their
+        points, the lower ends of their rods."""
+        import parakin.dynamics.jet as dj
+        from parakin.dynamics.model import BodyGroup, frame_with_z
+
+        batch = pose.shape[:-1]
+        drives: _Drives = {}
+        ends, points = [], []
+        for i in legs:
+            q, point = self._slider_leg(tops, i)
+            points.append(point)
+            drives[i] = (q, f"slider{i + 1}")
+            ends.append((i, point, f"slider{i + 1}"))
+        frames = frame_with_z(self._axes[legs])
+        group = BodyGroup(
+            "slider",
+            tuple(f"slider{i + 1}" for i in legs),
+            ("world",) * len(legs),
+            "slide",
+            dj.stack(points, axis=-2),
+            rotation=dj.constant_like(np.broadcast_to(frames, (*batch, *frames.shape)), pose),
+            joint_axis=np.broadcast_to(self._axes[legs], (*batch, len(legs), 3)),
+        )
+        return group, drives, ends
+
+    def _crank_leg(self, pose: Jet, tops: Jet, i: int) -> tuple[Jet, Jet, Jet]:
+        """Crank ``i``'s angle (its joint, on the leg's branch), frame (x its axis, z along its
+        arm) and tip, where its rod hangs: the leg's closed-form IK as jets."""
+        import parakin.dynamics.jet as dj
+
+        r, rod, br = self._cranks[i], self._rods[i], self.legs[i].branch
+        z, s, axis = self._zeros[i], self._sides[i], self._axes[i]
+        w = tops[..., i, :] - self.base_points[i]
+        wu, wv = dj.dot(w, z), dj.dot(w, s)
+        big_k = (dj.dot(w, w) + (r * r - rod * rod)) * (1.0 / (2.0 * r))
+        root = dj.sqrt(wu * wu + wv * wv - big_k * big_k)
+        inv = 1.0 / (wu * wu + wv * wv)
+        cos_q = (wu * big_k - br * (wv * root)) * inv
+        sin_q = (wv * big_k + br * (wu * root)) * inv
+        arm = cos_q[..., None] * z + sin_q[..., None] * s
+        tip = r * arm + self.base_points[i]
+        # the angle's jet: its value by atan2, its rates from d(theta) = cos d(sin) - sin d(cos)
+        c0, s0 = cos_q.value, sin_q.value
+        angle = (c0 * sin_q - s0 * cos_q) + np.arctan2(s0, c0)
+        axis_jet = dj.constant_like(np.broadcast_to(axis, (*pose.shape[:-1], 3)), pose)
+        return angle, dj.stack([axis_jet, dj.cross(arm, axis), arm], axis=-1), tip
+
+    def _crank_bodies(
+        self, pose: Jet, tops: Jet, legs: NDArray[np.intp]
+    ) -> tuple[BodyGroup, _Drives, _Ends]:
+        """The cranks turning about their axes (hinge joints at their centres), their joints and
+        their tips, the lower ends of their rods."""
+        import parakin.dynamics.jet as dj
+        from parakin.dynamics.model import BodyGroup
+
+        batch = pose.shape[:-1]
+        drives: _Drives = {}
+        ends, frames = [], []
+        for i in legs:
+            angle, frame, tip = self._crank_leg(pose, tops, i)
+            drives[i] = (angle, f"crank{i + 1}")
+            frames.append(frame)
+            ends.append((i, tip, f"crank{i + 1}"))
+        base = dj.constant_like(
+            np.broadcast_to(self.base_points[legs], (*batch, len(legs), 3)), pose
+        )
+        group = BodyGroup(
+            "crank",
+            tuple(f"crank{i + 1}" for i in legs),
+            ("world",) * len(legs),
+            "hinge",
+            base,
+            rotation=dj.stack(frames, axis=-3),
+            joint_axis=np.broadcast_to(self._axes[legs], (*batch, len(legs), 3)),
+        )
+        return group, drives, ends
+
+    @staticmethod
+    def _rod_bodies(tops: Jet, ends: _Ends) -> tuple[BodyGroup, Closure]:
+        """The rods of the slider and crank legs, in leg order: S-S links from their lower
+        ``ends`` (leg, point, body) to the platform anchors, closing loops there."""
+        import parakin.dynamics.jet as dj
+        from parakin.dynamics.model import rods
+
+        ends = sorted(ends, key=lambda end: end[0])
+        legs = [end[0] for end in ends]
+        return rods(
+            "rod",
+            dj.stack([end[1] for end in ends], axis=-2),
+            tops[..., legs, :],
+            [end[2] for end in ends],
+            ("platform",) * len(legs),
+            [str(i + 1) for i in legs],
+        )
