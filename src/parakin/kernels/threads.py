@@ -48,6 +48,7 @@ def _pool(workers: int) -> ThreadPoolExecutor:
     with _LOCK:
         pool, pid = _POOL
         if pool is None or pid != os.getpid() or pool._max_workers < workers:
+            # a narrower pool is left to idle, not shut down: another thread may be submitting
             pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="parakin")
             _POOL[:] = [pool, os.getpid()]
         return pool
