@@ -108,7 +108,7 @@ def test_stored_start_system_regenerates():
     x, beta, jn = hc.newton_refine(q, stored["patch"], stored["solutions"], iters=1)
     alpha = hc.certify(q, beta, jn)
     assert np.all(alpha < hc.ALPHA0)
-    assert hc.distinct(x[None], beta[None], (alpha < hc.ALPHA0)[None]).all()
+    assert hc.distinct(x[None], beta[None], (alpha < hc.ALPHA0)[None], alpha[None]).all()
 
 
 # ------------------------------------------------------------------------------------ all solutions

@@ -19,6 +19,7 @@ import pytest
 import parakin.mechanisms.stewart66_homotopy as hc
 from parakin.mechanisms.stewart66 import Stewart66
 
+ROOT = Path(__file__).resolve().parents[1]
 DATA = np.load(Path(__file__).parent / "data" / "stewart66_odd_census.npz")
 
 
@@ -60,3 +61,28 @@ def test_real_decision_does_not_depend_on_the_representative_and_never_guesses()
     assert np.all(hc.real_decision(qq[: len(real)], noisy)[1] == 1)
     far = real + 1e-2 * (1 + 1j) * rng.normal(size=real.shape)
     assert np.all(hc.real_decision(qq[: len(real)], far, iters=0)[1] != 1)
+
+
+def test_a_zero_near_a_fold_is_not_counted_twice(monkeypatch):
+    """Platform 557, input 619 of the 10^6 census (``config/cluster.yaml``), on its platform's own
+    start system: two real zeros 1.6e-3 apart (near a fold). Two fibre paths once ended on one of
+    them, 1.6e-13 apart, and both were kept as distinct (the computed beta of an ill-conditioned
+    zero is rounding, 1e-16): 40 "distinct" solutions with 5 real, an odd count. With beta's
+    rounding floor in the distinctness radius the duplicate is caught, the input retracked, and
+    the 40 solutions pair off with their conjugates: 4 real."""
+    from parakin.config import load_run_config
+    from parakin.studies import stewart66_census as census
+
+    section = census._section(load_run_config([ROOT / "config" / "cluster.yaml"]))
+    mech, legs = census._platform(int(section["seed"]), 557, section)
+    for path in ("1", "0"):  # compiled (where available), then numpy
+        monkeypatch.setenv("PARAKIN_KERNELS", path)
+        r = mech.fk_all(legs[[0, 619]], return_info=True)  # two inputs: the platform's start system
+        assert r.complete[1] and r.n_undecided[1] == 0 and r.n_found[1] == 40
+        assert r.n_real[1] == 4, f"real count {r.n_real[1]} ({path})"
+        z = r.study[1]
+        z = z / z[np.arange(40), np.argmax(np.abs(z), axis=1)][:, None]
+        d = np.linalg.norm(z[:, None] - z[None], axis=-1) + np.eye(40)
+        assert d.min() > 1e-6  # no zero twice
+        conj = np.linalg.norm(z[:, None] - np.conj(z)[None], axis=-1).min(axis=1)
+        assert conj.max() < 1e-8  # every solution's conjugate is among the 40

@@ -64,22 +64,30 @@ EVAL_ULPS = 16 * np.finfo(np.float64).eps
 @njit(**_O)
 def keep_distinct(x, beta, alpha, alpha0, keep):
     """``keep[i]``: ``x[i]`` is certified (``alpha < alpha0``), an assembly (``e . e`` not
-    numerically 0) and its ``2 beta`` ball meets no earlier kept one's (as
-    :func:`parakin.mechanisms.stewart66_homotopy.distinct`)."""
+    numerically 0) and its ``2 beta`` ball, ``beta`` with its rounding floor, meets no earlier
+    kept one's (as :func:`parakin.mechanisms.stewart66_homotopy.distinct`)."""
     m = len(x)
+    radius = np.empty(m)
     for i in range(m):
         ee = 0j
         nn = 0.0
+        xx = 0.0
+        for a in range(8):
+            xx += x[i, a].real ** 2 + x[i, a].imag ** 2
         for a in range(4):
             ee += x[i, a] * x[i, a]
             nn += x[i, a].real ** 2 + x[i, a].imag ** 2
         keep[i] = abs(ee) > 1e-10 * nn and alpha[i] < alpha0
+        # the computed beta of an ill-conditioned zero is rounding, not a bound on its distance
+        # to the zero: the floor gamma EVAL_ULPS |x|^2 (gamma = alpha / beta), as the reality test
+        gamma = alpha[i] / beta[i] if beta[i] > 0 else 0.0
+        radius[i] = beta[i] + EVAL_ULPS * gamma * xx
     for i in range(1, m):
         if not keep[i]:
             continue
         for j in range(i):
             if keep[j]:
-                r = 2 * (beta[i] + beta[j]) + 1e-12
+                r = 2 * (radius[i] + radius[j]) + 1e-12
                 d = 0.0
                 for a in range(8):
                     z = x[i, a] - x[j, a]

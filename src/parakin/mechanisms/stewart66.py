@@ -431,7 +431,8 @@ class Stewart66(SixLegs):
             x, beta, jn = hc.newton_refine(q, patch, x, iters=4)
             alpha = hc.certify(q, beta, jn)
             finite = np.abs(np.sum(x[:, :4] ** 2, -1)) > 1e-10 * np.sum(np.abs(x[:, :4]) ** 2, -1)
-            keep = hc.distinct(x[None], beta[None], ((alpha < hc.ALPHA0) & finite)[None])[0]
+            ok = ((alpha < hc.ALPHA0) & finite)[None]
+            keep = hc.distinct(x[None], beta[None], ok, alpha[None])[0]
             best = x[keep]
             if len(best) == m:
                 break
@@ -649,7 +650,7 @@ class Stewart66(SixLegs):
         e = x[..., :4]
         with np.errstate(invalid="ignore"):
             finite = np.abs(np.sum(e * e, -1)) > 1e-10 * np.sum(np.abs(e) ** 2, -1)
-        return hc.distinct(x, beta, (alpha < hc.ALPHA0) & finite)
+        return hc.distinct(x, beta, (alpha < hc.ALPHA0) & finite, alpha)
 
     def _package(self, qf, x, alpha, keep, steps, retried) -> FKAll:
         n, m, _ = x.shape

@@ -513,14 +513,20 @@ def real_decision(q: np.ndarray, x: np.ndarray, iters: int = 3) -> tuple[np.ndar
     return y, np.where(ok & np.all(np.isfinite(y), -1), decision, 0)
 
 
-def distinct(x: np.ndarray, beta: np.ndarray, ok: np.ndarray) -> np.ndarray:
+def distinct(x: np.ndarray, beta: np.ndarray, ok: np.ndarray, alpha: np.ndarray) -> np.ndarray:
     """Per row of (n, m, 8): mask of certified solutions whose 2 beta balls (where the associated zero
-    lies) do not meet an earlier kept one's: every kept solution is a different zero."""
+    lies) do not meet an earlier kept one's: every kept solution is a different zero. ``beta``
+    gets its rounding floor ``EVAL_ULPS gamma |x|^2`` (``gamma = alpha / beta``), as in
+    :func:`real_decision`: at an ill-conditioned zero the computed beta is rounding, not a bound
+    on the distance to the zero, and two paths ending on one zero near a fold were once kept as
+    two (the 10^6 census's one odd count, docs/census.md)."""
     n, m, _ = x.shape
     keep = ok.copy()
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore", divide="ignore"):
+        gamma = np.where(beta > 0, alpha / beta, 0.0)
+        radius = beta + EVAL_ULPS * gamma * np.sum(np.abs(x) ** 2, -1)
         d = np.linalg.norm(x[:, :, None, :] - x[:, None, :, :], axis=-1)
-        clash = d <= 2 * (beta[:, :, None] + beta[:, None, :]) + 1e-12
+        clash = d <= 2 * (radius[:, :, None] + radius[:, None, :]) + 1e-12
     for i in range(1, m):
         prev = clash[:, i, :i] & keep[:, :i]
         keep[:, i] &= ~prev.any(-1)
