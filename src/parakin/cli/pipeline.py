@@ -103,12 +103,6 @@ def cmd_check(args) -> int:
     return EXIT_NOT_CONVERGED if args.strict and bad else 0
 
 
-def _default_config() -> dict:
-    from parakin.config import load_run_config
-
-    return load_run_config()
-
-
 def cmd_which(args) -> int:
     from parakin.pipeline import which
 
