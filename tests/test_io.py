@@ -170,6 +170,29 @@ def test_record_copies_atomically_and_follows_no_symlink(tmp_path, monkeypatch):
     assert not list(committed.rglob("*.tmp*"))
 
 
+def test_cli_record_takes_a_config_overlay(tmp_path, capsys):
+    """`parakin record --config config/cluster.yaml` records the cluster census alone (the
+    config's one study), not every study of the default config."""
+    from pathlib import Path
+
+    from parakin.cli import main
+    from parakin.pipeline import artefacts
+
+    root = Path(__file__).resolve().parents[1]
+    found = artefacts(["parakin.studies.stewart66_census"])
+    results, committed = tmp_path / "results", tmp_path / "record"
+    files = [Path(a.study_folder) / f for a in found.values() for f in a.outputs]
+    for name in [*files, Path("REPORT.md"), Path("report.csv")]:
+        (results / name).parent.mkdir(parents=True, exist_ok=True)
+        (results / name).write_text(f"{name}\n")
+    args = ["record", "--no-readme", "--config", str(root / "config" / "cluster.yaml")]
+    assert main([*args, "--results", str(results), "--record", str(committed)]) == 0
+    assert sorted(p.relative_to(committed) for p in committed.rglob("*") if p.is_file()) == sorted(
+        [*files, Path("REPORT.md"), Path("report.csv")]
+    )
+    assert f"{len(files) + 2} files copied" in capsys.readouterr().err
+
+
 # ------------------------------------------------------------ bounded reading (issue 46)
 def test_read_text_refuses_what_is_not_a_regular_file_and_what_is_too_large(tmp_path):
     import os

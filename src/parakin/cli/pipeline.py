@@ -103,12 +103,6 @@ def cmd_check(args) -> int:
     return EXIT_NOT_CONVERGED if args.strict and bad else 0
 
 
-def _default_config() -> dict:
-    from parakin.config import load_run_config
-
-    return load_run_config()
-
-
 def cmd_which(args) -> int:
     from parakin.pipeline import which
 
@@ -119,12 +113,13 @@ def cmd_which(args) -> int:
 
 
 def cmd_record(args) -> int:
+    from parakin.config import load_run_config
     from parakin.pipeline import record
 
-    config = _default_config()
+    config = load_run_config(args.config or [])
     results = Path(args.results or config["figures_dir"])
     target = Path(args.record or config["record_dir"])
-    record(results, target)
+    record(results, target, config["studies"])
     if args.readme:
         return cmd_readme(
             argparse.Namespace(readme=None, benchmarks=str(target / "benchmarks.md"), check=False)
@@ -240,6 +235,7 @@ def add_record(sub) -> None:
         action="store_false",
         help=f"do not write the generated blocks into {RESULTS_PAGE}",
     )
+    _config_overlays(p)
 
 
 def add_report(sub) -> None:
