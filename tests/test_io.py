@@ -147,25 +147,37 @@ def test_rows_round_trip_by_name(tmp_path):
         read_rows(path, ("x", "y", "z"), ("m", "m", "deg"))
 
 
+def _finished_run(results, studies: list[str]) -> list:
+    """A fake finished run in ``results``: every output of ``studies`` and the report, each file
+    holding ``new <its path>``; returns their paths relative to ``results``."""
+    from pathlib import Path
+
+    from parakin.pipeline import artefacts
+
+    found = artefacts(studies)
+    files = [Path(a.study_folder) / f for a in found.values() for f in a.outputs]
+    files += [Path("REPORT.md"), Path("report.csv")]
+    for name in files:
+        (results / name).parent.mkdir(parents=True, exist_ok=True)
+        (results / name).write_text(f"new {name}\n")
+    return files
+
+
 def test_record_copies_atomically_and_follows_no_symlink(tmp_path, monkeypatch):
     """`parakin record` (pipeline.record) writes the record through the same atomic writer."""
     from pathlib import Path
 
-    from parakin.pipeline import artefacts, record
+    from parakin.pipeline import record
 
     monkeypatch.syspath_prepend(str(Path(__file__).parent / "data"))
-    found = artefacts(["toy_study"])
     results, committed = tmp_path / "results", tmp_path / "record"
-    files = [Path(a.study_folder) / f for a in found.values() for f in a.outputs]
-    for name in [*files, Path("REPORT.md"), Path("report.csv")]:
-        (results / name).parent.mkdir(parents=True, exist_ok=True)
-        (results / name).write_text(f"new {name}\n")
+    files = _finished_run(results, ["toy_study"])
     victim = tmp_path / "victim.txt"
     victim.write_text("keep\n")
     (committed / files[0]).parent.mkdir(parents=True)
     (committed / files[0]).symlink_to(victim)
     copied = record(results, committed, ["toy_study"])
-    assert len(copied) == len(files) + 2 and victim.read_text() == "keep\n"
+    assert len(copied) == len(files) and victim.read_text() == "keep\n"
     assert (committed / files[0]).read_text() == f"new {files[0]}\n"
     assert not list(committed.rglob("*.tmp*"))
 
@@ -176,21 +188,16 @@ def test_cli_record_takes_a_config_overlay(tmp_path, capsys):
     from pathlib import Path
 
     from parakin.cli import main
-    from parakin.pipeline import artefacts
 
     root = Path(__file__).resolve().parents[1]
-    found = artefacts(["parakin.studies.stewart66_census"])
     results, committed = tmp_path / "results", tmp_path / "record"
-    files = [Path(a.study_folder) / f for a in found.values() for f in a.outputs]
-    for name in [*files, Path("REPORT.md"), Path("report.csv")]:
-        (results / name).parent.mkdir(parents=True, exist_ok=True)
-        (results / name).write_text(f"{name}\n")
+    files = _finished_run(results, ["parakin.studies.stewart66_census"])
     args = ["record", "--no-readme", "--config", str(root / "config" / "cluster.yaml")]
     assert main([*args, "--results", str(results), "--record", str(committed)]) == 0
     assert sorted(p.relative_to(committed) for p in committed.rglob("*") if p.is_file()) == sorted(
-        [*files, Path("REPORT.md"), Path("report.csv")]
+        files
     )
-    assert f"{len(files) + 2} files copied" in capsys.readouterr().err
+    assert f"{len(files)} files copied" in capsys.readouterr().err
 
 
 # ------------------------------------------------------------ bounded reading (issue 46)
