@@ -272,6 +272,23 @@ def test_entries_are_built_once_in_the_cache_directory():
     assert any((path / "newton").rglob("*.nbi"))  # numba's index of the entries, in our directory
 
 
+def test_known_answer_probe_asks_the_kernel_the_entry_was_built_for():
+    """The 6-6's kernel takes its leg equations from the 3-6's module but has an assembly test of
+    its own (every assembly). The first call's probe of its verification must ask the 6-6's
+    source: asked the 3-6's (``Z > 0``), a first pose below the base failed the probe, and each
+    process that met one threw the whole 6-6 build away and compiled it again."""
+    mech = mechanisms.REGISTRY["stewart66"]()
+    kernel = kernels.kernel_of(mech)
+    entry = kernels.entries_of(kernel.module, "verify").verify_serial
+    x = mech.home()[None].copy()
+    x[0, 5] = -abs(x[0, 5])  # mirrored through the base: an assembly of the 6-6, not of the 3-6
+    q = mech.ik(x)
+    flags, err = np.zeros((1, 2), dtype=np.int64), np.empty(1)
+    assert store._known_answer(entry.fn, (kernel.params, q, x, flags, err)) is None
+    ok, _, on = kernels.verify_hooks(mech, q, x, parallel=False)
+    assert ok[0] and on[0]
+
+
 @pytest.mark.parametrize("method", METHODS)
 def test_single_call_path_equals_batched(method, monkeypatch):
     """One joint vector per call (the single-call path: solve and verification in one compiled

@@ -378,6 +378,7 @@ def entries_of(module: types.ModuleType, group: str) -> types.SimpleNamespace:
     # the joints' periods: a kernel with angle joints declares joint_period(p, k)
     glob["PER"] = getattr(kern, "joint_period", drivers.no_period)
     glob["ROW"] = getattr(drivers, row) if row else None
+    glob["KERNEL"] = module.__name__
     if row:  # a method's single call verifies its answer with the kernel's one check
         glob["check"] = entries_of(module, "verify").check.fn
     path = _build(module)[0]

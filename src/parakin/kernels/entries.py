@@ -23,6 +23,10 @@ from parakin.kernels.drivers import finite, pso_iterations, verify
 from parakin.kernels.methods import BAD_INPUT
 
 RES = JAC = IK = DOM = ASM = PER = ROW = None  # bound per kernel and method (parakin.kernels)
+#: the name of the kernel module the entry is built for, bound with them: the known-answer probe
+#: (parakin.kernels.store) asks that module's source, not the module that defines RES or ASM (the
+#: 6-6 takes its leg equations from the 3-6 and has its own assembly test)
+KERNEL = None
 
 
 def row(p, q, x0, opts, x, info):

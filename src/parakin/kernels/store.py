@@ -601,8 +601,7 @@ def _known_answer(fn: Any, args: tuple) -> str | None:
 
     py = fn.py_func
     name = py.__name__
-    res = py.__globals__.get("RES")
-    module = sys.modules.get(getattr(getattr(res, "py_func", None), "__module__", ""))
+    module = sys.modules.get(py.__globals__.get("KERNEL") or "")
     if name not in _PROBED or module is None:
         return None
     ns = rebind(
