@@ -283,10 +283,30 @@ def test_known_answer_probe_asks_the_kernel_the_entry_was_built_for():
     x = mech.home()[None].copy()
     x[0, 5] = -abs(x[0, 5])  # mirrored through the base: an assembly of the 6-6, not of the 3-6
     q = mech.ik(x)
-    flags, err = np.zeros((1, 2), dtype=np.int64), np.empty(1)
-    assert store._known_answer(entry.fn, (kernel.params, q, x, flags, err)) is None
+    # first through the entry's own first call (it loads the entry from the cache, tagged, and
+    # asks the probe): the numba function called bare before that would compile untagged files
+    # into the shared cache, which every later process refuses
     ok, _, on = kernels.verify_hooks(mech, q, x, parallel=False)
     assert ok[0] and on[0]
+    flags, err = np.zeros((1, 2), dtype=np.int64), np.empty(1)
+    assert store._known_answer(entry.fn, (kernel.params, q, x, flags, err)) is None
+
+
+@pytest.mark.parametrize("key", [k for k in mechanisms.REGISTRY if k in MECHS])
+def test_known_answer_probe_asks_nothing_of_a_pose_whose_answer_overflows(key):
+    """A first pose so far out (finite, 1e300 m) that the source's own joint error is not finite
+    has no answer to compare: the probe asks nothing. It compared NaN with the compiled inf, and
+    the first verification of such a pose (a fuzzed start, a diverged solve) threw away the
+    3-6-6 cube's and the 3-RPR's builds and compiled them again."""
+    mech = MECHS[key]
+    kernel = kernels.kernel_of(mech)
+    entry = kernels.entries_of(kernel.module, "verify").verify_serial
+    x = mech.home()[None].copy()
+    q = mech.ik(x)
+    kernels.verify_hooks(mech, q, x, parallel=False)  # loaded through its first call, tagged
+    x[0, 0] = 1e300
+    flags, err = np.zeros((1, 2), dtype=np.int64), np.empty(1)
+    assert store._known_answer(entry.fn, (kernel.params, q, x, flags, err)) is None
 
 
 @pytest.mark.parametrize("method", METHODS)

@@ -586,7 +586,8 @@ _PROBED = ("row", "one", "serial", *_VERIFY)
 def _known_answer(fn: Any, args: tuple) -> str | None:
     """Ask entry ``fn`` (called with ``args``) a question whose answer the kernel's own source
     gives on Python floats; None where it answers so, or where no question applies (not an entry
-    of :data:`_PROBED`, or a first pose outside the kernel's domain), else what differs.
+    of :data:`_PROBED`, a first pose outside the kernel's domain, or one so far out that the
+    source's own answer is not finite), else what differs.
 
     The probe: ``x`` the first pose of the call (a start, or an answer to verify), ``q`` its IK
     moved by 1e-3 (1 + |q_k|) k / m. A solver entry, run with ``maxiter = 0``, must return
@@ -613,17 +614,25 @@ def _known_answer(fn: Any, args: tuple) -> str | None:
     like = args[1][0] if batched else args[1]
     m = like.shape[0]
     pl, xl, ik = p.tolist(), x.tolist(), [0.0] * m
-    try:
+    try:  # the source's answer on Python floats
         with np.errstate(all="ignore"):
             if not (np.all(np.isfinite(x)) and ns.in_domain(pl, xl) and ns.ik(pl, xl, ik)):
                 return None
+            ik = np.array(ik)
+            q = (ik + 1e-3 * (1 + np.abs(ik)) * np.arange(1, m + 1) / m).astype(like.dtype)
+            if name in _VERIFY:
+                want = float(np.max(np.abs(ik - q)))
+                on = bool(ns.on_assembly(pl, xl, q.tolist()))
+            else:
+                r = [0.0] * m
+                ns.residual(pl, xl, q.tolist(), r)
+                want = float(np.max(np.abs(r)))
     except (ArithmeticError, ValueError):
         return None
-    ik = np.array(ik)
-    q = (ik + 1e-3 * (1 + np.abs(ik)) * np.arange(1, m + 1) / m).astype(like.dtype)
+    if not (np.all(np.isfinite(q)) and np.isfinite(want)):
+        return None  # a pose so far out that the source's own answer overflows: nothing to compare
     scale = 1e-10 * (1 + float(np.max(np.abs(q))))
     if name in _VERIFY:
-        want, on = float(np.max(np.abs(ik - q))), bool(ns.on_assembly(pl, xl, q.tolist()))
         if batched:
             flags, err = np.zeros_like(args[3][:1]), np.zeros_like(args[4][:1])
             fn(p, q[None], x[None], flags, err)
@@ -637,9 +646,6 @@ def _known_answer(fn: Any, args: tuple) -> str | None:
             f"{name} gave joint error {got:.6g}, flags {flags.tolist()} where the kernel's "
             f"source gives {want:.6g}, [1, {int(on)}]"
         )
-    r = [0.0] * m
-    ns.residual(pl, xl, q.tolist(), r)
-    want = float(np.max(np.abs(r)))
     opts = np.array(args[3], copy=True)
     opts[VECTOR.index("maxiter")] = 0
     if batched:
