@@ -172,6 +172,20 @@ def test_batched_equals_one_by_one(mech, rng):
     )
 
 
+def test_benchmark_batches_on_threads_give_one_calls_forces():
+    """The benchmark's batch (parakin.dynamics.bench: chunks, as contiguous blocks on two
+    threads, the last chunk of each block shorter) gives one call's forces, in order."""
+    from parakin.dynamics.bench import batched_forces
+
+    mech = Stewart12()
+    tr = Harmonic.around(mech, 0.05, 0.5)
+    x, v, a = tr.state(np.linspace(0.0, tr.period, 300))
+    one = D.inverse_dynamics(mech, x, v, a).force
+    got = batched_forces(mech, x, v, a, chunk=64, workers=2)
+    assert got.shape == one.shape
+    assert np.allclose(got, one, rtol=1e-12, atol=1e-12 * np.max(np.abs(one)))
+
+
 # ---------------------------------------------------------------------------------------- Zhao
 class Lissajous:
     """Every axis moving by centimetres at 5, 10 and 15 Hz (velocity-squared terms matter)."""

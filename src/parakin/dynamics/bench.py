@@ -15,7 +15,6 @@ the machine and its load; they never decide a test.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -23,6 +22,7 @@ import pandas as pd
 
 from parakin.dynamics.inverse import inverse_dynamics
 from parakin.dynamics.trajectory import Harmonic
+from parakin.kernels.threads import side_by_side
 from parakin.mechanisms.base import Array, Mechanism
 from parakin.timing import best_time
 
@@ -40,18 +40,19 @@ def batched_forces(
     chunk: int = 1024,
     workers: int = 2,
 ) -> Array:
-    """:func:`inverse_dynamics` forces of samples (k, n) in chunks of ``chunk`` on ``workers``
-    threads (the same numbers as one call: every sample is independent)."""
-    starts = range(0, len(pose), chunk)
+    """:func:`inverse_dynamics` forces of samples (k, n) in chunks of ``chunk``, as contiguous
+    blocks of samples on ``workers`` threads (:func:`parakin.kernels.threads.side_by_side`: the
+    compiled loops inside run serially in their block): the same numbers as one call, since every
+    sample is independent."""
+    parts: dict[int, Array] = {}
 
-    def run(i: int) -> Array:
-        sl = slice(i, i + chunk)
-        return inverse_dynamics(mech, pose[sl], rate[sl], acceleration[sl]).force
+    def run(lo: int, hi: int) -> None:
+        for i in range(lo, hi, chunk):
+            sl = slice(i, min(i + chunk, hi))
+            parts[i] = inverse_dynamics(mech, pose[sl], rate[sl], acceleration[sl]).force
 
-    if workers <= 1:
-        return np.concatenate([run(i) for i in starts])
-    with ThreadPoolExecutor(workers) as pool:
-        return np.concatenate(list(pool.map(run, starts)))
+    side_by_side(len(pose), run, threads=workers, min_block=chunk)
+    return np.concatenate([parts[i] for i in sorted(parts)])
 
 
 def mj_inverse_alone(mm, pose: Array) -> Any:
