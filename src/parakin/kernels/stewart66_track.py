@@ -304,12 +304,6 @@ def _decide(y, beta, jn, qn, decision):
 
 
 # ------------------------------------------------------------------------------ the batch
-def _side_by_side(P: int, threads: int, run) -> None:
-    """``run(lo, hi)`` over ``P`` items in at most ``threads`` blocks of at least
-    :data:`MIN_BLOCK` (:func:`parakin.kernels.threads.side_by_side`)."""
-    side_by_side(P, run, threads=threads, min_block=MIN_BLOCK)
-
-
 def _target(bs, ps, c1) -> np.ndarray:
     """Per input the parameters of its target system as a path at rest (``t^0`` only):
     (n, 3, 6, 7) complex, the anchors ``bs, ps`` (n, 6, 3) and leg constants ``c1`` (n, 6)."""
@@ -335,7 +329,7 @@ def _refine(target, x, item_k, patch, iters, threads):
             jn[lo:hi], qn[lo:hi],
         )  # fmt: skip
 
-    _side_by_side(P, threads, run)
+    side_by_side(P, run, threads=threads, min_block=MIN_BLOCK)
     return xr, beta, beta * jn * qn
 
 
@@ -358,7 +352,7 @@ def track_solutions(par, starts, patch, target, opts, moving, iters, threads):
             steps[lo:hi],
         )  # fmt: skip
 
-    _side_by_side(P, threads, run)
+    side_by_side(P, run, threads=threads, min_block=MIN_BLOCK)
     xr, beta, alpha = _refine(target, x, item_k, patch, iters, threads)
     return (
         xr.reshape(K, M, 8),
@@ -388,7 +382,7 @@ def _reality(target, x, keep, iters: int, threads: int):
             jn[lo:hi], qn[lo:hi],
         )  # fmt: skip
 
-    _side_by_side(P, threads, run)
+    side_by_side(P, run, threads=threads, min_block=MIN_BLOCK)
     dk = np.zeros(P, np.int64)
     _decide(yk, beta, jn, qn, dk)
     y = np.full((n * M, 8), complex(np.nan, np.nan))
