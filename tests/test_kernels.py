@@ -309,6 +309,18 @@ def test_known_answer_probe_asks_nothing_of_a_pose_whose_answer_overflows(key):
     assert store._known_answer(entry.fn, (kernel.params, q, x, flags, err)) is None
 
 
+def test_entries_are_tagged_before_their_first_call():
+    """Every entry's cache is tagged (build, group, name) as soon as it is made: a bare call of
+    the numba function before the entry's first call writes what every process accepts."""
+    k = Stewart36().kernel()
+    path = kernels._build(k.module)[0]
+    for group in ("newton", "verify", "pso"):
+        fresh = kernels.entries_of.__wrapped__(k.module, group)  # made now, never called
+        for name, entry in vars(fresh).items():
+            tag = getattr(entry.fn._cache, "_parakin_tag", None)
+            assert tag == (path.name, group, entry.fn.py_func.__qualname__), (group, name, tag)
+
+
 @pytest.mark.parametrize("method", METHODS)
 def test_single_call_path_equals_batched(method, monkeypatch):
     """One joint vector per call (the single-call path: solve and verification in one compiled

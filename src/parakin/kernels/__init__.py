@@ -397,6 +397,9 @@ def entries_of(module: types.ModuleType, group: str) -> types.SimpleNamespace:
             copy.__qualname__ = f"{fn.__qualname__}__{kernel_name}__{group}"
             copy.__module__ = fn.__module__
             glob[name] = numba.njit(**_NJIT)(copy)
+            # tagged now, not at its first call: a bare call of the numba function (``.fn``)
+            # before that would write untagged files, which every later process refuses
+            _store.guard(glob[name], path)
             out[name] = _Entry(glob[name], path)  # an unreadable file: the whole build is rebuilt
     return types.SimpleNamespace(**out)
 
