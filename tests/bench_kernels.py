@@ -141,7 +141,7 @@ def test_newton_iteration_parts(benchmark, name, part):
         _, qs = _sample(mech, reps, seed=18)
         x0 = np.ascontiguousarray(np.broadcast_to(kernel.home, (reps, n)))
         opts = kernels.methods.pack("newton", 1e-10, 100, {})
-        xs, info, out = np.empty((reps, n)), np.zeros((reps, 4), np.int64), np.empty(reps)
+        xs, info, out = np.empty((reps, n)), np.zeros((reps, 4), np.int64), np.empty((reps, 1))
         serial = kernels.entries_of(kernel.module, "newton").serial
         run = lambda: (info.fill(0), serial(p, qs, x0, opts, xs, info, out))  # noqa: E731
     elif part == "direction":

@@ -403,7 +403,7 @@ def test_two_processes_on_an_empty_cache_compile_an_entry_once(tmp_path):
 
         m = Toy()
         res = solve_fk(m, m.ik(np.array([0.1, 0.9])), method="lm")
-        entry = kernels.entries_of(kernels.kernel_of(m).module, "lm").one.fn
+        entry = kernels.entries_of(kernels.kernel_of(m).module, "lm").serial.fn
         print(bool(res.success), len(entry.stats.cache_misses), len(entry.stats.cache_hits))
         """
     )

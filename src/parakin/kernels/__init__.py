@@ -321,12 +321,11 @@ def compiled(module: types.ModuleType) -> Any:
     return out
 
 
-#: entry groups: name -> (the entries of parakin.kernels.entries compiled in it, its ROW loop);
-#: the first names are helpers the others call (compiled once, linked into each)
+#: entry groups: name -> (the entries of parakin.kernels.entries compiled in it, its ROW loop)
 _GROUPS = {
-    **{m: (("row", "one", "serial"), m) for m in methods.COMPILED},
-    "verify": (("check", "verify_serial"), None),
-    "pso": (("swarm", "pso_serial"), None),
+    **{m: (("serial",), m) for m in methods.COMPILED},
+    "verify": (("verify_serial",), None),
+    "pso": (("pso_serial",), None),
 }
 
 
@@ -379,8 +378,6 @@ def entries_of(module: types.ModuleType, group: str) -> types.SimpleNamespace:
     glob["PER"] = getattr(kern, "joint_period", drivers.no_period)
     glob["ROW"] = getattr(drivers, row) if row else None
     glob["KERNEL"] = module.__name__
-    if row:  # a method's single call verifies its answer with the kernel's one check
-        glob["check"] = entries_of(module, "verify").check.fn
     path = _build(module)[0]
     where = path / group
     out = {}

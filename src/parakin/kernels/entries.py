@@ -9,12 +9,13 @@ kernel), with numba's on-disk cache in a directory named by the hash of every so
 into them (:mod:`parakin.kernels.store`): a changed kernel, driver or numba is a new directory,
 never a stale build. Unbound here (``None``): this module is never compiled as it is.
 
-Arguments: ``p`` the parameter vector, ``q``/``Q`` joints (one row / ``(N, m)``), ``x0``/``X0``
-starts, ``opts`` the options vector (:mod:`parakin.kernels.methods`), ``x``/``X`` the solutions
-(written), ``info`` ``(status, nit, nfev, njev, ...)`` per row, ``out`` the residual norms.
+Arguments: ``p`` the parameter vector, ``Q`` joints ``(N, m)``, ``X0`` starts, ``opts`` the
+options vector (:mod:`parakin.kernels.methods`), ``X`` the solutions (written), ``info``
+``(status, nit, nfev, njev, ...)`` per row, ``out`` the residual norms (and joint errors).
 
-The batched entries are serial loops over rows; a large batch runs on every core as blocks of rows
-on threads (:func:`parakin.kernels.threads.rows`: the entries release the GIL).
+One entry per group, each a serial loop over rows with the loop it runs inlined (numba's IR
+inlining of the drivers): a single pose is a batch of one row. A large batch runs on every core as
+blocks of rows on threads (:func:`parakin.kernels.threads.rows`: the entries release the GIL).
 """
 
 from __future__ import annotations
@@ -29,47 +30,33 @@ RES = JAC = IK = DOM = ASM = PER = ROW = None  # bound per kernel and method (pa
 KERNEL = None
 
 
-def row(p, q, x0, opts, x, info):
-    """One pose by the method's loop (compiled once per kernel and method; the entries below call
-    it). Returns the residual norm at ``x``."""
-    return ROW(RES, JAC, p, q, x0, opts, x, info)
-
-
-def check(p, q, x, flags):
-    """The verification of one pose: ``flags`` = in domain, on assembly; returns the joint error."""
-    return verify(IK, DOM, ASM, PER, p, q, x, flags)
-
-
-def one(p, q, x0, opts, x, info, out):
-    """One pose solved and checked in one call: ``info`` (6,) = status, nit, nfev, njev, in domain,
-    on assembly; ``out`` (2,) = residual norm, joint error."""
-    if not (finite(q) and finite(x0)):
-        info[0] = BAD_INPUT
-        return
-    out[0] = row(p, q, x0, opts, x, info)
-    out[1] = check(p, q, x, info[4:])
-
-
 def serial(p, Q, X0, opts, X, info, out):
-    """Every row of a batch, one after the other."""
+    """Every row of a batch by the method's loop, one after the other: ``info[i]`` = status, nit,
+    nfev, njev; ``out[i, 0]`` = residual norm at ``X[i]``. Where ``info`` has six columns (the
+    single call, :func:`parakin.solvers.compiled.solve_one`), each answer is checked as well:
+    ``info[i, 4:]`` = in domain, on assembly, ``out[i, 1]`` = joint error, and a row whose joints
+    or start are not finite is left unsolved as ``BAD_INPUT``. (One function for both: numba
+    optimises a caller again over every compiled function it links, so a single-call entry and a
+    batched entry beside a shared one-row loop compiled that loop three times.)"""
+    checked = info.shape[1] > 4
     for i in range(Q.shape[0]):
-        out[i] = row(p, Q[i], X0[i], opts, X[i], info[i])
+        if checked and not (finite(Q[i]) and finite(X0[i])):
+            info[i, 0] = BAD_INPUT
+            continue
+        out[i, 0] = ROW(RES, JAC, p, Q[i], X0[i], opts, X[i], info[i])
+        if checked:
+            out[i, 1] = verify(IK, DOM, ASM, PER, p, Q[i], X[i], info[i, 4:])
 
 
 def verify_serial(p, Q, X, flags, err):
     """``err[i]`` = joint error of pose ``X[i]`` for joints ``Q[i]``; ``flags[i]`` = in domain, on
     assembly."""
     for i in range(Q.shape[0]):
-        err[i] = check(p, Q[i], X[i], flags[i])
-
-
-def swarm(p, q, x, v, pb, pf, gb, gf, rnd, w, k0, lo, hi, vmax, coef, state, hist):
-    """A block of particle-swarm iterations of one run (``parakin.solvers.pso``)."""
-    pso_iterations(RES, p, q, x, v, pb, pf, gb, gf, rnd, w, k0, lo, hi, vmax, coef, state, hist)
+        err[i] = verify(IK, DOM, ASM, PER, p, Q[i], X[i], flags[i])
 
 
 def pso_serial(p, Q, X, V, PB, PF, GB, GF, RND, W, k0, lo, hi, vmax, coef, STATE, HIST):
-    """A block of iterations of every run."""
+    """A block of particle-swarm iterations of every run (``parakin.solvers.pso``)."""
     for i in range(Q.shape[0]):
-        swarm(p, Q[i], X[i], V[i], PB[i], PF[i], GB[i], GF[i], RND[i], W[i], k0, lo, hi, vmax,
-              coef, STATE[i], HIST[i])  # fmt: skip
+        pso_iterations(RES, p, Q[i], X[i], V[i], PB[i], PF[i], GB[i], GF[i], RND[i], W[i], k0, lo,
+                       hi, vmax, coef, STATE[i], HIST[i])  # fmt: skip

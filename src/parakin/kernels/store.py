@@ -577,10 +577,8 @@ def guard(fn: Any, where: Path) -> list[Any]:
 
 
 #: the entries of :mod:`parakin.kernels.entries` a known answer is asked of (the particle swarm's,
-#: random by design, are checked by their tags alone)
-_BATCHED = ("serial", "verify_serial")
-_VERIFY = ("check", "verify_serial")
-_PROBED = ("row", "one", "serial", *_VERIFY)
+#: random by design, is checked by its tags alone)
+_PROBED = ("serial", "verify_serial")
 
 
 def _known_answer(fn: Any, args: tuple) -> str | None:
@@ -608,10 +606,10 @@ def _known_answer(fn: Any, args: tuple) -> str | None:
     ns = rebind(
         module, scalar_names()
     )  # the kernels on Python floats (parakin.kernels._scalar_namespace)
-    batched = name in _BATCHED
+    verifies = name == "verify_serial"
     p = np.asarray(args[0])
-    x = np.array(args[2][0] if batched else args[2], dtype=float)
-    like = args[1][0] if batched else args[1]
+    x = np.array(args[2][0], dtype=float)
+    like = args[1][0]
     m = like.shape[0]
     pl, xl, ik = p.tolist(), x.tolist(), [0.0] * m
     try:  # the source's answer on Python floats
@@ -620,7 +618,7 @@ def _known_answer(fn: Any, args: tuple) -> str | None:
                 return None
             ik = np.array(ik)
             q = (ik + 1e-3 * (1 + np.abs(ik)) * np.arange(1, m + 1) / m).astype(like.dtype)
-            if name in _VERIFY:
+            if verifies:
                 want = float(np.max(np.abs(ik - q)))
                 on = bool(ns.on_assembly(pl, xl, q.tolist()))
             else:
@@ -632,14 +630,10 @@ def _known_answer(fn: Any, args: tuple) -> str | None:
     if not (np.all(np.isfinite(q)) and np.isfinite(want)):
         return None  # a pose so far out that the source's own answer overflows: nothing to compare
     scale = 1e-10 * (1 + float(np.max(np.abs(q))))
-    if name in _VERIFY:
-        if batched:
-            flags, err = np.zeros_like(args[3][:1]), np.zeros_like(args[4][:1])
-            fn(p, q[None], x[None], flags, err)
-            got, flags = float(err[0]), flags[0]
-        else:
-            flags = np.zeros_like(args[3])
-            got = float(fn(p, q, x, flags))
+    if verifies:
+        flags, err = np.zeros_like(args[3][:1]), np.zeros_like(args[4][:1])
+        fn(p, q[None], x[None], flags, err)
+        got, flags = float(err[0]), flags[0]
         if flags[0] == 1 and bool(flags[1]) == on and abs(got - want) <= 1e-7 * want + scale:
             return None
         return (
@@ -648,18 +642,9 @@ def _known_answer(fn: Any, args: tuple) -> str | None:
         )
     opts = np.array(args[3], copy=True)
     opts[VECTOR.index("maxiter")] = 0
-    if batched:
-        xo, info, out = (np.zeros_like(args[k][:1]) for k in (4, 5, 6))
-        fn(p, q[None], x[None], opts, xo, info, out)
-        got, xo = float(out[0]), xo[0]
-    else:
-        xo, info = np.zeros_like(args[4]), np.zeros_like(args[5])
-        if name == "one":
-            out = np.zeros_like(args[6])
-            fn(p, q, x, opts, xo, info, out)
-            got = float(out[0])
-        else:
-            got = float(fn(p, q, x, opts, xo, info))
+    xo, info, out = (np.zeros_like(args[k][:1]) for k in (4, 5, 6))
+    fn(p, q[None], x[None], opts, xo, info, out)
+    got, xo = float(out[0, 0]), xo[0]
     if np.array_equal(xo, x) and abs(got - want) <= 1e-7 * want + scale:
         return None
     return f"{name} gave residual {got:.6g} where the kernel's source gives {want:.6g}"

@@ -49,8 +49,8 @@ def solve(
     q = np.ascontiguousarray(joints, dtype=float)
     x0 = np.ascontiguousarray(x0, dtype=float)
     x = np.empty_like(x0)
-    info = np.zeros((n, 4), dtype=np.int64)
-    res = np.empty(n)
+    info = np.zeros((n, 4), dtype=np.int64)  # four columns: solved only (verified after)
+    res = np.empty((n, 1))
     args = (kernel.params, q, x0, opts, x, info, res)
     threads.rows(group.serial, args, (1, 2, 4, 5, 6), parallel=parallel)
     status = info[:, 0].copy()
@@ -61,7 +61,7 @@ def solve(
         nit=info[:, 1].copy(),
         nfev=info[:, 2].copy(),
         njev=info[:, 3].copy(),
-        residual=res,
+        residual=res[:, 0],
         wall_time=time.perf_counter() - start,
         method=method,
         message=summarize(status, maxiter),
@@ -70,7 +70,8 @@ def solve(
 
 #: (method, tol, maxiter, options) -> options vector (single-call path)
 _OPTS: dict[tuple, np.ndarray] = {}
-#: (kernel module, method) -> compiled single-pose solve, once it has loaded
+#: (kernel module, method) -> compiled solve (the batched entry, called with one row), once it
+#: has loaded
 _ONE: dict[tuple[Any, str], Any] = {}
 
 
@@ -89,11 +90,11 @@ def _options(method: str, tol: float, maxiter: int, options: dict[str, Any]) -> 
 
 
 def _single(kernel: Any, method: str) -> Any:
-    """The compiled single-pose entry of ``kernel`` and ``method`` (the numba function itself once
-    it has loaded, which saves the loader's check on every later call)."""
+    """The compiled entry of ``kernel`` and ``method`` (the numba function itself once it has
+    loaded, which saves the loader's check on every later call)."""
     fn = _ONE.get((kernel.module, method))
     if fn is None:
-        fn = entries_of(kernel.module, method).one
+        fn = entries_of(kernel.module, method).serial
         if fn.ready:
             fn = _ONE[kernel.module, method] = fn.fn
     return fn
@@ -124,16 +125,19 @@ def solve_one(
     if opts is None:
         return None
     try:
-        q = np.asarray(joints, dtype=float)
-        x0 = kernel.home if x0 is None else np.asarray(x0, dtype=float)
+        # contiguous, as the batched path's: one compiled signature for both
+        q = np.ascontiguousarray(joints, dtype=float)
+        x0 = kernel.home if x0 is None else np.ascontiguousarray(x0, dtype=float)
     except (TypeError, ValueError, OverflowError):
         return None
     if q.shape != (kernel.n_joints,) or x0.shape != (kernel.n_pose,):
         return None
-    x = np.empty(kernel.n_pose)
-    info = np.zeros(6, dtype=np.int64)  # status, nit, nfev, njev, in domain, on assembly
-    out = np.empty(2)  # residual, joint error
-    _single(kernel, method)(kernel.params, q, x0, opts, x, info, out)
+    # one row whose info has six columns: solved and checked in the same compiled call
+    x = np.empty((1, kernel.n_pose))
+    info = np.zeros((1, 6), dtype=np.int64)  # status, nit, nfev, njev, in domain, on assembly
+    out = np.empty((1, 2))  # residual, joint error
+    _single(kernel, method)(kernel.params, q[None], x0[None], opts, x, info, out)
+    x, info, out = x[0], info[0], out[0]
     if info[0] == methods.BAD_INPUT:  # joints or start not finite: the general path marks it
         return None
     jtol = default_joint_tol(tol, options) if joint_tol is None else float(joint_tol)
