@@ -555,6 +555,17 @@ _PACKAGE_ROOT = Path(__file__).resolve().parent
 
 
 def _module_file(name: str) -> Path | None:
+    """The source file of module ``name``, or None (not a module: a name it imports from one).
+    parakin's own modules are found by path, nothing imported: ``importlib.util.find_spec``
+    imports every parent package of the name, and through them torch, numba, scipy and
+    matplotlib, 3.7 CPU-s of each Snakemake start for the digests of the rules' sources."""
+    top, _, rest = name.partition(".")
+    if top == _PACKAGE_ROOT.name:
+        base = _PACKAGE_ROOT.joinpath(*rest.split(".")) if rest else _PACKAGE_ROOT
+        for path in (base / "__init__.py", base.parent / f"{base.name}.py"):
+            if path.is_file():
+                return path.resolve()
+        return None
     spec = (
         importlib.util.find_spec(name)
         if name not in sys.modules
