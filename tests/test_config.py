@@ -73,6 +73,37 @@ def test_missing_file(tmp_path):
         load_config(tmp_path / "nope.yaml")
 
 
+#: in a fresh process: validate a good config and a bad one, then report what was imported
+FRESH_VALIDATION = """
+import copy, sys
+from parakin.config import load_run_config, validate
+from parakin.errors import ConfigError
+cfg = load_run_config()
+bad = copy.deepcopy(cfg)
+bad["seed"] = -5
+try:
+    validate(bad)
+    print("accepted")
+except ConfigError as exc:
+    print("rejected" if "seed" in str(exc) and "minimum" in str(exc) else f"other: {exc}")
+print("rfc3987_syntax" in sys.modules)
+import rfc3987_syntax
+print(rfc3987_syntax.__name__)
+"""
+
+
+def test_validation_imports_no_costly_format_library():
+    """Validating imports none of jsonschema's optional format libraries that cost seconds
+    (rfc3987-syntax builds a grammar at import: 1.4-1.8 CPU-s of every Snakemake start; parakin
+    checks no formats), still rejects a bad value by name, and leaves the library importable."""
+    pytest.importorskip("rfc3987_syntax")
+    res = subprocess.run(
+        [sys.executable, "-c", FRESH_VALIDATION], capture_output=True, text=True, timeout=120
+    )
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert res.stdout.split() == ["rejected", "False", "rfc3987_syntax"], res.stdout
+
+
 def test_snakemake_validates_the_config():
     """The Snakefile's own validation (snakemake.utils.validate) stops a malformed run."""
     res = subprocess.run(

@@ -17,6 +17,7 @@ import copy
 import functools
 import json
 import math
+import sys
 import zlib
 from collections.abc import Iterable
 from pathlib import Path
@@ -210,9 +211,7 @@ def validate(config: dict, schema_path: Path = SCHEMA_PATH, *, partial: bool = F
     schema = _schema(str(schema_path), Path(schema_path).stat().st_mtime_ns)
     if partial:
         schema = _relax_required(schema, config)
-    import jsonschema  # here: its import costs ~1 s (format checkers), paid only when validating
-
-    validator = jsonschema.Draft202012Validator(schema)
+    validator = _jsonschema().Draft202012Validator(schema)
     errors = sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.absolute_path)))
     problems = [_describe(e) for e in _one_per_key(errors)] + _nonfinite(config)
     if not problems:
@@ -220,6 +219,28 @@ def validate(config: dict, schema_path: Path = SCHEMA_PATH, *, partial: bool = F
     if problems:
         raise ConfigError("; ".join(problems))
     return config
+
+
+#: optional libraries of jsonschema's format checkers that cost seconds to import: rfc3987-syntax
+#: builds a lark grammar of RFC 3987 (1.4-1.8 CPU-s, more than the rest of a Snakemake start's
+#: parsing). It comes with jupyter (jsonschema[format-nongpl]); parakin checks no formats
+_COSTLY_FORMAT_LIBRARIES = ("rfc3987_syntax",)
+
+
+def _jsonschema() -> Any:
+    """jsonschema, imported (where this process has not yet) without the costly optional format
+    libraries: the validators here get no format checker, so none of them is ever used. The block
+    lasts for the import only; a later ``import rfc3987_syntax`` works as usual."""
+    if "jsonschema" not in sys.modules:
+        blocked = [name for name in _COSTLY_FORMAT_LIBRARIES if name not in sys.modules]
+        sys.modules.update(dict.fromkeys(blocked))  # None: "import name" raises ImportError
+        try:
+            import jsonschema  # noqa: F401
+        finally:
+            for name in blocked:
+                if sys.modules.get(name, 0) is None:
+                    del sys.modules[name]
+    return sys.modules["jsonschema"]
 
 
 @functools.lru_cache(maxsize=4)
