@@ -290,12 +290,23 @@ _NJIT = dict(cache=True, error_model="numpy", nogil=True)
 
 
 @cache
+def _drivers() -> types.ModuleType:
+    """:mod:`parakin.kernels.drivers`, its shared linear algebra cached once per process
+    (:data:`parakin.kernels.drivers.SHARED`, :func:`parakin.kernels.store.share_compiled`)."""
+    from parakin.kernels import drivers
+
+    _store.share_compiled(drivers.SHARED)
+    return drivers
+
+
+@cache
 def _build(module: types.ModuleType) -> tuple[Any, Any]:
     """``(path, hash)`` of the compiled code of kernel ``module``: the directory named by the hash
     of the kernel (and of any kernel module it takes functions from), ``_math``, the drivers, the
     entries and the options table (:func:`parakin.kernels.store.digest`)."""
-    from parakin.kernels import drivers, entries
+    from parakin.kernels import entries
 
+    drivers = _drivers()
     sources = {module} | {  # a kernel may take functions from another kernel module
         sys.modules[f.__module__]
         for f in vars(module).values()
@@ -367,8 +378,9 @@ def entries_of(module: types.ModuleType, group: str) -> types.SimpleNamespace:
     of :mod:`parakin.kernels.entries` with the kernel's functions and the method's loop bound
     (as :func:`parakin.kernels._math.rebind` binds math names), numba-cached in
     ``<kernel dir>/<group>``. Each compiles (or loads) on its first call."""
-    from parakin.kernels import drivers, entries
+    from parakin.kernels import entries
 
+    drivers = _drivers()
     numba = _numba()
     names, row = _GROUPS[group]
     kern = compiled(module)

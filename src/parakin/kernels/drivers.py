@@ -703,3 +703,11 @@ def pso_iterations(res, p, q, x, v, pb, pf, gb, gf, rnd, w, k0, lo, hi, vmax, co
         hist[k] = gf[0]
         if not (gf[0] > ftol):
             state[0] = 0
+
+
+#: the linear algebra every loop shares, which calls no kernel: cached in numba's part of the
+#: kernel cache (:func:`parakin.kernels.store.share_compiled`), so that one compiled copy serves
+#: every entry. An entry compiled after them links their cached code instead of compiling them
+#: again, LAPACK's pseudo-inverse included (about 3 of the 8.6 CPU-s that a fresh process spent on
+#: a toy kernel's first Newton solve). Their cache is keyed by this file, which holds all they call
+SHARED = (finite, _all_finite, _lu_solve, _solve, _gram, _direction)

@@ -55,7 +55,7 @@ import stat
 import sys
 import threading
 import uuid
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from functools import cache
 from pathlib import Path
@@ -75,6 +75,7 @@ __all__ = [
     "kernel_dir",
     "numba_cache",
     "root",
+    "share_compiled",
     "share_compiles",
     "status",
 ]
@@ -494,7 +495,7 @@ def _shared_cache() -> type:
 
     class SharedCache(FunctionCache):
         def load_overload(self, sig: Any, target_context: Any) -> Any:
-            got = super().load_overload(sig, target_context)
+            got = self._readable(sig, target_context)
             base = root()
             if got is not None or not self._enabled or base is None or id(self) in _COMPILING:
                 return got
@@ -504,12 +505,29 @@ def _shared_cache() -> type:
             if fd is None:
                 return None
             fcntl.flock(fd, fcntl.LOCK_EX)
-            got = super().load_overload(sig, target_context)
+            got = self._readable(sig, target_context, mend=True)
             if got is None:
                 _COMPILING[id(self)] = fd  # held while this process compiles it
             else:
                 os.close(fd)
             return got
+
+        def _readable(self, sig: Any, target_context: Any, mend: bool = False) -> Any:
+            """numba's load, where a file that cannot be read (garbage, truncated) is a miss;
+            under the function's lock (``mend``) its index is removed with a one-line notice, so
+            that the compile that follows writes a fresh one (numba's save reads the old index
+            first, and would fail on it)."""
+            try:
+                return super().load_overload(sig, target_context)
+            except Exception as exc:
+                if mend:
+                    index = Path(self._cache_file._index_path)
+                    _notice(
+                        f"kernel cache file {index} could not be read ({type(exc).__name__}): "
+                        "rebuilt"
+                    )
+                    index.unlink(missing_ok=True)
+                return None
 
         def save_overload(self, sig: Any, data: Any) -> None:
             try:
@@ -544,6 +562,21 @@ def share_compiles(namespace: dict[str, Any]) -> None:
     for disp in namespace.values():
         if isinstance(disp, Dispatcher) and type(getattr(disp, "_cache", None)) is FunctionCache:
             disp._cache.__class__ = shared  # same fields, same files: only a miss changes
+
+
+def share_compiled(functions: Iterable[Any]) -> None:
+    """Cache the numba ``functions`` (decorated without ``cache``) in numba's part of the cache
+    (``<root>/numba``), compiled by one process at a time (:func:`share_compiles`), whatever
+    cache directory is in force where their module was imported. Without a cache root nothing is
+    cached (the compiled path is off)."""
+    where = root()
+    if where is None:
+        return
+    functions = list(functions)
+    with numba_cache(where / "numba"):
+        for fn in functions:
+            fn.enable_caching()
+    share_compiles({fn.__name__: fn for fn in functions})
 
 
 def guard(fn: Any, where: Path) -> list[Any]:
