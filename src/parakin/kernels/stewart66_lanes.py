@@ -66,6 +66,15 @@ __all__ = [
 ]
 
 _O = dict(cache=True, error_model="numpy", nogil=True)
+# Compile cost: numba compiles every function called from compiled code on its own, then links
+# its optimised code into each caller and optimises the whole again, once per layer of calls.
+# The helpers with one call site (the step's parts, the queue's bookkeeping) and the thin
+# wrappers (``_higher``, ``_series``) are therefore inlined into their caller (numba IR,
+# ``inline="always"``): compiled once, in :func:`track_queue` or :func:`newton_queue`. The
+# larger functions (``features``, ``combine``, ``jacobian``, ``lu``, ``solve``, ``theta``,
+# ``residual``) stay compiled functions: inlined, they made the queue functions so large that
+# LLVM took longer (102 CPU-s). Measured on an empty cache (one process, first 6-6 solve): 80 -> 70 CPU-s;
+# the same operations in the same order, so the same bits.
 #: paths side by side: the lanes, the last axis of every array (a single input's 40 paths fill
 #: them: no second pass of its queue)
 LANES = 40
@@ -582,7 +591,7 @@ def jacobian(TH, X, CH, A, n):
                 _jset(A, m, 5 + a, ln, _j_g(TH, leg, X, a, ln))
 
 
-@njit(**_O)
+@njit(inline="always", **_O)
 def rows_half(A, X, out, n):
     """``out[m] = x . A[m] / 2`` for rows ``m < 7``: the quadrics' values ``x^T Q_m x`` from the
     Jacobian's rows ``2 Q_m x`` (Euler's identity for quadratic forms)."""
@@ -597,7 +606,7 @@ def rows_half(A, X, out, n):
             out[1, m, ln] = 0.5 * im
 
 
-@njit(**_O)
+@njit(inline="always", **_O)
 def chart_row(CH, X, out, n):
     """``out[7] = a . x - 1`` (the chart's equation)."""
     for ln in range(n):
@@ -786,7 +795,7 @@ def solve(A, L, piv, D, B, out, Wk, n):
             Wk[1, i, ln] = out[1, i, ln]
 
 
-@njit(**_O)
+@njit(inline="always", **_O)
 def norms(V, out, n):
     """``out[ln] = |v_ln|`` (2-norm of 8 complex coordinates)."""
     for ln in range(n):
@@ -797,7 +806,7 @@ def norms(V, out, n):
 
 
 # ------------------------------------------------------------------------------ Taylor predictor
-@njit(**_O)
+@njit(inline="always", **_O)
 def _negate_rhs(R, n):
     """``R = -R`` on rows 0..6, 0 on the chart's row (the chart fixes ``a . x_k = 0``)."""
     for m in range(7):
@@ -809,7 +818,7 @@ def _negate_rhs(R, n):
         R[1, 7, ln] = 0.0
 
 
-@njit(**_O)
+@njit(inline="always", **_O)
 def _higher(TH, FS, k, R, moving, n):
     """Add ``theta' . F_{k-1} + theta''/2 . F_{k-2}`` (the parameters' motion) to ``R``; only the
     leg constants where the anchors do not move."""
@@ -823,7 +832,7 @@ def _higher(TH, FS, k, R, moving, n):
             combine_c(TH, 2, FS[k - 2], R, n)
 
 
-@njit(**_O)
+@njit(inline="always", **_O)
 def _series(U, V, F, scale, add, moving, n):
     """A term of the features' series that only the parameters' motion reads (a pair with
     ``x_0``): every feature where the anchors move, ``e.e`` alone where only ``c`` does."""
@@ -834,7 +843,7 @@ def _series(U, V, F, scale, add, moving, n):
         _put(F, 2, ln, _f_sum4(U, V, 0, ln), scale, add)
 
 
-@njit(**_O)
+@njit(inline="always", **_O)
 def taylor(TH, T, A, L, piv, D, FS, Fx, R, Wk, moving, n):
     """Taylor coefficients ``T[1..4]`` of the path through ``T[0]`` (each lane at its ``t``,
     ``TH`` its coefficients' series there) with the LU ``A, L, piv, D`` of the Jacobian. The
@@ -877,7 +886,7 @@ def taylor(TH, T, A, L, piv, D, FS, Fx, R, Wk, moving, n):
     solve(A, L, piv, D, R, T[4], Wk, n)
 
 
-@njit(**_O)
+@njit(inline="always", **_O)
 def pade(T, flag, tau, err, n):
     """Per lane: the Padé trust region ``tau = min_i |x_2i / x_3i|`` and the norm ``err`` of the
     local error coefficient (``x_4 - x_3^2 / x_2``); ``flag[i, ln]`` 1 where coordinate ``i``
@@ -908,7 +917,7 @@ def pade(T, flag, tau, err, n):
         err[ln] = math.sqrt(err[ln])
 
 
-@njit(**_O)
+@njit(inline="always", **_O)
 def predict(T, S, flag, X, CH, n):
     """The prediction at ``t + dt`` of each lane, ``x_0 + s (x_1 + s g)`` with
     ``g = x_2^2 / (x_2 - s x_3)`` (Padé) or ``x_2 + s x_3`` (Taylor), rescaled into the chart
@@ -946,7 +955,7 @@ def predict(T, S, flag, X, CH, n):
 
 
 # ------------------------------------------------------------------------------ step control
-@njit(**_O)
+@njit(inline="always", **_O)
 def control(S, T, X, nrm, t1, acc, opts, n):
     """Accept or reject each lane's step: ``acc[ln]`` 1 or 0. An accepted step moves the lane to
     the corrected point and updates ``omega``; a rejected one halves the step and doubles
@@ -991,7 +1000,7 @@ def control(S, T, X, nrm, t1, acc, opts, n):
             acc[ln] = 0.0
 
 
-@njit(**_O)
+@njit(inline="always", **_O)
 def next_step(S, tau, err, acc, opts, n):
     """The next step of each accepted lane: the smallest of the trust region's share, the step
     whose predicted error is ``a / omega`` and what is left to ``t = 1``."""
@@ -1007,7 +1016,7 @@ def next_step(S, tau, err, acc, opts, n):
 
 
 # ------------------------------------------------------------------------------ a queue of paths
-@njit(**_O)
+@njit(inline="always", **_O)
 def _load(S, T, flag, POLY, ln, p, item_k, item_j, starts, par, opts):
     """Lane ``ln`` takes queue entry ``p``: start solution ``item_j[p]`` (scaled to norm 1) on
     input ``item_k[p]``'s parameter path ``par[k]`` (3, 6, 7), at ``t = 0`` with a zero step."""
@@ -1034,7 +1043,7 @@ def _load(S, T, flag, POLY, ln, p, item_k, item_j, starts, par, opts):
     S[_ACT, ln] = 1.0
 
 
-@njit(**_O)
+@njit(inline="always", **_O)
 def _finish(S, T, ln, ok, patch, out_x, out_ok, out_steps):
     """Write lane ``ln``'s path: its point in the common ``patch`` (``patch . x = 1``)."""
     p = int(S[_ITEM, ln])
@@ -1047,7 +1056,7 @@ def _finish(S, T, ln, ok, patch, out_x, out_ok, out_steps):
     out_steps[p] = int(S[_STEPS, ln])
 
 
-@njit(**_O)
+@njit(inline="always", **_O)
 def _move(S, T, flag, POLY, src, dst):
     """Lane ``src``'s path (its state, Taylor coefficients, flags and parameters) into lane
     ``dst``: the active lanes stay ``0 .. n - 1``, so that the loops run over them only."""
@@ -1167,7 +1176,7 @@ def track_queue(par, starts, item_k, item_j, opts, moving, patch, out_x, out_ok,
 
 
 # ------------------------------------------------------------------------------ Newton in lanes
-@njit(**_O)
+@njit(inline="always", **_O)
 def _inverse_norm(A, Lm, piv, D, B, Y, Wk, out, n):
     """``out[ln] = |J_ln^-1|_F``, column by column from the LU (``B, Y`` (2, 8, W) scratch)."""
     for ln in range(n):
@@ -1187,7 +1196,7 @@ def _inverse_norm(A, Lm, piv, D, B, Y, Wk, out, n):
         out[ln] = math.sqrt(out[ln])
 
 
-@njit(**_O)
+@njit(inline="always", **_O)
 def qnorm(TH, out, n):
     """``out[ln] = sqrt(sum_m |Q_m|_F^2)`` of each lane's quadrics (``TH[0]``): the bound of
     Smale's gamma of a quadratic system with ``|J^-1|_F``. The Study quadric contributes 2 (eight
