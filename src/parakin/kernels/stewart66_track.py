@@ -318,8 +318,15 @@ def _target(bs, ps, c1) -> np.ndarray:
 def _refine(target, x, item_k, patch, iters, threads):
     """Newton's refinement of every endpoint ``x`` (P, 8) on its input's target system in the
     common ``patch``: ``(x, beta, alpha)`` (Smale's ``alpha = beta |J^-1|_F qn``)."""
+    charts = np.ascontiguousarray(np.broadcast_to(patch, (len(item_k), 8)))
+    xr, beta, jn, qn = _newton(target, x, item_k, charts, iters, threads)
+    return xr, beta, beta * jn * qn
+
+
+def _newton(target, x, item_k, charts, iters, threads):
+    """:func:`parakin.kernels.stewart66_lanes.newton_queue` on every point ``x`` (P, 8), its
+    input ``item_k`` and chart ``charts``, in blocks side by side: ``(x, beta, |J^-1|_F, qn)``."""
     P = len(item_k)
-    charts = np.ascontiguousarray(np.broadcast_to(patch, (P, 8)))
     xr = np.empty((P, 8), np.complex128)
     beta, jn, qn = np.empty(P), np.empty(P), np.empty(P)
 
@@ -330,7 +337,7 @@ def _refine(target, x, item_k, patch, iters, threads):
         )  # fmt: skip
 
     side_by_side(P, run, threads=threads, min_block=MIN_BLOCK)
-    return xr, beta, beta * jn * qn
+    return xr, beta, jn, qn
 
 
 def track_solutions(par, starts, patch, target, opts, moving, iters, threads):
@@ -372,17 +379,7 @@ def _reality(target, x, keep, iters: int, threads: int):
     y0 = np.empty((P, 8), np.complex128)
     charts = np.empty((P, 8), np.complex128)
     _real_charts(x.reshape(-1, 8), flat, y0, charts)
-    item_k = flat // M
-    yk = np.empty((P, 8), np.complex128)
-    beta, jn, qn = np.empty(P), np.empty(P), np.empty(P)
-
-    def run(lo: int, hi: int) -> None:
-        lanes.newton_queue(
-            target, y0[lo:hi], item_k[lo:hi], charts[lo:hi], iters, yk[lo:hi], beta[lo:hi],
-            jn[lo:hi], qn[lo:hi],
-        )  # fmt: skip
-
-    side_by_side(P, run, threads=threads, min_block=MIN_BLOCK)
+    yk, beta, jn, qn = _newton(target, y0, flat // M, charts, iters, threads)
     dk = np.zeros(P, np.int64)
     _decide(yk, beta, jn, qn, dk)
     y = np.full((n * M, 8), complex(np.nan, np.nan))
