@@ -152,14 +152,3 @@ def test_rounding_bound_covers_what_printing_can_do(config):
     moved = row + g.uniform(-1, 1, (2000, 6)) * half
     gap = np.abs(m.ik(pose_from_paper(moved)) - m.ik(pose_from_paper(row)))
     assert (gap <= bound * (1 + 1e-6)).all() and gap.max() > 0.3 * bound.max()
-
-
-def test_notebook_runs(tmp_path):
-    nbformat = pytest.importorskip("nbformat")
-    nbclient = pytest.importorskip("nbclient")
-    nb = nbformat.read(ROOT / "notebooks" / "li2017_stewart36.ipynb", as_version=4)
-    nbclient.NotebookClient(
-        nb, timeout=60, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}
-    ).execute()
-    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])]
-    assert not any(o.get("output_type") == "error" for o in outputs)
