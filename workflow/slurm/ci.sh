@@ -18,6 +18,11 @@ TARGETS=(
 )
 OUT=${SLURM_CI_DIR:-build/slurm-ci}
 
+# no process outlives the command: a cluster this script starts is stopped when it ends, however
+# it ends; one that was already running is left as it was
+if ! sinfo -h -o %T 2>/dev/null | grep -q -E "idle|mix|alloc"; then
+    trap 'bash workflow/slurm/start-local.sh stop' EXIT
+fi
 status=0
 bash workflow/slurm/start-local.sh || status=$?
 if [ "$status" = 3 ]; then

@@ -17,12 +17,20 @@ STATE=/var/lib/parakin-slurm        # the daemons' logs and state (not the repos
 CLUSTER=parakin
 ACCOUNT=parakin
 
-stop() {
-    for d in slurmd slurmctld slurmdbd; do
-        [ -f "$STATE/$d.pid" ] && kill "$(cat "$STATE/$d.pid")" 2>/dev/null || true
+stop() {  # the daemons whose pid files are in $STATE, SLURM's first; waits until they have ended
+    local pids=() pid d alive
+    for d in slurmd slurmctld slurmdbd mariadb munged; do
+        [ -f "$STATE/$d.pid" ] || continue
+        for pid in $(cat "$STATE/$d.pid"); do kill "$pid" 2>/dev/null && pids+=("$pid"); done
+        rm -f "$STATE/$d.pid"  # never read again: a stale number could be another process by then
     done
-    [ -f "$STATE/mariadb.pid" ] && kill "$(cat "$STATE/mariadb.pid")" 2>/dev/null || true
-    [ -f "$STATE/munged.pid" ] && kill "$(cat "$STATE/munged.pid")" 2>/dev/null || true
+    for _ in $(seq 60); do  # up to 30 s (MariaDB flushes its tables)
+        alive=0
+        for pid in "${pids[@]}"; do kill -0 "$pid" 2>/dev/null && alive=1; done
+        [ "$alive" = 0 ] && return 0
+        sleep 0.5
+    done
+    echo "SLURM: daemons still running after 30 s: ${pids[*]}" >&2
     return 0
 }
 
@@ -52,7 +60,7 @@ chown -R munge:munge /etc/munge /run/munge /var/lib/munge /var/log/munge 2>/dev/
 chmod 0700 /etc/munge && chmod 0400 /etc/munge/munge.key
 if ! pgrep -x munged >/dev/null; then
     runuser -u munge -- /usr/sbin/munged 2>>"$STATE/munged.log"
-    for _ in $(seq 20); do pgrep -x munged >"$STATE/munged.pid" && break; sleep 0.25; done
+    for _ in $(seq 20); do pgrep -n -x munged >"$STATE/munged.pid" && break; sleep 0.25; done
 fi
 
 # --- MariaDB: the accounting database
@@ -62,7 +70,7 @@ if ! pgrep -x mariadbd >/dev/null; then
     runuser -u mysql -- /usr/sbin/mariadbd --skip-networking=0 --bind-address=127.0.0.1 \
         --socket=/run/mysqld/mysqld.sock >>"$STATE/mariadb.log" 2>&1 &
     for _ in $(seq 60); do mariadb -e "select 1" >/dev/null 2>&1 && break; sleep 0.5; done
-    pgrep -x mariadbd >"$STATE/mariadb.pid"
+    pgrep -n -x mariadbd >"$STATE/mariadb.pid"
 fi
 mariadb -e "CREATE DATABASE IF NOT EXISTS slurm_acct_db;
 CREATE USER IF NOT EXISTS 'slurm'@'localhost' IDENTIFIED BY 'slurm';
