@@ -74,7 +74,7 @@ _O = dict(cache=True, error_model="numpy", nogil=True)
 # larger functions (``features``, ``combine``, ``jacobian``, ``lu``, ``solve``, ``theta``,
 # ``residual``) stay compiled functions: inlined, they made the queue functions so large that
 # LLVM took longer (102 CPU-s). Measured on an empty cache (one process, first 6-6 solve):
-# 80 -> 70 CPU-s; the same operations in the same order, so the same bits.
+# 80-91 -> 72-74 CPU-s; the same operations in the same order, so the same bits.
 #: paths side by side: the lanes, the last axis of every array (a single input's 40 paths fill
 #: them: no second pass of its queue)
 LANES = 40
