@@ -69,6 +69,15 @@ def _infnorm(v):
 
 
 @njit(**_O)
+def _copy(dst, src):
+    """``dst[:] = src`` element by element. numba compiles a slice assignment from an array with
+    its shape-mismatch error message (string formatting: about 2 CPU-s in every process that
+    compiles one, and that code linked into every caller); a loop compiles to the same copy."""
+    for i in range(dst.shape[0]):
+        dst[i] = src[i]
+
+
+@njit(**_O)
 def finite(v):
     """Every entry of ``v`` finite."""
     for i in range(v.shape[0]):
@@ -163,7 +172,7 @@ def _solve(a, b, out, w):
     if not (finite(b) and _all_finite(a)):
         out[:] = math.nan
     elif not _lu_solve(a, b, out, w):
-        out[:] = np.linalg.pinv(a) @ b
+        _copy(out, np.linalg.pinv(a) @ b)
 
 
 @njit(**_O)
@@ -194,13 +203,13 @@ def _direction(jac, r, out, w, a, g):
     else:
         _gram(jac, r, a, g)
         if not _lu_solve(a, g, out, w):
-            out[:] = np.linalg.pinv(jac) @ r
+            _copy(out, np.linalg.pinv(jac) @ r)
 
 
 @njit(**_TAKES_KERNELS)
 def _start(res, p, q, x0, x, r, opts, info):
     """Residual at the start; returns the status (CONVERGED, NONFINITE or RUNNING) and its norm."""
-    x[:] = x0
+    _copy(x, x0)
     info[2] += _eval(res, p, x, q, r)
     norm = _infnorm(r)
     if norm <= opts[TOL]:
@@ -249,8 +258,8 @@ def newton(res, jac, p, q, x0, opts, x, info):
         new_res, ok = _checked(xt, rt)
         status = _code(opts, _infnorm(dx), math.nan, False, new_res, ok)
         if ok:
-            x[:] = xt
-            r[:] = rt
+            _copy(x, xt)
+            _copy(r, rt)
             norm = new_res
     info[0] = MAXITER if status == RUNNING else status
     return norm
@@ -298,8 +307,8 @@ def lm(res, jac, p, q, x0, opts, x, info):
             predicted += h[i] * (mu * h[i] - g[i])
         rho = (0.5 * _dot(r, r) - 0.5 * _dot(rt, rt)) / (0.5 * predicted)
         if rho > 0:
-            x[:] = xt
-            r[:] = rt
+            _copy(x, xt)
+            _copy(r, rt)
             jac(p, x, q, jm)
             info[3] += 1
             _gram(jm, r, a, g)
@@ -351,8 +360,8 @@ def broyden(res, jac, p, q, x0, opts, x, info):
             for k in range(m):
                 for i in range(n):
                     b[k, i] += u[k] * d[i]
-            x[:] = xt
-            r[:] = rt
+            _copy(x, xt)
+            _copy(r, rt)
             norm = new_res
     info[0] = MAXITER if status == RUNNING else status
     return norm
@@ -377,7 +386,8 @@ def _bfgs_start(jac, p, x, q, r, opts, info, jm, a, g, hh, w):
         e[:] = 0.0
         e[j] = 1.0
         _solve(a, e, col, w)
-        hh[:, j] = col
+        for i in range(n):
+            hh[i, j] = col[i]
 
 
 @njit(**_TAKES_KERNELS)
@@ -439,7 +449,7 @@ def bfgs(res, jac, p, q, x0, opts, x, info):
                 pp[i] = -g[i]
             slope = -_dot(g, g)
         alpha, found = _armijo(res, p, x, q, r, pp, slope, opts, info, xt, rt)
-        gn[:] = g
+        _copy(gn, g)
         if found:
             jac(p, xt, q, jm)
             info[3] += 1
@@ -452,10 +462,10 @@ def bfgs(res, jac, p, q, x0, opts, x, info):
             d[i] = alpha * pp[i] if found else 0.0
             y[i] = gn[i] - g[i]
         _bfgs_update(hh, d, y)
-        g[:] = gn
+        _copy(g, gn)
         if found:
-            x[:] = xt
-            r[:] = rt
+            _copy(x, xt)
+            _copy(r, rt)
         info[1] += 1
         step = 0.0
         for i in range(n):
@@ -510,7 +520,7 @@ def _dogleg_step(jm, g, pn, d, delta, st):
     Cauchy point towards it, cut at the boundary. Returns True where ``st`` ends on the boundary."""
     m, n = jm.shape
     if _scaled_norm(d, pn) <= delta:
-        st[:] = pn
+        _copy(st, pn)
         return False
     gs2, jv2 = 0.0, 0.0
     for i in range(n):
@@ -593,8 +603,8 @@ def dogleg(res, jac, p, q, x0, opts, x, info):
         rho = _gain_ratio(jm, r, rt, st)
         delta = _new_radius(delta, rho, _scaled_norm(d, st), boundary)
         if rho > opts[ETA]:
-            x[:] = xt
-            r[:] = rt
+            _copy(x, xt)
+            _copy(r, rt)
             jac(p, x, q, jm)
             info[3] += 1
             _dogleg_model(jm, r, d, g, pn, w, a, gg, False)
@@ -691,12 +701,12 @@ def pso_iterations(res, p, q, x, v, pb, pf, gb, gf, rnd, w, k0, lo, hi, vmax, co
             f = _pso_fitness(res, p, x[i], q, r)
             if f < pf[i]:
                 pf[i] = f
-                pb[i, :] = x[i]
+                _copy(pb[i], x[i])
         gi = 0
         for i in range(1, n_particles):  # first minimum, as argmin
             if pf[i] < pf[gi]:
                 gi = i
-        gb[:] = pb[gi]
+        _copy(gb, pb[gi])
         gf[0] = pf[gi]
         state[1] += n_particles
         state[2] += 1

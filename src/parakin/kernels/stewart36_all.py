@@ -515,7 +515,8 @@ def _recover(g, t, nroot, steps, jac, f):
                         one[0, 2] = t3s[k, b]
                         _newton_t(g, one[0], steps, jac, f)
                         if _is_real(one[0]) and _is_new(t, nroot, one[0]):
-                            t[j, :] = one[0]
+                            for c in range(t.shape[1]):  # no slice from an array (drivers._copy)
+                                t[j, c] = one[0, c]
                             found = True
                             break
                 if found:
@@ -757,7 +758,8 @@ def _sorted_out(p, q, poses, out, iinfo, finfo, fr, jr, lengths):
         src = poses[order[j]]
         if not math.isfinite(src[0]):
             continue
-        out[j, :] = src
+        for c in range(out.shape[1]):  # no slice from an array (drivers._copy)
+            out[j, c] = src[c]
         n_real += 1
         if src[5] > 0:
             n_above += 1

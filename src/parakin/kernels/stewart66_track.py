@@ -105,17 +105,25 @@ def _merge(x, beta, alpha, keep, x2, b2, a2, alpha0):
     xx = np.full((2 * m, 8), np.nan + 0j)
     bb = np.full(2 * m, np.inf)
     aa = np.full(2 * m, np.inf)
+    # rows copied element by element: numba compiles an array assigned to a row with its
+    # shape-mismatch message (string formatting, about 2 CPU-s per compiling process)
     for i in range(m):
         if keep[i]:
-            xx[i], bb[i], aa[i] = x[i], beta[i], alpha[i]
-        xx[m + i], bb[m + i], aa[m + i] = x2[i], b2[i], a2[i]
+            bb[i], aa[i] = beta[i], alpha[i]
+            for c in range(8):
+                xx[i, c] = x[i, c]
+        bb[m + i], aa[m + i] = b2[i], a2[i]
+        for c in range(8):
+            xx[m + i, c] = x2[i, c]
     kk = np.zeros(2 * m, np.bool_)
     keep_distinct(xx, bb, aa, alpha0, kk)
     slot = 0
     for want in (True, False):
         for i in range(2 * m):
             if kk[i] == want and slot < m:
-                x[slot], beta[slot], alpha[slot], keep[slot] = xx[i], bb[i], aa[i], kk[i]
+                beta[slot], alpha[slot], keep[slot] = bb[i], aa[i], kk[i]
+                for c in range(8):
+                    x[slot, c] = xx[i, c]
                 slot += 1
 
 
@@ -224,7 +232,8 @@ def _package(i, x, alpha, keep, y, decision, joints, geo, out):
         for a in range(4):
             ee += x[i, j, a] * x[i, j, a]
         xs = x[i, j] / cmath.sqrt(ee)
-        study[i, j] = xs
+        for a in range(8):  # element by element, as in _merge
+            study[i, j, a] = xs[a]
         al[i, j] = alpha[i, j]
         study_rt(xs, rot[i, j], trn[i, j])
         _origin(rot[i, j], trn[i, j].copy(), bc + 0j, pc + 0j, s, trn[i, j])
@@ -243,9 +252,11 @@ def _package(i, x, alpha, keep, y, decision, joints, geo, out):
         if z[j] < np.inf:
             slot = nr
             while slot > 0 and -poses[i, slot - 1, 5] > z[j]:
-                poses[i, slot] = poses[i, slot - 1]
+                for a in range(6):  # element by element, as in _merge
+                    poses[i, slot, a] = poses[i, slot - 1, a]
                 slot -= 1
-            poses[i, slot] = cand[j]
+            for a in range(6):
+                poses[i, slot, a] = cand[j, a]
             nr += 1
     counts[i, 0] = keep[i].sum()
     counts[i, 1] = nr
