@@ -189,7 +189,32 @@ def test_fresh_clone_schedules_every_artefact(tmp_path):
         for line in res.stdout.splitlines()
         if line.strip() and line.split()[-1].isdigit()
     }
-    assert {a.rule for a in ARTEFACTS.values()} | {"report", "reproduction_check", "all"} <= planned
+    rules = {job.rule for job in registry.jobs(ARTEFACTS)}
+    assert rules | {"report", "reproduction_check", "all"} <= planned
+
+
+def test_every_artefact_is_made_by_one_job_and_small_ones_share_their_module_s():
+    """The pipeline's jobs (registry.jobs): each artefact in exactly one; a job of several holds
+    only small artefacts (one thread, default resources, nothing upstream or downstream) of one
+    module, and every module with several small artefacts has one such job; an artefact with
+    threads, resources or links runs alone, under its own rule."""
+    jobs = registry.jobs(ARTEFACTS)
+    made = [item.key for job in jobs for item in job.items]
+    assert sorted(made) == sorted(ARTEFACTS) and len(made) == len(set(made))
+    linked = {k for a in ARTEFACTS.values() for k in (a.key, *a.needs) if a.needs}
+    for job in jobs:
+        if len(job.items) > 1:
+            assert job.small and len({a.module for a in job.items}) == 1, job.rule
+            assert all(a.threads == 1 and not a.resources for a in job.items), job.rule
+            assert not {a.key for a in job.items} & linked, job.rule
+        elif not job.small:
+            assert job.rule == job.items[0].rule
+    assert any(len(job.items) > 1 for job in jobs)
+    for module in {a.module for a in ARTEFACTS.values()}:
+        shared = [j for j in jobs if j.small and j.items[0].module == module]
+        assert len(shared) <= 1, module
+    heavy = ARTEFACTS["zhao2017_3p4s:ga_runs"]  # threads and resources: alone
+    assert [j.items for j in jobs if heavy in j.items] == [(heavy,)]
 
 
 def test_a_toy_study_runs_from_one_registration_line(tmp_path):

@@ -12,6 +12,7 @@ import pkgutil
 import re
 import sys
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 from parakin import papers, registry
@@ -90,23 +91,31 @@ def artefacts(
 
 
 def reproduce(
-    study: str, name: str, config: dict, outdir: Path | None, module: str | None = None
+    study: str,
+    name: str | Sequence[str],
+    config: dict,
+    outdir: Path | None,
+    module: str | None = None,
 ) -> list[Path]:
-    """Run one artefact (``name == "all"``: every artefact of the study, upstream first) into ``outdir``."""
+    """Run one artefact, or several in the order given (a pipeline job that makes several
+    artefacts of one module, :func:`parakin.registry.jobs`), into ``outdir``; ``name == "all"``:
+    every artefact of the study, upstream first. Each artefact is given only the config sections
+    it declares (:func:`parakin.registry.prune_config`), as if it ran alone."""
     found = artefacts([module] if module else config.get("studies"), complete=not module)
-    if name == "all":
+    names = [name] if isinstance(name, str) else list(name)
+    if names == ["all"]:
         items = [a for a in found.values() if a.study == study]
         if not items:
             registry.find(found, study, "all")
     else:
-        items = [registry.find(found, study, name)]
+        items = [registry.find(found, study, n) for n in names]
     paths = []
     # the process's CPU so far (interpreter, imports, config)
     startup = _cpu()
     for item in items:
         out = Path(outdir) if outdir else Path(config["figures_dir"]) / item.study_folder
         start = _cpu()
-        paths += item.make(config, out)
+        paths += item.make(registry.prune_config(config, item), out)
         print(cpu_line(item.name, startup, _cpu() - start), file=sys.stderr)
         startup = 0.0  # paid once per process
     return paths
@@ -195,11 +204,12 @@ def describe(path: str | Path, found: dict[str, registry.Artefact] | None = None
             f"no registered artefact writes {str(path)!r} (`parakin which --list` lists every file)"
         )
     tol = item.tolerance
+    rule = next(job.rule for job in registry.jobs(found) if item in job.items)
     lines = [
         f"{path}",
         f"  artefact:  {item.key}",
         f"  made by:   {item.module}.{item.make.__name__} ({_relative(item.location)})",
-        f"  rule:      {item.rule}  (snakemake --cores 2 {item.rule})",
+        f"  rule:      {rule}  (snakemake --cores 2 {rule})",
         f"  config:    {', '.join(['seed', *item.config])}",
         f"  needs:     {', '.join(item.needs) or '-'}",
         f"  writes:    {', '.join(item.outputs + item.generated)}",

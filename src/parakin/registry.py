@@ -46,6 +46,8 @@ __all__ = [
     "find",
     "which",
     "prune_config",
+    "Job",
+    "jobs",
     "EXACT",
     "ROUNDING",
     "ITERATIVE",
@@ -547,6 +549,78 @@ def prune_config(config: dict, item: Artefact) -> dict:
         if parts[-1] not in src:
             raise KeyError(f"config has no section {dotted!r} (declared by {item.key})")
         dst[parts[-1]] = src[parts[-1]]
+    return out
+
+
+@dataclass(frozen=True)
+class Job:
+    """One pipeline job (one Snakemake rule, one process): the artefacts it makes, in registry
+    order. ``small``: one core, the default resources, no artefact upstream or downstream and no
+    chunks to gather (a cluster profile sends several such jobs in one submission)."""
+
+    rule: str
+    items: tuple[Artefact, ...]
+    small: bool
+
+    @property
+    def study(self) -> str:
+        return self.items[0].study
+
+
+#: the packages whose study modules name a shared job by their path below them
+_STUDY_PACKAGES = ("parakin.papers.", "parakin.studies.")
+
+
+def _module_rule(module: str) -> str:
+    """The rule of the job that makes several artefacts of ``module``: its path below parakin's
+    study packages, dots as underscores (``parakin.papers.zhao2017_3p4s.dynamics`` ->
+    ``zhao2017_3p4s_dynamics``; a study of one's own: its whole dotted name)."""
+    for prefix in _STUDY_PACKAGES:
+        if module.startswith(prefix):
+            module = module[len(prefix) :]
+            break
+    return module.replace(".", "_")
+
+
+def gathers(item: Artefact) -> bool:
+    """``item``'s study module scatters its work into chunk files that the artefact gathers (its
+    ``chunk_files(config)``: the 6-6 census, workflow/rules/census.smk)."""
+    return hasattr(sys.modules.get(item.module), "chunk_files")
+
+
+def jobs(artefacts: dict[str, Artefact]) -> list[Job]:
+    """The pipeline's jobs. The small artefacts of one module (one core, the default resources,
+    linked to no other artefact, nothing to gather) share one job, so that the interpreter's
+    start, the imports and numba's start are paid once per module instead of once per artefact;
+    every other artefact is a job of its own, named by its :attr:`Artefact.rule`. Each artefact
+    still reads only its declared config sections (:func:`prune_config`) and writes only its
+    outputs; a job reruns when any of its artefacts' code, config or inputs change."""
+    linked = {k for a in artefacts.values() for k in (a.key, *a.needs) if a.needs}
+    small = {
+        k: a.threads == 1 and not a.resources and k not in linked and not gathers(a)
+        for k, a in artefacts.items()
+    }
+    by_module: dict[str, list[Artefact]] = {}
+    for key, item in artefacts.items():
+        if small[key]:
+            by_module.setdefault(item.module, []).append(item)
+    out, placed = [], set()
+    for key, item in artefacts.items():
+        if key in placed:
+            continue
+        shared = by_module.get(item.module, []) if small[key] else []
+        if len(shared) > 1:
+            out.append(Job(_module_rule(item.module), tuple(shared), True))
+            placed.update(a.key for a in shared)
+        else:
+            out.append(Job(item.rule, (item,), small[key]))
+    rules = [job.rule for job in out]
+    clash = sorted({r for r in rules if rules.count(r) > 1})
+    if clash:
+        raise ValueError(
+            f"pipeline rule name(s) {clash} made twice (a module's shared job and an artefact "
+            "of the same name): rename the artefact"
+        )
     return out
 
 

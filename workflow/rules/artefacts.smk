@@ -1,39 +1,48 @@
-# One rule per registered artefact. Inputs: its paper's reference CSV and the outputs of the
-# artefacts it needs; scattered studies (the 6-6 census) also gather their chunk files
-# (workflow/rules/census.smk). Params: a digest of the source files it runs (its module and every
-# parakin module that imports: editing one reruns it, common.smk code_digest), and only the config
-# sections it declares and the seed, so editing one section reruns only the artefacts that read
-# it. group: the small jobs share a cluster submission (common.smk). threads/resources: what the
-# artefact declares (the long jobs: training, GA, NSGA-II, PSO, the solver atlas); every figure
-# and table goes into the report (snakemake --report) with its one-line caption from the registry.
+# One rule per pipeline job (parakin.registry.jobs): an artefact with threads, resources, an
+# upstream or downstream artefact or chunks to gather is a job of its own; the small artefacts of
+# one module share a job, made one after the other in one process (Python, the imports and numba
+# start once per module, not once per artefact). Inputs: the papers' reference CSVs and the
+# outputs of the artefacts they need; scattered studies (the 6-6 census) also gather their chunk
+# files (workflow/rules/census.smk). Params: a digest of the source files the job runs (its
+# modules and every parakin module they import: editing one reruns it, common.smk code_digest),
+# and only the config sections its artefacts declare and the seed, so editing one section reruns
+# only the jobs that read it (each artefact is still given only its own sections). group: the
+# small jobs share a cluster submission (common.smk). threads/resources: what the artefact
+# declares (the long jobs: training, GA, NSGA-II, PSO, the solver atlas); every figure and table
+# goes into the report (snakemake --report) with its one-line caption from the registry.
 
-for _item in ARTEFACTS.values():
+
+for _job in JOBS:
+    _first = _job.items[0]
 
     rule:
         name:
-            _item.rule
+            _job.rule
         input:
-            reference=reference(_item),
-            upstream=upstream(_item),
-            chunks=scattered(_item),
-            files=list(_item.files),
+            reference=union(reference(item) for item in _job.items),
+            upstream=union(upstream(item) for item in _job.items),
+            chunks=union(scattered(item) for item in _job.items),
+            files=union(item.files for item in _job.items),
         output:
-            report_outputs(_item),
+            report_outputs(_job),
         log:
-            f"{LOGS}/{_item.study}/{_item.name}.log",
+            f"{LOGS}/{_first.study}/{_first.name if len(_job.items) == 1 else _job.rule}.log",
         params:
-            code=code_digest(_item),
-            cfg=shlex.quote(json.dumps(registry.prune_config(config, _item), sort_keys=True)),
-            study=_item.study,
-            name=_item.name,
-            module=_item.module,
-            outdir=outdir_of(_item),
-            caption=verbatim(rst_escape(_item.description)),
-        threads: _item.threads
+            code=code_digest(*_job.items),
+            cfg=job_config(_job),
+            study=_first.study,
+            name=" ".join(item.name for item in _job.items),
+            module=_first.module,
+            outdir=outdir_of(_job),
+            caption=verbatim(rst_escape(_first.description)),
+            captions=verbatim(
+                "\n".join(f"- ``{item.name}``: {rst_escape(item.description)}" for item in _job.items)
+            ),
+        threads: _first.threads
         resources:
-            **resources_of(_item),
+            **resources_of(_first),
         group:
-            group_of(_item)
+            group_of(_job)
         conda:
             ENV
         shell:

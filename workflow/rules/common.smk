@@ -22,6 +22,7 @@ if (CHECKOUT_SRC / "parakin").is_dir():
 shell.prefix(_prefix)
 
 from parakin import registry
+from parakin.config import merge as merge_config
 from parakin.config import validate as validate_config
 from parakin.errors import ConfigError
 from parakin.pipeline import artefacts as load_studies
@@ -57,13 +58,13 @@ def _file_digest(path):
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def code_digest(item):
-    """One digest of the parakin source files the artefact runs (its module and all it imports,
-    by path and content). It is a param of the artefact's rule, so that editing any of them reruns
-    the artefact (Snakemake's params trigger) without making every one of those files an input:
-    ~50 inputs per rule cost the scheduler millions of stat calls a run."""
+def code_digest(*items):
+    """One digest of the parakin source files the artefacts run (their modules and all they
+    import, by path and content). It is a param of the job's rule, so that editing any of them
+    reruns the job (Snakemake's params trigger) without making every one of those files an
+    input: ~50 inputs per rule cost the scheduler millions of stat calls a run."""
     h = hashlib.sha256()
-    for path in item.sources():
+    for path in sorted({path for item in items for path in item.sources()}):
         h.update(f"{relative(path)}\0{_file_digest(path)}\n".encode())
     return h.hexdigest()
 
@@ -72,6 +73,11 @@ def scattered(item):
     """Chunk files the artefact gathers: its study module's ``chunk_files(config)``, each written
     by the study's scatter rule (workflow/rules/census.smk); none for the others."""
     return getattr(sys.modules[item.module], "chunk_files", lambda config: [])(config)
+
+
+def union(lists):
+    """The paths of ``lists`` in order, each once (the inputs of a job of several artefacts)."""
+    return list(dict.fromkeys(path for paths in lists for path in paths))
 
 
 def upstream(item):
@@ -95,15 +101,14 @@ def resources_of(item):
     return {**DEFAULT_RESOURCES, **dict(item.resources)}
 
 
-def group_of(item):
+def group_of(job):
     """Jobs that need no more than the defaults (one core, 15 min) and are linked to no other job
     form the group "small": on a cluster, `group-components` (profiles/slurm) sends several in one
     submission, so that SLURM's queue and scheduling are paid once per batch (each job is still
     its own step inside it). Artefacts with upstream or downstream artefacts, or chunks to gather,
     stay alone (a group may not wait on a job outside it that waits on the group, and one waiting
     on the census would hold its whole batch back). A local run ignores groups."""
-    alone = item.threads > 1 or item.resources or item.key in LINKED or scattered(item)
-    return None if alone else "small"
+    return "small" if job.small else None
 
 
 def rst_escape(text):
@@ -116,24 +121,39 @@ def verbatim(text):
     return lambda wildcards: text
 
 
-def report_outputs(item):
-    """The artefact's outputs, figures and tables marked for the report with its caption."""
-    paper = item.study if item.study_folder else "beyond the papers"
-    return [report(path, caption="../report/artefact.rst", category=paper, subcategory=item.name,
-                   labels={"artefact": item.name, "file": Path(path).name})
+def report_outputs(job):
+    """The job's outputs, figures and tables marked for the report with their artefact's caption
+    (a job of several artefacts: workflow/report/artefacts.rst captions each by its name)."""
+    caption = "../report/artefact.rst" if len(job.items) == 1 else "../report/artefacts.rst"
+    return [report(path, caption=caption, category=item.study if item.study_folder else "beyond the papers",
+                   subcategory=item.name, labels={"artefact": item.name, "file": Path(path).name})
             if path.endswith(SHOWN) and path.startswith(FIG) else path
-            for path in outputs(item)]
+            for item in job.items for path in outputs(item)]
 
 
-def outdir_of(item):
-    """The artefact's output folder, derived from its first output (a param that is a path prefix
-    must come from the output, so that a remote or cluster run rewrites it with the file)."""
+def outdir_of(job):
+    """The job's output folder, derived from its first output (a param that is a path prefix
+    must come from the output, so that a remote or cluster run rewrites it with the file); the
+    artefacts of one job share their study's folder."""
+    folders = {item.study_folder for item in job.items}
+    if len(folders) > 1:
+        sys.exit(f"pipeline error: the artefacts of job {job.rule} write to several folders {sorted(folders)}")
+    item = job.items[0]
     if not item.outputs:
         return lambda wildcards: str(Path(FIG) / item.study_folder)
     depth = len(Path(item.outputs[0]).parts)
     return lambda wildcards, output: str(Path(output[0]).parents[depth - 1])
 
 
-#: artefacts with an upstream or a downstream artefact (never grouped, see group_of)
-LINKED = {key for item in ARTEFACTS.values() for key in (item.key, *item.needs) if item.needs}
+def job_config(job):
+    """The config sections the job's artefacts declare, and the seed (registry.prune_config), as
+    one JSON argument: editing a section reruns only the jobs whose artefacts read it."""
+    merged = {}
+    for item in job.items:
+        merged = merge_config(merged, registry.prune_config(config, item))
+    return shlex.quote(json.dumps(merged, sort_keys=True))
+
+
+#: one job per artefact, or per module for its small artefacts (parakin.registry.jobs)
+JOBS = registry.jobs(ARTEFACTS)
 ALL_OUTPUTS = [path for item in ARTEFACTS.values() for path in outputs(item)]

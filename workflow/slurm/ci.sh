@@ -2,7 +2,7 @@
 # CI's cluster check (.ci/run): part of the quick pipeline through `--profile profiles/slurm` on a
 # real single-node SLURM (workflow/slurm/start-local.sh), then the reproduction check of its
 # outputs against the same part run locally (parakin.check, each artefact's declared tolerance).
-# One artefact of each kind: network training, an FK table, a GA, a dynamics study, a drawing,
+# One job of each kind: network training, an FK table, a GA, a dynamics study, drawings,
 # the 6-6 census (scatter-gather). Where SLURM cannot be started (not root, no apt-get) it says so
 # in one line and exits 0: the step is skipped, never faked.
 set -euo pipefail
@@ -12,8 +12,8 @@ TARGETS=(
     zhao2017_3p4s_train           # training (Levenberg-Marquardt), 2 threads
     zhao2017_3p4s_table2          # FK table (the trained network + quasi-Newton)
     zhao2017_3p4s_table3          # GA
-    zhao2017_3p4s_power_balance   # dynamics
-    li2017_stewart36_fig01        # a drawing
+    zhao2017_3p4s_dynamics        # dynamics: one job that makes ten small artefacts
+    li2017_stewart36_solutions    # drawings and tables: one job of six
     stewart66_census_census       # the census: scatter (chunks) and gather
 )
 OUT=${SLURM_CI_DIR:-build/slurm-ci}
@@ -57,10 +57,12 @@ from pathlib import Path
 
 from parakin.check import check_artefact
 from parakin.pipeline import artefacts
+from parakin.registry import jobs
 
 out, since, targets = Path(sys.argv[1]), sys.argv[2], set(sys.argv[3:])
-items = [a for a in artefacts().values() if a.rule in targets]
-assert len(items) == len(targets), f"unknown targets {targets - {a.rule for a in items}}"
+picked = [job for job in jobs(artefacts()) if job.rule in targets]
+assert len(picked) == len(targets), f"unknown targets {targets - {j.rule for j in picked}}"
+items = [a for job in picked for a in job.items]
 needed = {k for a in items for k in a.needs}
 items += [a for k, a in artefacts().items() if k in needed and a not in items]
 bad = []

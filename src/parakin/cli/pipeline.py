@@ -154,14 +154,19 @@ def add_readme(sub) -> None:
 def add_reproduce(sub) -> None:
     p = sub.add_parser(
         "reproduce",
-        help="compute one artefact (table or figure) of a paper or study",
+        help="compute artefacts (tables or figures) of a paper or study",
         func=cmd_reproduce,
     )
     p.add_argument(
         "paper",
         help="study key, e.g. zhao2017_3p4s, or 'extra' (beyond the papers: solver atlas, benchmarks)",
     )
-    p.add_argument("artefact", help="artefact name, e.g. table1, or 'all'")
+    p.add_argument(
+        "artefact",
+        nargs="+",
+        help="artefact name, e.g. table1, several (made one after the other, in this process), "
+        "or 'all'",
+    )
     _text_option(
         p,
         "--outdir",
