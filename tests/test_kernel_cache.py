@@ -89,6 +89,16 @@ def _copy(warm: Path, tmp_path: Path) -> Path:
     return cache
 
 
+def _without_builds(warm: Path, tmp_path: Path) -> Path:
+    """A cache with no kernel's build in it, only numba's part of the warm one: the solver loops'
+    shared linear algebra, which calls no kernel and which every fresh process here would
+    otherwise compile again (about 3.5 of its CPU-s). What these tests build and count, the
+    kernels' entries, starts from nothing."""
+    cache = tmp_path / "cache"
+    shutil.copytree(warm / "numba", cache / "numba")
+    return cache
+
+
 def test_warm_cache_is_used_and_lives_in_one_directory(warm, tmp_path):
     """The second process solves from the cache; every compiled file is under the cache directory
     (kernel builds named by their hash, numba's own part in numba/), none beside the sources."""
@@ -344,12 +354,12 @@ COUNTERS = textwrap.dedent(
 
 
 @pytest.mark.slow  # fresh processes that compile
-def test_entries_built_by_separate_processes_keep_their_own_loops(tmp_path):
+def test_entries_built_by_separate_processes_keep_their_own_loops(warm, tmp_path):
     """Every method's entries share their source (``parakin.kernels.entries``) and differ only in
     the loop bound into them. Each built by a fresh process (where numba numbers its functions
     alike), then loaded together by a third: each method still runs its own loop (the counters of
     the numpy path), not the loop of the build that another entry of the same name linked first."""
-    cache = tmp_path / "cache"
+    cache = _without_builds(warm, tmp_path)
     env = _env(cache)
     env["PYTHONPATH"] = os.pathsep.join([str(DATA), env["PYTHONPATH"]])
     methods = ["newton", "dogleg", "broyden"]
@@ -365,11 +375,11 @@ def test_entries_built_by_separate_processes_keep_their_own_loops(tmp_path):
 
 
 @pytest.mark.slow  # fresh processes that compile
-def test_kernel_functions_compiled_outside_an_entry_are_tagged(tmp_path):
+def test_kernel_functions_compiled_outside_an_entry_are_tagged(warm, tmp_path):
     """A loop that calls a kernel's compiled functions directly (the workspace's do) may compile
     them first: what it writes carries the build's tags, so the entries load it after, with no
     notice and no rebuild (untagged, the next solve found "an entry without tags" and rebuilt)."""
-    cache = tmp_path / "cache"
+    cache = _without_builds(warm, tmp_path)
     env = _env(cache)
     direct = textwrap.dedent(
         """
@@ -391,11 +401,11 @@ def test_kernel_functions_compiled_outside_an_entry_are_tagged(tmp_path):
 
 
 @pytest.mark.slow  # fresh processes that compile
-def test_two_processes_on_an_empty_cache_compile_an_entry_once(tmp_path):
+def test_two_processes_on_an_empty_cache_compile_an_entry_once(warm, tmp_path):
     """Two processes that need the same entries at once: one compiles them, the other waits and
     loads what it wrote (numba's cache statistics of the single-call entry: one miss between the
     two, where both compiled beside each other before the group lock)."""
-    cache = tmp_path / "cache"
+    cache = _without_builds(warm, tmp_path)
     env = _env(cache)
     code = textwrap.dedent(
         """
