@@ -39,6 +39,7 @@ for _job in JOBS:
                 "\n".join(f"- ``{item.name}``: {rst_escape(item.description)}" for item in _job.items)
             ),
         threads: _first.threads
+        priority: priority_of(_job)
         resources:
             **resources_of(_first),
         group:

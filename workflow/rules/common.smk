@@ -145,6 +145,21 @@ def outdir_of(job):
     return lambda wildcards, output: str(Path(output[0]).parents[depth - 1])
 
 
+#: artefacts that another artefact needs (the heads of the pipeline's chains)
+UPSTREAM = {key for item in ARTEFACTS.values() for key in item.needs}
+
+
+def priority_of(job):
+    """Snakemake starts the ready job of highest priority first: the jobs that others wait on
+    (2: the network's samples and training, the GA runs, the solver atlas, ...), then the other
+    jobs that take both cores (1: the network-convergence trainings), then the rest. Otherwise the
+    scheduler may leave the longest chains to the end, with one core idle while they finish
+    (a full run of 64 jobs started the samples of the training chain after 4.5 of its 12.4 min)."""
+    if any(item.key in UPSTREAM for item in job.items):
+        return 2
+    return 1 if any(item.threads > 1 for item in job.items) else 0
+
+
 def job_config(job):
     """The config sections the job's artefacts declare, and the seed (registry.prune_config), as
     one JSON argument: editing a section reruns only the jobs whose artefacts read it."""
