@@ -191,8 +191,14 @@ def _location(dotted: str) -> str:
     return f"{inspect.getsourcefile(fn)}:{inspect.getsourcelines(fn)[1]}"
 
 
-def describe(path: str | Path, found: dict[str, registry.Artefact] | None = None) -> str:
-    """What makes ``path``: the artefact, its function (file:line), its rule and its tolerance."""
+def describe(
+    path: str | Path,
+    found: dict[str, registry.Artefact] | None = None,
+    rules: dict[str, str] | None = None,
+) -> str:
+    """What makes ``path``: the artefact, its function (file:line), its rule and its tolerance.
+    ``rules``: each artefact's rule (:func:`rules_of`), computed once by a caller that describes
+    several paths."""
     found = artefacts() if found is None else found
     name = Path(path).name
     if name in SPECIAL:
@@ -204,7 +210,7 @@ def describe(path: str | Path, found: dict[str, registry.Artefact] | None = None
             f"no registered artefact writes {str(path)!r} (`parakin which --list` lists every file)"
         )
     tol = item.tolerance
-    rule = next(job.rule for job in registry.jobs(found) if item in job.items)
+    rule = (rules_of(found) if rules is None else rules)[item.key]
     lines = [
         f"{path}",
         f"  artefact:  {item.key}",
@@ -233,7 +239,13 @@ def which(paths: list[str], list_all: bool = False) -> str:
             for a in found.values()
             for f in a.outputs
         )
-    return "\n\n".join(describe(p, found) for p in paths)
+    rules = rules_of(found)
+    return "\n\n".join(describe(p, found, rules) for p in paths)
+
+
+def rules_of(found: dict[str, registry.Artefact]) -> dict[str, str]:
+    """The rule of the pipeline job that makes each artefact, by key (:func:`registry.jobs`)."""
+    return {item.key: job.rule for job in registry.jobs(found) for item in job.items}
 
 
 def record(results: Path, record_dir: Path, names: list[str] | None = None) -> list[Path]:

@@ -26,11 +26,11 @@ for _job in JOBS:
         output:
             report_outputs(_job),
         log:
-            f"{LOGS}/{_first.study}/{_first.name if len(_job.items) == 1 else _job.rule}.log",
+            f"{LOGS}/{_job.study}/{_first.name if len(_job.items) == 1 else _job.rule}.log",
         params:
             code=code_digest(*_job.items),
             cfg=job_config(_job),
-            study=_first.study,
+            study=_job.study,
             name=" ".join(item.name for item in _job.items),
             module=_first.module,
             outdir=outdir_of(_job),

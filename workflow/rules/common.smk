@@ -72,7 +72,7 @@ def code_digest(*items):
 def scattered(item):
     """Chunk files the artefact gathers: its study module's ``chunk_files(config)``, each written
     by the study's scatter rule (workflow/rules/census.smk); none for the others."""
-    return getattr(sys.modules[item.module], "chunk_files", lambda config: [])(config)
+    return sys.modules[item.module].chunk_files(config) if registry.gathers(item) else []
 
 
 def union(lists):

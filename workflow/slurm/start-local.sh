@@ -3,7 +3,8 @@
 # profile (profiles/slurm, docs/cluster.md) without a cluster account.
 #
 #   bash workflow/slurm/start-local.sh          # install (Debian/Ubuntu, as root) and start
-#   bash workflow/slurm/start-local.sh stop     # stop the daemons this script started
+#   bash workflow/slurm/start-local.sh stop     # stop the daemons this script started and put
+#                                               # back the SLURM config files it replaced
 #
 # It installs Debian's slurm-wlm, slurmdbd, munge and mariadb-server, writes a slurm.conf for this
 # one node (all its cores and memory, partition "local") and starts munged, mariadbd, slurmdbd,
@@ -16,6 +17,32 @@ set -euo pipefail
 STATE=/var/lib/parakin-slurm        # the daemons' logs and state (not the repository)
 CLUSTER=parakin
 ACCOUNT=parakin
+#: the config files this script writes. Left behind with no controller answering, a slurm.conf
+#: makes every `scontrol show config` wait ~9 s, and the Snakemake SLURM executor plugin asks it
+#: when it is imported: every later `snakemake` command on this machine, local runs included,
+#: started 9 s late (docs/cluster.md). So `stop` removes them, or puts back what was there.
+CONFIGS=(/etc/slurm/slurm.conf /etc/slurm/slurmdbd.conf)
+MARK="# written by parakin's workflow/slurm/start-local.sh; its 'stop' removes it"
+
+keep_configs() {  # a config file this script did not write is kept in $STATE, once
+    local f
+    for f in "${CONFIGS[@]}"; do
+        if [ -f "$f" ] && ! grep -qxF "$MARK" "$f" && [ ! -e "$STATE/kept/${f##*/}" ]; then
+            mkdir -p "$STATE/kept" && cp -p "$f" "$STATE/kept/${f##*/}"
+        fi
+    done
+}
+
+restore_configs() {  # each config file back as this script found it: removed if there was none
+    local f
+    for f in "${CONFIGS[@]}"; do
+        if [ -e "$STATE/kept/${f##*/}" ]; then
+            mv -f "$STATE/kept/${f##*/}" "$f"
+        elif [ -f "$f" ] && grep -qxF "$MARK" "$f"; then
+            rm -f "$f"
+        fi
+    done
+}
 
 stop() {  # the daemons whose pid files are in $STATE, SLURM's first; waits until they have ended
     local pids=() pid d alive
@@ -77,7 +104,9 @@ CREATE USER IF NOT EXISTS 'slurm'@'localhost' IDENTIFIED BY 'slurm';
 GRANT ALL ON slurm_acct_db.* TO 'slurm'@'localhost'; FLUSH PRIVILEGES;"
 
 # --- slurmdbd and slurm.conf
+keep_configs
 cat >/etc/slurm/slurmdbd.conf <<EOF
+$MARK
 AuthType=auth/munge
 DbdHost=localhost
 SlurmUser=root
@@ -96,6 +125,7 @@ node=$(slurmd -C | head -1 | sed -E 's/ UpTime=.*//')
 mem=$(echo "$node" | sed -E 's/.*RealMemory=([0-9]+).*/\1/')
 node=$(echo "$node" | sed -E "s/RealMemory=[0-9]+/RealMemory=$((mem > 2048 ? mem - 1024 : mem))/")
 cat >/etc/slurm/slurm.conf <<EOF
+$MARK
 ClusterName=$CLUSTER
 SlurmctldHost=$host(127.0.0.1)
 SlurmUser=root
