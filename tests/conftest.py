@@ -26,24 +26,31 @@ def p3p4s(request) -> P3P4S:
     return P3P4S.zhao2017() if request.param == "stated" else P3P4S.zhao2017_optimised()
 
 
-#: the test files that go last: the quick pipeline (a fifth of the suite's CPU). Run after the
-#: other files have compiled the kernels, it loads them from the shared cache instead of compiling
-#: them beside the other worker, and its two-core jobs fill the run's end, when the other worker
-#: has no file left to start
-LAST = ("tests/test_pipeline.py",)
+#: the quick pipeline (a fifth of the suite's CPU) goes after the files that compile the kernels,
+#: so that it loads them from the shared cache instead of compiling them beside the other worker
+PIPELINE = "tests/test_pipeline.py"
+#: ... and before these, which run in processes of their own (a notebook's kernel, fresh
+#: interpreters) on kernels already compiled: the other worker runs them while the pipeline's
+#: chain of jobs (samples, training, the tables that use the network) leaves a core free; with
+#: the pipeline last, that core idled at the end
+AFTER_PIPELINE = ("tests/test_stability.py", "notebooks/")
 
 
 def _file(item) -> str:
     return item.nodeid.split("::")[0]
 
 
+def _phase(path: str) -> int:
+    return 2 if path.startswith(AFTER_PIPELINE) else 1 if path == PIPELINE else 0
+
+
 def pytest_collection_modifyitems(config, items):
     """The notebooks (collected by nbmake from notebooks/) are slow: each runs a paper's walk-through
     in a kernel of its own. Files go to the workers (xdist ``--dist loadfile``, in this order:
     ``--no-loadscope-reorder``) by their number of tests, most first, as xdist would order them,
-    except :data:`LAST`, which go last."""
+    with the quick pipeline after the others (:data:`PIPELINE`, :data:`AFTER_PIPELINE`)."""
     for item in items:
         if item.nodeid.endswith(".ipynb"):
             item.add_marker(pytest.mark.slow)
     count = Counter(_file(item) for item in items)
-    items.sort(key=lambda item: (_file(item) in LAST, -count[_file(item)]))  # stable: else as found
+    items.sort(key=lambda item: (_phase(_file(item)), -count[_file(item)]))  # stable

@@ -61,7 +61,7 @@ stop() {  # the daemons whose pid files are in $STATE, SLURM's first; waits unti
     return 0
 }
 
-if [ "${1:-}" = "stop" ]; then stop; exit 0; fi
+if [ "${1:-}" = "stop" ]; then stop; restore_configs; exit 0; fi
 
 if [ "$(id -u)" != 0 ]; then echo "SLURM: not root, cannot install or start a local cluster"; exit 3; fi
 if ! command -v apt-get >/dev/null; then echo "SLURM: no apt-get on this machine, cannot install a local cluster"; exit 3; fi
