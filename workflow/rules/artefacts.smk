@@ -8,8 +8,9 @@
 # and only the config sections its artefacts declare and the seed, so editing one section reruns
 # only the jobs that read it (each artefact is still given only its own sections). group: the
 # small jobs share a cluster submission (common.smk). threads/resources: what the artefact
-# declares (the long jobs: training, GA, NSGA-II, PSO, the solver atlas); every figure and table
-# goes into the report (snakemake --report) with its one-line caption from the registry.
+# declares (the long jobs: training, GA, NSGA-II, PSO, the solver atlas), threads at most the
+# config's max_threads (common.smk threads_of); every figure and table goes into the report
+# (snakemake --report) with its one-line caption from the registry.
 
 
 for _job in JOBS:
@@ -38,7 +39,7 @@ for _job in JOBS:
             captions=verbatim(
                 "\n".join(f"- ``{item.name}``: {rst_escape(item.description)}" for item in _job.items)
             ),
-        threads: _first.threads
+        threads: threads_of(_job)
         priority: priority_of(_job)
         resources:
             **resources_of(_first),

@@ -149,6 +149,14 @@ def outdir_of(job):
 UPSTREAM = {key for item in ARTEFACTS.values() for key in item.needs}
 
 
+def threads_of(job):
+    """The cores the job takes: what its artefacts declare, at most the config's ``max_threads``
+    (the quick sizes: 1). The runs of a chaotic computation give the same results on any number
+    of cores (parakin.papers.runs), so this moves no number."""
+    declared = max(item.threads for item in job.items)
+    return min(declared, config.get("max_threads", declared))
+
+
 def priority_of(job):
     """Snakemake starts the ready job of highest priority first: the jobs that others wait on
     (2: the network's samples and training, the GA runs, the solver atlas, ...), then the other
@@ -158,7 +166,7 @@ def priority_of(job):
     Snakemake reserves no cores: a two-core job still waits until no one-core job is ready."""
     if any(item.key in UPSTREAM for item in job.items):
         return 2
-    return 1 if any(item.threads > 1 for item in job.items) else 0
+    return 1 if threads_of(job) > 1 else 0
 
 
 def job_config(job):
