@@ -38,9 +38,11 @@ def _copy_workflow(workdir: Path) -> None:
     shutil.copytree(ROOT / "data" / "reference", workdir / "data" / "reference")
 
 
-def run_pipeline(workdir: Path, marker: str, targets: tuple[str, ...] = ()) -> Path:
+def run_pipeline(
+    workdir: Path, marker: str, targets: tuple[str, ...] = (), config: tuple[str, ...] = ()
+) -> Path:
     """The quick pipeline (or only ``targets``) in a copy of the workflow in ``workdir``; every
-    job inherits ``MARKER=marker``."""
+    job inherits ``MARKER=marker``; ``config``: ``KEY=VALUE`` settings over the quick config."""
     _copy_workflow(workdir)
     res = subprocess.run(
         [
@@ -52,6 +54,7 @@ def run_pipeline(workdir: Path, marker: str, targets: tuple[str, ...] = ()) -> P
             "2",
             "--configfile",
             "config/quick.yaml",
+            *(("--config", *config) if config else ()),
             "--quiet",
             "rules",
         ],
@@ -89,7 +92,9 @@ def quick_run(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def two_runs(quick_run, tmp_path_factory):
-    """The quick run's figures, and those of :data:`AGAIN` run alone in a fresh copy."""
+    """The quick run's figures, and those of :data:`AGAIN` run alone in a fresh copy, on two cores
+    a job (``max_threads=2``: the quick config runs every job on one, the GA runs and the
+    trainings then run side by side in worker processes)."""
     config = _quick_config()
     found = artefacts(config["studies"])
     targets = tuple(
@@ -97,7 +102,9 @@ def two_runs(quick_run, tmp_path_factory):
         for k in AGAIN
         for path in found[k].output_paths(config["figures_dir"], config["generated_dir"])
     )
-    again = run_pipeline(tmp_path_factory.mktemp("run2"), uuid.uuid4().hex, targets)
+    again = run_pipeline(
+        tmp_path_factory.mktemp("run2"), uuid.uuid4().hex, targets, ("max_threads=2",)
+    )
     return quick_run[0], again
 
 
@@ -162,15 +169,19 @@ def _same(a: Path, b: Path) -> bool:
 
 @pytest.mark.slow  # the quick pipeline (about 2-4 min of two cores)
 def test_two_runs_are_byte_identical(two_runs):
-    """Same config, same seeds -> the same bytes (timing columns aside): every file the second,
-    smaller run made (its targets and their upstream, network weights included) equals the
-    whole run's."""
+    """Same config, same seeds -> the same bytes (timing columns aside), whatever the cores a job
+    takes: every file the second, smaller run made on two cores a job (its targets and their
+    upstream, network weights included) equals the whole run's, made on one."""
     a, b = two_runs
     made = sorted(p.relative_to(b.parent) for p in b.parent.rglob("*") if p.is_file())
     made = [f for f in made if f.parts[0] in ("figures", "generated")]
     assert len(made) >= len(AGAIN)
     different = [str(f) for f in made if not _same(a.parent / f, b.parent / f)]
     assert not different
+    # the GA's runs went one at a time in the whole run and two at a time in the second
+    for run, cores in ((a, 1), (b, 2)):
+        log = (run.parent / "logs" / "zhao2017_3p4s" / "ga_runs.log").read_text()
+        assert f"({cores} at once)" in log and f"({3 - cores} at once)" not in log
 
 
 @pytest.mark.slow  # the quick pipeline (about 2-4 min of two cores)

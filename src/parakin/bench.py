@@ -178,16 +178,23 @@ def kernel_goals(
     One row per measurement: ``mechanism, what, value, unit, goal, met``. The mechanisms are the
     registered ones with kernels (:data:`parakin.mechanisms.base.REGISTRY`)."""
     rows: list[dict[str, Any]] = []
+    # the 6-6 first, its rows last: on an empty kernel cache its tracker is the longest compile
+    # (~70 CPU-s, one process), and the solver atlas, which runs beside this in the pipeline,
+    # needs it too. Started last, it was the chain that both jobs waited on (a cold quick run:
+    # this job idle 57 s on the atlas's compile); first, the other job compiles the solver
+    # entries meanwhile
+    rows_66 = []
+    if n_all_66:
+        if progress:
+            progress("stewart66 all-solutions")
+        rows_66 = _stewart66_all_goals(n_all_66, repeats)
     for mech in _compiled_mechanisms():
         if progress:
             progress(mech.name)
         rows += _solver_goals(mech, n_single, n_batch, repeats)
     mech = REGISTRY["stewart36"]()  # the goals of issue 17 name the 3-6 and the 6-6
     rows += _stewart36_all_goals(mech, n_all, repeats)
-    if n_all_66:
-        if progress:
-            progress("stewart66 all-solutions")
-        rows += _stewart66_all_goals(n_all_66, repeats)
+    rows += rows_66
     if pso:
         if progress:
             progress("Li 2017 PSO")

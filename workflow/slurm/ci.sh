@@ -36,8 +36,11 @@ run() {  # run NAME [snakemake options...]: the targets into $OUT/NAME
     local name=$1; shift
     rm -rf "$OUT/$name"
     local start=$SECONDS
+    # max_threads=2: the quick sizes run every job on one core; here the training keeps its two
+    # (a SLURM job that asks for two cores)
     snakemake "${TARGETS[@]}" --configfile config/quick.yaml --quiet rules \
-        --config figures_dir="$OUT/$name/figures" generated_dir="$OUT/$name/generated" "$@"
+        --config figures_dir="$OUT/$name/figures" generated_dir="$OUT/$name/generated" \
+        max_threads=2 "$@"
     echo "== $name run: $((SECONDS - start)) s"
 }
 
