@@ -152,7 +152,8 @@ UPSTREAM = {key for item in ARTEFACTS.values() for key in item.needs}
 def threads_of(job):
     """The cores the job takes: what its artefacts declare, at most the config's ``max_threads``
     (the quick sizes: 1). The runs of a chaotic computation give the same results on any number
-    of cores (parakin.papers.runs), so this moves no number."""
+    of cores (parakin.papers.runs), so this moves no result, timings aside (tests/test_pipeline.py
+    checks the bytes of a run on two cores a job against the quick run's on one)."""
     declared = max(item.threads for item in job.items)
     return min(declared, config.get("max_threads", declared))
 
