@@ -668,8 +668,12 @@ def test_ctrl_c_is_one_line_exit_130(monkeypatch):
         return 0
 
     monkeypatch.setattr(kinematics, "cmd_ik", slow)
+    # Python's own handler, as under a terminal: a shell starts a background job (``pytest &``)
+    # with SIGINT ignored, Python keeps it ignored, and the command would sleep its 30 s out
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         code, stdout, stderr = run(["ik", "3p4s", "--pose", "0", "0", "0.592"])
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     assert code == 130 and stderr == "parakin ik: interrupted\n" and not stdout, stderr
