@@ -30,10 +30,12 @@ def p3p4s(request) -> P3P4S:
 #: so that it loads them from the shared cache instead of compiling them beside the other worker
 PIPELINE = "tests/test_pipeline.py"
 #: ... and before these, which run in processes of their own (a notebook's kernel, fresh
-#: interpreters) on kernels already compiled: the other worker runs them while the pipeline's
-#: chain of jobs (samples, training, the tables that use the network) leaves a core free; with
-#: the pipeline last, that core idled at the end
-AFTER_PIPELINE = ("tests/test_stability.py", "notebooks/")
+#: interpreters, the kernel-cache tests' private caches): the other worker runs them while the
+#: pipeline's chain of jobs (samples, training, the tables that use the network) leaves a core
+#: free. About as much work as the pipeline's 2.5-3 minutes beside them: with the kernel-cache
+#: tests before the pipeline, the pipeline's worker finished 72 s after the other (a cold run,
+#: 481 against 409 s); with the pipeline last, that core idled at the end
+AFTER_PIPELINE = ("tests/test_kernel_cache.py", "tests/test_stability.py", "notebooks/")
 
 
 def _file(item) -> str:

@@ -467,8 +467,23 @@ def test_lane_kernels_give_the_same_bits_in_both_loop_orders():
     """Each function of the lane tracker runs with the lanes innermost (vectorised) for many lanes
     and one lane at a time for a few: the same operations in the same order in a lane, so the same
     bits (what makes a path's result independent of the batch around it)."""
-    pytest.importorskip("numba")
+    numba = pytest.importorskip("numba")
     from parakin.kernels import stewart66_lanes as lanes
+
+    # theta, features and combine take flags as constants: called from compiled code, as the
+    # tracker calls them, they are the tracker's own specialisations (loaded from the cache);
+    # called from Python, each would be compiled again for a plain bool (about 9 CPU-s)
+    @numba.njit
+    def theta_series(POLY, tt, TH, n):
+        lanes.theta(POLY, tt, TH, True, n)
+
+    @numba.njit
+    def features_of_pairs(X, U, F, n):
+        lanes.features(X, U, F, 2.0, False, n)
+
+    @numba.njit
+    def combine_added(TH, F, out, n):
+        lanes.combine(TH, 1, F, out, False, True, n)
 
     W = lanes.LANES
     few = lanes.VECTOR_LANES - 1
@@ -486,7 +501,7 @@ def test_lane_kernels_give_the_same_bits_in_both_loop_orders():
 
     def theta(n):
         TH = np.zeros((3, 2, 6, lanes.NTH, W))
-        lanes.theta(POLY, tt, TH, True, n)
+        theta_series(POLY, tt, TH, n)
         return (TH,)
 
     both(theta)
@@ -495,9 +510,9 @@ def test_lane_kernels_give_the_same_bits_in_both_loop_orders():
 
     def feats(n):
         F = np.zeros((2, lanes.NF, W))
-        lanes.features(X, U, F, 2.0, False, n)
+        features_of_pairs(X, U, F, n)
         out = np.zeros((2, 8, W))
-        lanes.combine(TH, 1, F, out, True, False, n)
+        combine_added(TH, F, out, n)
         return F, out
 
     both(feats)

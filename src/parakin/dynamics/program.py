@@ -266,6 +266,9 @@ class Program:
         """The outputs (k, :attr:`columns`) of inputs (k, sum of :attr:`widths`), as columns."""
         from parakin.dynamics._kernels import replay
 
+        # one array type for the compiled replay: a column slice (layout 'A') or a read-only
+        # view would each compile it again
+        inputs = np.require(inputs, np.float64, ["C", "W"])
         out = np.empty((inputs.shape[0], self.columns))
         replay(self.code, self.constants, inputs, out, self.registers, self.CHUNK)
         return out
