@@ -482,8 +482,9 @@ def test_lane_kernels_give_the_same_bits_in_both_loop_orders():
         lanes.features(X, U, F, 2.0, False, n)
 
     @numba.njit
-    def combine_added(TH, F, out, n):
-        lanes.combine(TH, 1, F, out, False, True, n)
+    def combine_both(TH, F, out0, out1, n):  # the tracker's level 0 (const) and level 1 (add)
+        lanes.combine(TH, 0, F, out0, True, False, n)
+        lanes.combine(TH, 1, F, out1, False, True, n)
 
     W = lanes.LANES
     few = lanes.VECTOR_LANES - 1
@@ -511,9 +512,9 @@ def test_lane_kernels_give_the_same_bits_in_both_loop_orders():
     def feats(n):
         F = np.zeros((2, lanes.NF, W))
         features_of_pairs(X, U, F, n)
-        out = np.zeros((2, 8, W))
-        combine_added(TH, F, out, n)
-        return F, out
+        out0, out1 = np.zeros((2, 8, W)), np.zeros((2, 8, W))
+        combine_both(TH, F, out0, out1, n)
+        return F, out0, out1
 
     both(feats)
 
