@@ -20,7 +20,9 @@ blocks of rows on threads (:func:`parakin.kernels.threads.rows`: the entries rel
 
 from __future__ import annotations
 
-from parakin.kernels.drivers import finite, pso_iterations, verify
+import numpy as np
+
+from parakin.kernels.drivers import finite, pso_iterations, verify, work
 from parakin.kernels.methods import BAD_INPUT
 
 RES = JAC = IK = DOM = ASM = PER = ROW = None  # bound per kernel and method (parakin.kernels)
@@ -37,22 +39,26 @@ def serial(p, Q, X0, opts, X, info, out):
     ``info[i, 4:]`` = in domain, on assembly, ``out[i, 1]`` = joint error, and a row whose joints
     or start are not finite is left unsolved as ``BAD_INPUT``. (One function for both: numba
     optimises a caller again over every compiled function it links, so a single-call entry and a
-    batched entry beside a shared one-row loop compiled that loop three times.)"""
+    batched entry beside a shared one-row loop compiled that loop three times.) The loop's work
+    arrays are made once for all rows (:func:`parakin.kernels.drivers.work`)."""
     checked = info.shape[1] > 4
+    ws = work(Q.shape[1], X0.shape[1])
+    joints = np.empty(Q.shape[1])
     for i in range(Q.shape[0]):
         if checked and not (finite(Q[i]) and finite(X0[i])):
             info[i, 0] = BAD_INPUT
             continue
-        out[i, 0] = ROW(RES, JAC, p, Q[i], X0[i], opts, X[i], info[i])
+        out[i, 0] = ROW(RES, JAC, p, Q[i], X0[i], opts, X[i], info[i], ws)
         if checked:
-            out[i, 1] = verify(IK, DOM, ASM, PER, p, Q[i], X[i], info[i, 4:])
+            out[i, 1] = verify(IK, DOM, ASM, PER, p, Q[i], X[i], info[i, 4:], joints)
 
 
 def verify_serial(p, Q, X, flags, err):
     """``err[i]`` = joint error of pose ``X[i]`` for joints ``Q[i]``; ``flags[i]`` = in domain, on
     assembly."""
+    joints = np.empty(Q.shape[1])
     for i in range(Q.shape[0]):
-        err[i] = verify(IK, DOM, ASM, PER, p, Q[i], X[i], flags[i])
+        err[i] = verify(IK, DOM, ASM, PER, p, Q[i], X[i], flags[i], joints)
 
 
 def pso_serial(p, Q, X, V, PB, PF, GB, GF, RND, W, k0, lo, hi, vmax, coef, STATE, HIST):
