@@ -324,7 +324,9 @@ def test_entries_are_tagged_before_their_first_call():
 @pytest.mark.parametrize("method", METHODS)
 def test_single_call_path_equals_batched(method, monkeypatch):
     """One joint vector per call (the single-call path: solve and verification in one compiled
-    call) gives exactly the batched compiled rows, and the numpy path's statuses."""
+    call) gives exactly the batched compiled rows, and the numpy path's statuses. A batch reuses
+    one set of work arrays for all its rows (``drivers.work``), a single call has its own: a
+    loop that read a work array before writing it would make a row depend on the rows before it."""
     for key in [k for k in mechanisms.REGISTRY if k in MECHS]:
         mech = MECHS[key]
         truth = _poses(mech, 12, seed=4, spread=0.3)
