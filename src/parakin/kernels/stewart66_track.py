@@ -453,11 +453,8 @@ def fk_all(
     c1 = np.ascontiguousarray(c1, dtype=np.float64)
     n = len(c1)
     target = _target(G["bs"], G["ps"], c1)
-    # copies, always writable: a read-only argument (one input's broadcast view is already
-    # contiguous, so ``ascontiguousarray`` kept it read-only) is another type to numba, and
-    # :func:`package_all` was compiled twice, once for single inputs and once for batches
     geo = tuple(
-        np.broadcast_to(G[k], (n,) + np.shape(G[k])).copy()
+        np.broadcast_to(G[k], (n,) + np.shape(G[k]))
         for k in ("bc", "pc", "size", "base", "platform")
     )
 
@@ -503,7 +500,6 @@ def fk_all_new(
         par[:, 2, :, 6] = -bend
         return par, target[rows]
 
-    geo = tuple(np.array(g, dtype=np.float64, order="C") for g in geo)  # writable (fk_all)
     starts = np.ascontiguousarray(start["solutions"], dtype=np.complex128)
     patch = np.ascontiguousarray(start["patch"], dtype=np.complex128)
     return _solve(paths, starts, patch, True, n, joints, geo, alpha0, retries, options, iters, threads)  # fmt: skip
@@ -515,6 +511,10 @@ def _solve(paths, starts, patch, moving, n, joints, geo, alpha0, retries, option
     parameter paths and target systems."""
     _loaded()
     joints = np.ascontiguousarray(joints, dtype=np.float64)
+    # copies, always writable: a read-only argument (one input's broadcast view is already
+    # contiguous, so ``ascontiguousarray`` kept it read-only) is another type to numba, and
+    # :func:`package_all` was compiled twice, once for single inputs and once for batches
+    geo = tuple(np.array(g, dtype=np.float64, order="C") for g in geo)
     threads = numba.get_num_threads() if threads is None else max(1, int(threads))
     opts = options_vector(options)
     M = len(starts)
