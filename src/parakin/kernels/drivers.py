@@ -178,89 +178,14 @@ def _all_finite(a):
     return True
 
 
-#: sweeps of :func:`_min_norm` at most (small matrices converge in well under ten)
-_JACOBI_SWEEPS = 60
-_EPS = 2.220446049250313e-16
-
-
-@njit(**_O)
-def _min_norm(a, b, out):
-    """``out = pinv(a) b`` for a finite ``a`` (m, n), either shape: the minimum-norm least-squares
-    solution, from the SVD by one-sided Jacobi rotations (Hestenes 1958): the columns of ``a`` (of
-    ``a^T`` where ``m < n``) rotated until orthogonal, ``a V = W``, the singular values their norms.
-    As numpy's ``pinv``, singular values at most ``1e-15`` times the largest count as zero. The
-    fallback of an exactly singular step only: numba's ``pinv`` did the same through LAPACK, and
-    its code made every compiled solver entry about a fifth dearer to compile (docs/kernels.md)."""
-    m, n = a.shape
-    tall = m >= n
-    p, k = (m, n) if tall else (n, m)
-    w = np.empty((p, k))
-    v = np.zeros((k, k))
-    for i in range(p):
-        for j in range(k):
-            w[i, j] = a[i, j] if tall else a[j, i]
-    for j in range(k):
-        v[j, j] = 1.0
-    for _ in range(_JACOBI_SWEEPS):
-        rotated = False
-        for i in range(k - 1):
-            for j in range(i + 1, k):
-                al = 0.0
-                be = 0.0
-                ga = 0.0
-                for r in range(p):
-                    al += w[r, i] * w[r, i]
-                    be += w[r, j] * w[r, j]
-                    ga += w[r, i] * w[r, j]
-                if not abs(ga) > _EPS * math.sqrt(al * be):
-                    continue  # orthogonal to working precision (or a zero column)
-                rotated = True
-                # the rotation that makes columns i and j orthogonal (the 2 x 2 symmetric Schur
-                # decomposition of their Gram matrix, Golub & Van Loan 2013, Alg. 8.5.1)
-                zeta = (be - al) / (2.0 * ga)
-                t = math.copysign(1.0, zeta) / (abs(zeta) + math.hypot(1.0, zeta))
-                c = 1.0 / math.sqrt(1.0 + t * t)
-                s = c * t
-                for r in range(p):
-                    wi = w[r, i]
-                    w[r, i] = c * wi - s * w[r, j]
-                    w[r, j] = s * wi + c * w[r, j]
-                for r in range(k):
-                    vi = v[r, i]
-                    v[r, i] = c * vi - s * v[r, j]
-                    v[r, j] = s * vi + c * v[r, j]
-        if not rotated:
-            break
-    sv = np.empty(k)
-    big = 0.0
-    for j in range(k):
-        s2 = 0.0
-        for r in range(p):
-            s2 += w[r, j] * w[r, j]
-        sv[j] = math.sqrt(s2)
-        big = max(big, sv[j])
-    out[:] = 0.0
-    for j in range(k):
-        if not sv[j] > 1e-15 * big:
-            continue
-        # a = W V^T with W = U S: pinv(a) b = V S^-2 W^T b (tall), W S^-2 V^T b (wide)
-        d = 0.0
-        for r in range(m):
-            d += (w[r, j] if tall else v[r, j]) * b[r]
-        d /= sv[j] * sv[j]
-        for r in range(n):
-            out[r] += (v[r, j] if tall else w[r, j]) * d
-
-
 @njit(**_O)
 def _solve(a, b, out, w):
     """``a out = b`` for square ``a``: LU with partial pivoting; minimum-norm least squares
-    ``pinv(a) b`` (:func:`_min_norm`) where ``a`` is exactly singular; NaN where ``a`` or ``b`` is
-    not finite."""
+    ``pinv(a) b`` where ``a`` is exactly singular; NaN where ``a`` or ``b`` is not finite."""
     if not (finite(b) and _all_finite(a)):
         out[:] = math.nan
     elif not _lu_solve(a, b, out, w):
-        _min_norm(a, b, out)
+        _copy(out, np.linalg.pinv(a) @ b)
 
 
 @njit(**_O)
@@ -304,7 +229,7 @@ def _direction(jac, r, out, w, a, g):
     else:
         _gram(jac, r, a, g)
         if not _lu_solve(a, g, out, w):
-            _min_norm(jac, r, out)
+            _copy(out, np.linalg.pinv(jac) @ r)
 
 
 #: n-vectors among the work arrays (:func:`work`): as many as BFGS uses at once
@@ -840,4 +765,4 @@ def pso_iterations(res, p, q, x, v, pb, pf, gb, gf, rnd, w, k0, lo, hi, vmax, co
 #: every entry. An entry compiled after them links their cached code instead of compiling them
 #: again, LAPACK's pseudo-inverse included (about 3 of the 8.6 CPU-s that a fresh process spent on
 #: a toy kernel's first Newton solve). Their cache is keyed by this file, which holds all they call
-SHARED = (finite, _all_finite, _lu_solve, _min_norm, _solve, _gram, _direction)
+SHARED = (finite, _all_finite, _lu_solve, _solve, _gram, _direction)
