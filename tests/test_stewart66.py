@@ -434,6 +434,34 @@ def test_new_geometry_path_finds_what_the_fibre_finds(random_mechs):
             assert _projective_sets_agree(a, b)
 
 
+def test_a_geometry_called_again_builds_its_start_system(random_mechs):
+    """The first single input on a geometry takes the new-geometry path; the second call on the
+    same instance builds the geometry's start system and takes the fibre, as every later call:
+    the same certified counts and real poses as the first call's path."""
+    pytest.importorskip("numba")
+    from parakin import kernels
+
+    if not kernels.enabled():
+        pytest.skip("compiled kernels switched off")
+    rng = np.random.default_rng(16)
+    m = random_mechs[0]
+    q = m.ik(study.random_pose(rng, 2, m))
+    fresh = Stewart66(base=m.base_points, platform=m.platform_points)
+    first = fresh.fk_all(q[0], return_info=True)
+    assert "fk_start" not in fresh.__dict__
+    again = fresh.fk_all(q[0], return_info=True)
+    assert "fk_start" in fresh.__dict__  # built on the second call
+    later = fresh.fk_all(q[1], return_info=True)
+    reference = Stewart66(base=m.base_points, platform=m.platform_points).fk_all(
+        q, return_info=True
+    )  # two inputs at once: the fibre
+    for k in ("n_found", "n_real", "n_undecided", "complete"):
+        assert np.array_equal(getattr(first, k), getattr(again, k)), k
+        assert np.array_equal(getattr(later, k), getattr(reference, k)[1]), k
+    assert np.nanmax(np.abs(_wrap(first.poses - again.poses))) < 1e-9
+    np.testing.assert_array_equal(later.poses, reference.poses[1])  # the fibre: the same bits
+
+
 def test_many_geometries_in_one_batch_are_deterministic():
     """fk_all_geometries: every input its own geometry, all paths side by side; the same bits as
     one call per geometry and whatever the thread count."""
