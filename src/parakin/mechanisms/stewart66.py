@@ -106,19 +106,13 @@ TRACK_OPTIONS: dict[str, float] = {
 }
 
 
-def _kernels_on() -> bool:
-    from parakin import kernels
-
-    return kernels.enabled()
-
-
-def _compiled_kernel(q0: np.ndarray):
+def _compiled_kernel(q0: np.ndarray | None = None):
     """:mod:`parakin.kernels.stewart66_track` where the compiled path is on and the geometry's
-    quadrics are real; None otherwise (the numpy path). Imported here, on the first ``fk_all``:
-    importing the mechanism compiles nothing."""
+    quadrics ``q0`` (where given) are real; None otherwise (the numpy path). Imported here, on the
+    first ``fk_all``: importing the mechanism compiles nothing."""
     from parakin import kernels
 
-    if not kernels.enabled() or np.any(np.imag(q0) != 0):
+    if not kernels.enabled() or (q0 is not None and np.any(np.imag(q0) != 0)):
         return None
     from parakin.kernels import stewart66_track
 
@@ -475,9 +469,15 @@ class Stewart66(SixLegs):
         return self.root_count if self._special_layout else 40
 
     def _target_c(self, q: Array) -> Array:
+        """The leg constants ``c_i = |p_i|^2 + |b_i|^2 - (L_i / size)^2`` of leg lengths ``q``."""
+        return self._anchor_norms - (q / self._scaled[4]) ** 2
+
+    @cached_property
+    def _anchor_norms(self) -> Array:
+        """``|b_i|^2 + |p_i|^2`` of the centred, scaled anchors: the constant part of
+        :meth:`_target_c`, computed once per geometry."""
         b, p, *_ = self._scaled
-        s = self._scaled[4]
-        return np.sum(b * b, -1) + np.sum(p * p, -1) - (q / s) ** 2
+        return np.sum(b * b, -1) + np.sum(p * p, -1)
 
     def _solve_fiber(self, c1: Array, bend_seed: int | None):
         """Track all start solutions to every target ``c1`` (n, 6); refine, certify; per-input
@@ -547,7 +547,7 @@ class Stewart66(SixLegs):
         self.check_joints(q)
         batch = q.shape[:-1]
         qf = q.reshape(-1, 6)
-        compiled = _compiled_kernel(np.zeros(1)) if _kernels_on() else None
+        compiled = _compiled_kernel()
         if compiled is not None and self._new_geometry_path(len(qf)):
             info = self._fk_all_new(compiled, qf, retries)
         elif compiled is not None:  # the geometry's own start system, then every input's fibre
@@ -789,7 +789,7 @@ def fk_all_geometries(
     mechs = [Stewart66(base=bi, platform=pi) for bi, pi in zip(b, p)]
     for m, qi in zip(mechs, q):
         m.check_joints(qi)
-    kernel = _compiled_kernel(np.zeros(1)) if _kernels_on() else None
+    kernel = _compiled_kernel()
     if kernel is None:
         infos = [m.fk_all(qi, return_info=True, retries=retries) for m, qi in zip(mechs, q)]
         return _stack(infos)
