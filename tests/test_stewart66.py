@@ -495,24 +495,8 @@ def test_lane_kernels_give_the_same_bits_in_both_loop_orders():
     """Each function of the lane tracker runs with the lanes innermost (vectorised) for many lanes
     and one lane at a time for a few: the same operations in the same order in a lane, so the same
     bits (what makes a path's result independent of the batch around it)."""
-    numba = pytest.importorskip("numba")
+    pytest.importorskip("numba")
     from parakin.kernels import stewart66_lanes as lanes
-
-    # theta, features and combine take flags as constants: called from compiled code, as the
-    # tracker calls them, they are the tracker's own specialisations (loaded from the cache);
-    # called from Python, each would be compiled again for a plain bool (about 9 CPU-s)
-    @numba.njit
-    def theta_series(POLY, tt, TH, n):
-        lanes.theta(POLY, tt, TH, True, n)
-
-    @numba.njit
-    def features_of_pairs(X, U, F, n):
-        lanes.features(X, U, F, 2.0, False, n)
-
-    @numba.njit
-    def combine_both(TH, F, out0, out1, n):  # the tracker's level 0 (const) and level 1 (add)
-        lanes.combine(TH, 0, F, out0, True, False, n)
-        lanes.combine(TH, 1, F, out1, False, True, n)
 
     W = lanes.LANES
     few = lanes.VECTOR_LANES - 1
@@ -530,18 +514,20 @@ def test_lane_kernels_give_the_same_bits_in_both_loop_orders():
 
     def theta(n):
         TH = np.zeros((3, 2, 6, lanes.NTH, W))
-        theta_series(POLY, tt, TH, n)
+        lanes.theta(POLY, tt, TH, n)
         return (TH,)
 
     both(theta)
     TH = theta(W)[0]
-    X, U, CH = rng.normal(size=(3, 2, 8, W))
+    X, U, CH, R = rng.normal(size=(4, 2, 8, W))
 
     def feats(n):
         F = np.zeros((2, lanes.NF, W))
-        features_of_pairs(X, U, F, n)
-        out0, out1 = np.zeros((2, 8, W)), np.zeros((2, 8, W))
-        combine_both(TH, F, out0, out1, n)
+        lanes.features(X, U, F, 2.0, n)
+        out0, out1 = np.zeros((2, 8, W)), R.copy()
+        lanes.const_rows(F, out0, n)  # the tracker's level 0 (its constant parts first) ...
+        lanes.combine(TH[0], F, out0, n)
+        lanes.combine(TH[1], F, out1, n)  # ... and level 1 (added to what is there)
         return F, out0, out1
 
     both(feats)

@@ -223,12 +223,13 @@ def path_coefficients(par, k, POLY, ln):
 
 
 @njit(**_O)
-def theta(POLY, tt, TH, series, n):
+def theta(POLY, tt, TH, n):
     """The leg coefficients ``theta(t)`` of every lane at its ``tt[ln]`` into ``TH[0]`` (3, 2, 6,
-    17, L) from their polynomials ``POLY`` (:func:`path_coefficients`); with ``series`` also
-    ``theta'(t)`` into ``TH[1]`` and ``theta''/2`` into ``TH[2]`` (the Taylor coefficients of
-    ``theta(t + s)``). Where only ``c`` moves, the others' higher coefficients are 0 and they keep
-    their values exactly. One short loop over the lanes per coefficient."""
+    17, L) from their polynomials ``POLY`` (:func:`path_coefficients`), ``theta'(t)`` into
+    ``TH[1]`` and ``theta''/2`` into ``TH[2]`` (the Taylor coefficients of ``theta(t + s)``; Newton
+    on a target system reads ``TH[0]`` alone, and the two rows it does not need cost less than a
+    second compiled form). Where only ``c`` moves, the others' higher coefficients are 0 and they
+    keep their values exactly. One short loop over the lanes per coefficient."""
     for ri in range(2):
         for leg in range(6):
             for j in range(NTH):
@@ -236,12 +237,11 @@ def theta(POLY, tt, TH, series, n):
                     t = tt[ln]
                     a1, a2 = POLY[1, ri, leg, j, ln], POLY[2, ri, leg, j, ln]
                     TH[0, ri, leg, j, ln] = POLY[0, ri, leg, j, ln] + t * (a1 + t * a2)
-                if series:
-                    for ln in range(n):
-                        t = tt[ln]
-                        a1, a2 = POLY[1, ri, leg, j, ln], POLY[2, ri, leg, j, ln]
-                        TH[1, ri, leg, j, ln] = a1 + 2.0 * t * a2
-                        TH[2, ri, leg, j, ln] = a2
+                for ln in range(n):
+                    t = tt[ln]
+                    a1, a2 = POLY[1, ri, leg, j, ln], POLY[2, ri, leg, j, ln]
+                    TH[1, ri, leg, j, ln] = a1 + 2.0 * t * a2
+                    TH[2, ri, leg, j, ln] = a2
 
 
 # ------------------------------------------------------------------------------ features
@@ -328,8 +328,8 @@ _EB = (0, 1, 2, 3, 1, 2, 3, 2, 3, 3)
 
 
 @njit(**_O)
-def features(U, V, F, scale, add, n):
-    """``F (+)= scale phi(u, v)`` in lanes ``< n`` (``U, V`` (2, 8, L), ``F`` (2, 19, L)): the
+def features(U, V, F, scale, n):
+    """``F = scale phi(u, v)`` in lanes ``< n`` (``U, V`` (2, 8, L), ``F`` (2, 19, L)): the
     polarised features of the bilinear forms ``u^T Q v``, in this order: ``st = (u_e.v_g +
     u_g.v_e)/2`` (the Study quadric), ``gg = u_g.v_g``, then the feature of each coefficient:
     ``u_e.v_e`` (of c), ``D`` (of d), ``X`` (of s) and those of the entries of ``S'``.
@@ -337,97 +337,100 @@ def features(U, V, F, scale, add, n):
     (vectorised); a few: one lane at a time."""
     if n < VECTOR_LANES:
         for ln in range(n):
-            _put(F, 0, ln, _f_st(U, V, ln), scale, add)
-            _put(F, 1, ln, _f_sum4(U, V, 4, ln), scale, add)
-            _put(F, 2, ln, _f_sum4(U, V, 0, ln), scale, add)
+            _put(F, 0, ln, _f_st(U, V, ln), scale, False)
+            _put(F, 1, ln, _f_sum4(U, V, 4, ln), scale, False)
+            _put(F, 2, ln, _f_sum4(U, V, 0, ln), scale, False)
             for a in range(1, 4):
-                _put(F, 2 + a, ln, _f_d(U, V, a, ln), scale, add)
+                _put(F, 2 + a, ln, _f_d(U, V, a, ln), scale, False)
             for a in range(3):
-                _put(F, 6 + a, ln, _f_x(U, V, a, ln), scale, add)
+                _put(F, 6 + a, ln, _f_x(U, V, a, ln), scale, False)
             for j in range(10):
-                _put(F, 9 + j, ln, _f_e(U, V, _EA[j], _EB[j], ln), scale, add)
+                _put(F, 9 + j, ln, _f_e(U, V, _EA[j], _EB[j], ln), scale, False)
         return
     for ln in range(n):
-        _put(F, 0, ln, _f_st(U, V, ln), scale, add)
+        _put(F, 0, ln, _f_st(U, V, ln), scale, False)
     for ln in range(n):
-        _put(F, 1, ln, _f_sum4(U, V, 4, ln), scale, add)
+        _put(F, 1, ln, _f_sum4(U, V, 4, ln), scale, False)
     for ln in range(n):
-        _put(F, 2, ln, _f_sum4(U, V, 0, ln), scale, add)
+        _put(F, 2, ln, _f_sum4(U, V, 0, ln), scale, False)
     for a in range(1, 4):
         for ln in range(n):
-            _put(F, 2 + a, ln, _f_d(U, V, a, ln), scale, add)
+            _put(F, 2 + a, ln, _f_d(U, V, a, ln), scale, False)
     for a in range(3):
         for ln in range(n):
-            _put(F, 6 + a, ln, _f_x(U, V, a, ln), scale, add)
+            _put(F, 6 + a, ln, _f_x(U, V, a, ln), scale, False)
     for j in range(10):
         a, b = _EA[j], _EB[j]
         for ln in range(n):
-            _put(F, 9 + j, ln, _f_e(U, V, a, b, ln), scale, add)
+            _put(F, 9 + j, ln, _f_e(U, V, a, b, ln), scale, False)
 
 
 @njit(inline="always", **_O)
-def _comb_start(out, F, m, ln, const, add):
-    """A leg row's sum before its terms: what ``out`` holds where ``add``, plus ``gg`` where
-    ``const``."""
-    s0 = out[0, m, ln] if add else 0.0
-    s1 = out[1, m, ln] if add else 0.0
-    return s0 + (F[0, 1, ln] if const else 0.0), s1 + (F[1, 1, ln] if const else 0.0)
+def const_rows(F, out, n):
+    """The parts of ``H`` without a coefficient, as the rows' first terms: ``out[0] = st`` (the
+    Study quadric), ``out[1 + leg] = gg``; row 7 is not touched. (``0.0 +``: the value
+    :func:`combine` always started from, so the same bits, a zero's sign included.)"""
+    for ln in range(n):
+        out[0, 0, ln] = 0.0 + F[0, 0, ln]
+        out[1, 0, ln] = 0.0 + F[1, 0, ln]
+    for m in range(1, 7):
+        for ln in range(n):
+            out[0, m, ln] = 0.0 + F[0, 1, ln]
+            out[1, m, ln] = 0.0 + F[1, 1, ln]
 
 
 @njit(inline="always", **_O)
-def _comb_row0(out, F, ln, const, add):
-    if const:
-        out[0, 0, ln] = (out[0, 0, ln] if add else 0.0) + F[0, 0, ln]
-        out[1, 0, ln] = (out[1, 0, ln] if add else 0.0) + F[1, 0, ln]
-    elif not add:
-        out[0, 0, ln] = 0.0
-        out[1, 0, ln] = 0.0
+def accumulate(F, G, n):
+    """``F += G`` over the features (``F, G`` (2, 19, W)): a sum of two features' terms formed
+    apart, so that :func:`features` has one form (``F = scale phi``), compiled once."""
+    for ri in range(2):
+        for f in range(NF):
+            for ln in range(n):
+                F[ri, f, ln] = F[ri, f, ln] + G[ri, f, ln]
 
 
+# The flags and levels these functions once took were constants at every call site, and numba
+# compiles a function called from compiled code once per *literal* argument: features twice,
+# combine three times, theta twice. One form each, with the level's slice of ``TH`` passed in,
+# compiles each once (docs/kernels.md, "One compiled form per tracker function").
 @njit(**_O)
-def combine(TH, lev, F, out, const, add, n):
-    """``out[1 + leg] (+)= theta_{lev, leg} . phi`` (the coefficients of level ``lev`` times the
-    features ``F`` (2, 19, L)), plus with ``const`` the parts without a coefficient: ``gg`` on the
-    leg rows and ``st`` on row 0 (the Study quadric). Row 0 is set to 0 where neither ``const`` nor
-    ``add``; row 7 is not touched. ``out`` (2, 8, L). The terms are added in the order of the
-    coefficients, whichever loop order runs (the same bits)."""
+def combine(THl, F, out, n):
+    """``out[1 + leg] += theta_leg . phi`` (``THl`` (2, 6, 17, L) one level of the coefficients,
+    the features ``F`` (2, 19, L)); rows 0 and 7 are not touched. ``out`` (2, 8, L). The terms are
+    added in the order of the coefficients, whichever loop order runs (the same bits)."""
     if n < VECTOR_LANES:
         for ln in range(n):
-            _comb_row0(out, F, ln, const, add)
             for leg in range(6):
                 m = 1 + leg
-                sr, si = _comb_start(out, F, m, ln, const, add)
+                sr, si = out[0, m, ln] + 0.0, out[1, m, ln] + 0.0
                 for j in range(NTH):
-                    a, b = TH[lev, 0, leg, j, ln], TH[lev, 1, leg, j, ln]
+                    a, b = THl[0, leg, j, ln], THl[1, leg, j, ln]
                     fr, fi = F[0, 2 + j, ln], F[1, 2 + j, ln]
                     sr = sr + (a * fr - b * fi)
                     si = si + (a * fi + b * fr)
                 out[0, m, ln] = sr
                 out[1, m, ln] = si
         return
-    for ln in range(n):
-        _comb_row0(out, F, ln, const, add)
     for leg in range(6):
         m = 1 + leg
         for ln in range(n):
-            sr, si = _comb_start(out, F, m, ln, const, add)
-            out[0, m, ln] = sr
-            out[1, m, ln] = si
+            out[0, m, ln] = out[0, m, ln] + 0.0
+            out[1, m, ln] = out[1, m, ln] + 0.0
         for j in range(NTH):
             for ln in range(n):
-                a, b = TH[lev, 0, leg, j, ln], TH[lev, 1, leg, j, ln]
+                a, b = THl[0, leg, j, ln], THl[1, leg, j, ln]
                 fr, fi = F[0, 2 + j, ln], F[1, 2 + j, ln]
                 out[0, m, ln] = out[0, m, ln] + (a * fr - b * fi)
                 out[1, m, ln] = out[1, m, ln] + (a * fi + b * fr)
 
 
 @njit(**_O)
-def combine_c(TH, lev, F, out, n):
-    """``out[1 + leg] += c_{lev, leg} e.e``: :func:`combine` of a level whose only non-zero
-    coefficient is the leg constant (the fibre homotopy: only ``c`` moves)."""
+def combine_c(THl, F, out, n):
+    """``out[1 + leg] += c_leg e.e``: :func:`combine` of a level whose only non-zero coefficient
+    is the leg constant (the fibre homotopy: only ``c`` moves)."""
     for leg in range(6):
         for ln in range(n):
-            a, b = TH[lev, 0, leg, 0, ln], TH[lev, 1, leg, 0, ln]
+            a, b = THl[0, leg, 0, ln], THl[1, leg, 0, ln]
             out[0, 1 + leg, ln] += a * F[0, 2, ln] - b * F[1, 2, ln]
             out[1, 1 + leg, ln] += a * F[1, 2, ln] + b * F[0, 2, ln]
 
@@ -623,8 +626,9 @@ def chart_row(CH, X, out, n):
 def residual(TH, X, CH, F, out, n):
     """``out`` (2, 8, W) = ``H(x)``: the Study quadric, the legs ``x^T Q(theta) x``, the chart;
     ``F`` (2, 19, W) scratch (left holding ``phi(x, x)``)."""
-    features(X, X, F, 1.0, False, n)
-    combine(TH, 0, F, out, True, False, n)
+    features(X, X, F, 1.0, n)
+    const_rows(F, out, n)
+    combine(TH[0], F, out, n)
     chart_row(CH, X, out, n)
 
 
@@ -823,37 +827,42 @@ def _higher(TH, FS, k, R, moving, n):
     """Add ``theta' . F_{k-1} + theta''/2 . F_{k-2}`` (the parameters' motion) to ``R``; only the
     leg constants where the anchors do not move."""
     if moving:
-        combine(TH, 1, FS[k - 1], R, False, True, n)
+        combine(TH[1], FS[k - 1], R, n)
         if k >= 2:
-            combine(TH, 2, FS[k - 2], R, False, True, n)
+            combine(TH[2], FS[k - 2], R, n)
     else:
-        combine_c(TH, 1, FS[k - 1], R, n)
+        combine_c(TH[1], FS[k - 1], R, n)
         if k >= 2:
-            combine_c(TH, 2, FS[k - 2], R, n)
+            combine_c(TH[2], FS[k - 2], R, n)
 
 
 @njit(inline="always", **_O)
-def _series(U, V, F, scale, add, moving, n):
+def _series(U, V, F, scale, add, moving, n, G):
     """A term of the features' series that only the parameters' motion reads (a pair with
-    ``x_0``): every feature where the anchors move, ``e.e`` alone where only ``c`` does."""
+    ``x_0``): every feature where the anchors move (added through the scratch ``G``), ``e.e``
+    alone where only ``c`` does."""
     if moving:
-        features(U, V, F, scale, add, n)
+        if add:
+            features(U, V, G, scale, n)
+            accumulate(F, G, n)
+        else:
+            features(U, V, F, scale, n)
         return
     for ln in range(n):
         _put(F, 2, ln, _f_sum4(U, V, 0, ln), scale, add)
 
 
 @njit(inline="always", **_O)
-def taylor(TH, T, A, L, piv, D, FS, Fx, R, Wk, moving, n):
+def taylor(TH, T, A, L, piv, D, FS, Fx, Fy, R, Wk, moving, n):
     """Taylor coefficients ``T[1..4]`` of the path through ``T[0]`` (each lane at its ``t``,
     ``TH`` its coefficients' series there) with the LU ``A, L, piv, D`` of the Jacobian. The
     coefficient of ``s^k`` in ``H(x(t+s), t+s)`` is ``J x_k + r_k`` with ``r_k`` the sum over
     ``l = 0, 1, 2`` of ``theta_l . F_{k-l}`` (``F_m = sum_{i+j=m} phi(x_i, x_j)``, the
     features' series, and without the ``x_0, x_k`` terms for ``l = 0``), so ``J x_k = -r_k``.
-    ``FS`` (4, 2, 19, W) holds ``F_0 .. F_3``, ``Fx`` (2, 19, W) and ``R`` (2, 8, W) scratch."""
+    ``FS`` (4, 2, 19, W) holds ``F_0 .. F_3``, ``Fx, Fy`` (2, 19, W) and ``R`` (2, 8, W) scratch."""
     # where only the leg constants move, the parameters' terms read only e.e: the features of
     # the pairs with x_0 are needed for that one alone
-    _series(T[0], T[0], FS[0], 1.0, False, moving, n)
+    _series(T[0], T[0], FS[0], 1.0, False, moving, n, Fy)
     # k = 1: the parameters' motion only
     for m in range(8):
         for ln in range(n):
@@ -862,25 +871,29 @@ def taylor(TH, T, A, L, piv, D, FS, Fx, R, Wk, moving, n):
     _higher(TH, FS, 1, R, moving, n)
     _negate_rhs(R, n)
     solve(A, L, piv, D, R, T[1], Wk, n)
-    _series(T[0], T[1], FS[1], 2.0, False, moving, n)
+    _series(T[0], T[1], FS[1], 2.0, False, moving, n, Fy)
     # k = 2
-    features(T[1], T[1], FS[2], 1.0, False, n)
-    combine(TH, 0, FS[2], R, True, False, n)
+    features(T[1], T[1], FS[2], 1.0, n)
+    const_rows(FS[2], R, n)
+    combine(TH[0], FS[2], R, n)
     _higher(TH, FS, 2, R, moving, n)
     _negate_rhs(R, n)
     solve(A, L, piv, D, R, T[2], Wk, n)
-    _series(T[0], T[2], FS[2], 2.0, True, moving, n)
+    _series(T[0], T[2], FS[2], 2.0, True, moving, n, Fy)
     # k = 3
-    features(T[1], T[2], FS[3], 2.0, False, n)
-    combine(TH, 0, FS[3], R, True, False, n)
+    features(T[1], T[2], FS[3], 2.0, n)
+    const_rows(FS[3], R, n)
+    combine(TH[0], FS[3], R, n)
     _higher(TH, FS, 3, R, moving, n)
     _negate_rhs(R, n)
     solve(A, L, piv, D, R, T[3], Wk, n)
-    _series(T[0], T[3], FS[3], 2.0, True, moving, n)
+    _series(T[0], T[3], FS[3], 2.0, True, moving, n, Fy)
     # k = 4
-    features(T[1], T[3], Fx, 2.0, False, n)
-    features(T[2], T[2], Fx, 1.0, True, n)
-    combine(TH, 0, Fx, R, True, False, n)
+    features(T[1], T[3], Fx, 2.0, n)
+    features(T[2], T[2], Fy, 1.0, n)
+    accumulate(Fx, Fy, n)
+    const_rows(Fx, R, n)
+    combine(TH[0], Fx, R, n)
     _higher(TH, FS, 4, R, moving, n)
     _negate_rhs(R, n)
     solve(A, L, piv, D, R, T[4], Wk, n)
@@ -1107,6 +1120,7 @@ def track_queue(par, starts, item_k, item_j, opts, moving, patch, out_x, out_ok,
     DX = np.zeros((2, 8, W))
     FS = np.zeros((4, 2, NF, W))
     Fx = np.zeros((2, NF, W))
+    Fy = np.zeros((2, NF, W))
     nrm = np.zeros((3, W))
     t1 = np.zeros(W)
     acc = np.zeros(W)
@@ -1122,7 +1136,7 @@ def track_queue(par, starts, item_k, item_j, opts, moving, patch, out_x, out_ok,
         for ln in range(n):
             t1[ln] = min(S[_T, ln] + S[_DT, ln], 1.0)
             final |= t1[ln] >= 1.0
-        theta(POLY, t1, TH, True, n)
+        theta(POLY, t1, TH, n)
         jacobian(TH, X, CH, A, n)
         rows_half(A, X, H, n)
         chart_row(CH, X, H, n)
@@ -1151,7 +1165,7 @@ def track_queue(par, starts, item_k, item_j, opts, moving, patch, out_x, out_ok,
             for i in range(8):
                 for ln in range(n):
                     T2[0, a, i, ln] = T[0, a, i, ln]
-        taylor(TH, T2, A, Lm, piv, D, FS, Fx, H, Wk, moving, n)
+        taylor(TH, T2, A, Lm, piv, D, FS, Fx, Fy, H, Wk, moving, n)
         for ln in range(n):
             if acc[ln] == 1.0:
                 for o in range(1, 5):
@@ -1254,7 +1268,7 @@ def newton_queue(par, x, item_k, charts, iters, out_x, out_beta, out_jn, out_qn)
                 X[0, i, ln], X[1, i, ln] = x[p, i].real, x[p, i].imag
                 CH[0, i, ln], CH[1, i, ln] = charts[p, i].real, charts[p, i].imag
             path_coefficients(par, k, POLY, ln)  # the target: par[k]'s t^0 (the rest is 0)
-        theta(POLY, tt, TH, False, n)
+        theta(POLY, tt, TH, n)
         for it in range(iters + 1):
             jacobian(TH, X, CH, A, n)
             rows_half(A, X, H, n)
