@@ -462,6 +462,52 @@ def test_a_geometry_called_again_builds_its_start_system(random_mechs):
     np.testing.assert_array_equal(later.poses, reference.poses[1])  # the fibre: the same bits
 
 
+def test_far_from_real_decides_only_what_the_full_reality_test_decides(
+    mech, random_mechs, monkeypatch
+):
+    """The reality test's shortcut (a solution farther from every real point than its certified
+    radius is not real, with no Newton in a real chart) changes no result: every array of the
+    answer is the same bits with the shortcut switched off (every solution through the full test),
+    on Dietmaier's platform (40 real: it marks none) and on random ones (where it marks most of the
+    solutions the full test calls not real)."""
+    pytest.importorskip("numba")
+    from parakin import kernels
+    from parakin.kernels import stewart66_track as track
+
+    if not kernels.enabled():
+        pytest.skip("compiled kernels switched off")
+    rng = np.random.default_rng(17)
+    cases = [(mech, np.asarray(DIETMAIER_LENGTHS)[None])]
+    cases += [(m, m.ik(study.random_pose(rng, 3, m))) for m in random_mechs[:3]]
+    shortcut = track._far_from_real
+    marked = []
+
+    def counted(x, beta, alpha, idx, far):
+        shortcut(x, beta, alpha, idx, far)
+        marked.append(int(far.sum()))
+
+    def off(x, beta, alpha, idx, far):
+        far[:] = False
+
+    for m, q in cases:
+        m.fk_all(q[0])
+        m.fk_all(q[0])  # a geometry's first single call takes another path (the fibre after)
+        marked.clear()
+        monkeypatch.setattr(track, "_far_from_real", counted)
+        fast = m.fk_all(q, return_info=True)
+        monkeypatch.setattr(track, "_far_from_real", off)
+        full = m.fk_all(q, return_info=True)
+        for k, v in vars(fast).items():
+            if isinstance(v, np.ndarray):
+                assert v.tobytes() == getattr(full, k).tobytes(), k
+        not_real = int((fast.n_found - fast.n_real - fast.n_undecided).sum())
+        assert sum(marked) <= not_real  # it never marks a real or an undecided solution ...
+        if m is mech:
+            assert sum(marked) == 0 and fast.n_real == 40
+        else:
+            assert sum(marked) >= 0.9 * not_real > 0  # ... and it marks most of the others
+
+
 def test_many_geometries_in_one_batch_are_deterministic():
     """fk_all_geometries: every input its own geometry, all paths side by side; the same bits as
     one call per geometry and whatever the thread count."""
