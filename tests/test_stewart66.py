@@ -537,6 +537,37 @@ def test_many_geometries_in_one_batch_are_deterministic():
         fk_all_geometries(b[:, :5], p, q)
 
 
+def test_a_fibre_step_moves_only_the_leg_constants():
+    """On a fibre (a known geometry: only the leg constants move), a step evaluates the leg
+    constants' coefficients alone (``theta_c``); the others, written once per path
+    (``_lane_constants``), are the same bits as :func:`theta` gives at any ``t`` in [0, 1]
+    (their higher terms are signed zeros), and ``theta_c`` is ``theta``'s leg constants."""
+    numba = pytest.importorskip("numba")
+    from parakin.kernels import stewart66_lanes as lanes
+
+    @numba.njit
+    def fibre_theta(POLY, tt, TH, n):
+        lanes.theta_c(POLY, tt, TH, n)
+        for ln in range(n):
+            lanes._lane_constants(POLY, TH, ln)
+
+    W = lanes.LANES
+    rng = np.random.default_rng(18)
+    par = np.zeros((W, 3, 6, 7), complex)  # a fibre: anchors at rest, leg constants on a segment
+    par[:, 0] = rng.normal(size=(W, 6, 7)) + 1j * rng.normal(size=(W, 6, 7))
+    par[:, 1:, :, 6] = rng.normal(size=(W, 2, 6)) + 1j * rng.normal(size=(W, 2, 6))
+    par[: W // 2, 0, :, :6] *= -1  # signed zeros of both signs in the products
+    POLY = np.zeros((3, 2, 6, lanes.NTH, W))
+    for ln in range(W):
+        lanes.path_coefficients(par, ln, POLY, ln)
+    tt = np.concatenate([[0.0, 1.0], rng.uniform(size=W - 2)])
+    full, fibre = np.zeros((2, 3, 2, 6, lanes.NTH, W))
+    lanes.theta(POLY, tt, full, W)
+    fibre_theta(POLY, tt, fibre, W)
+    assert full[0].tobytes() == fibre[0].tobytes()  # every coefficient, at every lane's t
+    assert full[1:, :, :, 0].tobytes() == fibre[1:, :, :, 0].tobytes()  # the leg constants' series
+
+
 def test_lane_kernels_give_the_same_bits_in_both_loop_orders():
     """Each function of the lane tracker runs with the lanes innermost (vectorised) for many lanes
     and one lane at a time for a few: the same operations in the same order in a lane, so the same

@@ -244,6 +244,35 @@ def theta(POLY, tt, TH, n):
                     TH[2, ri, leg, j, ln] = a2
 
 
+@njit(inline="always", **_O)
+def theta_c(POLY, tt, TH, n):
+    """:func:`theta` of the leg constants alone (``j = 0``), the only coefficients that move on a
+    fibre (a known geometry). The others' values at any ``t >= 0`` are the same bits as at
+    ``t = 0`` (their higher terms are signed zeros), written once per path by
+    :func:`_lane_constants`; a fibre step reads no other coefficient's ``theta'`` or
+    ``theta''``."""
+    for ri in range(2):
+        for leg in range(6):
+            for ln in range(n):
+                t = tt[ln]
+                a1, a2 = POLY[1, ri, leg, 0, ln], POLY[2, ri, leg, 0, ln]
+                TH[0, ri, leg, 0, ln] = POLY[0, ri, leg, 0, ln] + t * (a1 + t * a2)
+                TH[1, ri, leg, 0, ln] = a1 + 2.0 * t * a2
+                TH[2, ri, leg, 0, ln] = a2
+
+
+@njit(inline="always", **_O)
+def _lane_constants(POLY, TH, ln):
+    """Lane ``ln``'s coefficients other than the leg constants at ``t = 0`` (:func:`theta`'s
+    expression), for the steps of a fibre (:func:`theta_c`)."""
+    t = 0.0
+    for ri in range(2):
+        for leg in range(6):
+            for j in range(1, NTH):
+                a1, a2 = POLY[1, ri, leg, j, ln], POLY[2, ri, leg, j, ln]
+                TH[0, ri, leg, j, ln] = POLY[0, ri, leg, j, ln] + t * (a1 + t * a2)
+
+
 # ------------------------------------------------------------------------------ features
 @njit(inline="always", **_O)
 def _pp(U, V, a, b, ln):
@@ -1030,7 +1059,7 @@ def next_step(S, tau, err, acc, opts, n):
 
 # ------------------------------------------------------------------------------ a queue of paths
 @njit(inline="always", **_O)
-def _load(S, T, flag, POLY, ln, p, item_k, item_j, starts, par, opts):
+def _load(S, T, flag, POLY, TH, ln, p, item_k, item_j, starts, par, opts):
     """Lane ``ln`` takes queue entry ``p``: start solution ``item_j[p]`` (scaled to norm 1) on
     input ``item_k[p]``'s parameter path ``par[k]`` (3, 6, 7), at ``t = 0`` with a zero step."""
     k, j = item_k[p], item_j[p]
@@ -1046,6 +1075,7 @@ def _load(S, T, flag, POLY, ln, p, item_k, item_j, starts, par, opts):
             T[o, 0, i, ln] = 0.0
             T[o, 1, i, ln] = 0.0
     path_coefficients(par, k, POLY, ln)
+    _lane_constants(POLY, TH, ln)
     S[_T, ln] = 0.0
     S[_DT, ln] = 0.0
     S[_OM, ln] = opts[4]
@@ -1070,7 +1100,7 @@ def _finish(S, T, ln, ok, patch, out_x, out_ok, out_steps):
 
 
 @njit(inline="always", **_O)
-def _move(S, T, flag, POLY, src, dst):
+def _move(S, T, flag, POLY, TH, src, dst):
     """Lane ``src``'s path (its state, Taylor coefficients, flags and parameters) into lane
     ``dst``: the active lanes stay ``0 .. n - 1``, so that the loops run over them only."""
     for r in range(_NS):
@@ -1086,6 +1116,7 @@ def _move(S, T, flag, POLY, src, dst):
             for leg in range(6):
                 for j in range(NTH):
                     POLY[o, a, leg, j, dst] = POLY[o, a, leg, j, src]
+    _lane_constants(POLY, TH, dst)
 
 
 @njit(**_O)
@@ -1128,7 +1159,7 @@ def track_queue(par, starts, item_k, item_j, opts, moving, patch, out_x, out_ok,
     err = np.zeros(W)
     n = min(W, P)
     for ln in range(n):
-        _load(S, T, flag, POLY, ln, ln, item_k, item_j, starts, par, opts)
+        _load(S, T, flag, POLY, TH, ln, ln, item_k, item_j, starts, par, opts)
     nxt = n
     while n > 0:
         predict(T, S, flag, X, CH, n)
@@ -1136,7 +1167,10 @@ def track_queue(par, starts, item_k, item_j, opts, moving, patch, out_x, out_ok,
         for ln in range(n):
             t1[ln] = min(S[_T, ln] + S[_DT, ln], 1.0)
             final |= t1[ln] >= 1.0
-        theta(POLY, t1, TH, n)
+        if moving:
+            theta(POLY, t1, TH, n)
+        else:
+            theta_c(POLY, t1, TH, n)
         jacobian(TH, X, CH, A, n)
         rows_half(A, X, H, n)
         chart_row(CH, X, H, n)
@@ -1181,12 +1215,12 @@ def track_queue(par, starts, item_k, item_j, opts, moving, patch, out_x, out_ok,
                 continue
             _finish(S, T, ln, done, patch, out_x, out_ok, out_steps)
             if nxt < P:
-                _load(S, T, flag, POLY, ln, nxt, item_k, item_j, starts, par, opts)
+                _load(S, T, flag, POLY, TH, ln, nxt, item_k, item_j, starts, par, opts)
                 nxt += 1
             else:
                 n -= 1
                 if ln != n:
-                    _move(S, T, flag, POLY, n, ln)
+                    _move(S, T, flag, POLY, TH, n, ln)
 
 
 # ------------------------------------------------------------------------------ Newton in lanes
