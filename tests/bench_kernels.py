@@ -97,6 +97,33 @@ def test_stewart66_new_geometry_per_call(benchmark):
     assert res.complete and res.n_found == 40
 
 
+@pytest.mark.parametrize("batch", [1, 100], ids=["one-input-per-call", "batch-of-100"])
+def test_stewart66_same_geometry(benchmark, batch):
+    """Inputs on a known geometry (its start system built before the clock: a platform reused),
+    one per call or 100 in one call, each along its fibre; random poses on one random platform.
+    One numba thread. ``extra_info``: milliseconds per input."""
+    from parakin.mechanisms.stewart66 import random_platform, random_pose
+    from parakin.timing import one_thread
+
+    rng = np.random.default_rng(5)
+    mech = random_platform(rng)
+    q = mech.ik(random_pose(rng, 2000, mech))
+    mech.fk_all(q[:2])  # the start system, and compiles
+    rows = iter(range(0, len(q), batch))
+
+    def setup():
+        i = next(rows)
+        return (q[i] if batch == 1 else q[i : i + batch],), {}
+
+    with one_thread():
+        res = benchmark.pedantic(
+            lambda legs: mech.fk_all(legs, return_info=True), setup=setup, rounds=19, iterations=1
+        )
+    if benchmark.stats is not None:
+        benchmark.extra_info["ms_per_input"] = 1e3 * benchmark.stats.stats.median / batch
+    assert np.all(res.complete)
+
+
 def _iteration_parts():
     """Compiled loops that call one part of a Newton iteration ``reps`` times on one pose (the
     pose moves by a rounding-size amount each time, so that no call can be hoisted out)."""
