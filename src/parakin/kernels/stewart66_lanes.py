@@ -1059,6 +1059,29 @@ def next_step(S, tau, err, acc, opts, n):
 
 # ------------------------------------------------------------------------------ a queue of paths
 @njit(inline="always", **_O)
+def _leg_constants(par, k, POLY, ln):
+    """Lane ``ln``'s leg constants' coefficients from input ``k``'s path (as
+    :func:`path_coefficients` sets them)."""
+    for o in range(3):
+        for leg in range(6):
+            POLY[o, 0, leg, 0, ln] = par[k, o, leg, 6].real
+            POLY[o, 1, leg, 0, ln] = par[k, o, leg, 6].imag
+
+
+@njit(inline="always", **_O)
+def _same_anchors(par, k, k2):
+    """Whether inputs ``k`` and ``k2`` have the same anchors on their paths (bit for bit)."""
+    if k == k2:
+        return True
+    for o in range(3):
+        for leg in range(6):
+            for c in range(6):
+                if par[k, o, leg, c] != par[k2, o, leg, c]:
+                    return False
+    return True
+
+
+@njit(inline="always", **_O)
 def _load(S, T, flag, POLY, TH, ln, p, item_k, item_j, starts, par, opts):
     """Lane ``ln`` takes queue entry ``p``: start solution ``item_j[p]`` (scaled to norm 1) on
     input ``item_k[p]``'s parameter path ``par[k]`` (3, 6, 7), at ``t = 0`` with a zero step."""
@@ -1074,8 +1097,13 @@ def _load(S, T, flag, POLY, TH, ln, p, item_k, item_j, starts, par, opts):
         for o in range(1, 5):
             T[o, 0, i, ln] = 0.0
             T[o, 1, i, ln] = 0.0
-    path_coefficients(par, k, POLY, ln)
-    _lane_constants(POLY, TH, ln)
+    # A path with the anchors of the lane's last path (a known geometry: every path of the call)
+    # has the same coefficients but the leg constants' (the same bits): only those are set.
+    if S[_ACT, ln] == 1.0 and _same_anchors(par, k, item_k[int(S[_ITEM, ln])]):
+        _leg_constants(par, k, POLY, ln)
+    else:
+        path_coefficients(par, k, POLY, ln)
+        _lane_constants(POLY, TH, ln)
     S[_T, ln] = 0.0
     S[_DT, ln] = 0.0
     S[_OM, ln] = opts[4]
