@@ -262,6 +262,16 @@ def theta_c(POLY, tt, TH, n):
 
 
 @njit(inline="always", **_O)
+def theta_step(POLY, tt, TH, moving, n):
+    """A step's coefficients at each lane's ``tt``: :func:`theta` where the anchors move,
+    :func:`theta_c` on a fibre."""
+    if moving:
+        theta(POLY, tt, TH, n)
+    else:
+        theta_c(POLY, tt, TH, n)
+
+
+@njit(inline="always", **_O)
 def _lane_constants(POLY, TH, ln):
     """Lane ``ln``'s coefficients other than the leg constants at ``t = 0`` (:func:`theta`'s
     expression), for the steps of a fibre (:func:`theta_c`)."""
@@ -1195,10 +1205,7 @@ def track_queue(par, starts, item_k, item_j, opts, moving, patch, out_x, out_ok,
         for ln in range(n):
             t1[ln] = min(S[_T, ln] + S[_DT, ln], 1.0)
             final |= t1[ln] >= 1.0
-        if moving:
-            theta(POLY, t1, TH, n)
-        else:
-            theta_c(POLY, t1, TH, n)
+        theta_step(POLY, t1, TH, moving, n)
         jacobian(TH, X, CH, A, n)
         rows_half(A, X, H, n)
         chart_row(CH, X, H, n)
