@@ -222,6 +222,19 @@ def path_coefficients(par, k, POLY, ln):
         _store_s(POLY, 2, leg, ln, b1, p1)
 
 
+@njit(inline="always", **_O)
+def _theta0(POLY, ri, leg, j, ln, t):
+    """``theta_j(t)`` of lane ``ln`` (one expression for :func:`theta`, :func:`theta_c` and
+    :func:`_lane_constants`: the same bits)."""
+    return POLY[0, ri, leg, j, ln] + t * (POLY[1, ri, leg, j, ln] + t * POLY[2, ri, leg, j, ln])
+
+
+@njit(inline="always", **_O)
+def _theta1(POLY, ri, leg, j, ln, t):
+    """``theta_j'(t)`` of lane ``ln``."""
+    return POLY[1, ri, leg, j, ln] + 2.0 * t * POLY[2, ri, leg, j, ln]
+
+
 @njit(**_O)
 def theta(POLY, tt, TH, n):
     """The leg coefficients ``theta(t)`` of every lane at its ``tt[ln]`` into ``TH[0]`` (3, 2, 6,
@@ -234,14 +247,10 @@ def theta(POLY, tt, TH, n):
         for leg in range(6):
             for j in range(NTH):
                 for ln in range(n):
-                    t = tt[ln]
-                    a1, a2 = POLY[1, ri, leg, j, ln], POLY[2, ri, leg, j, ln]
-                    TH[0, ri, leg, j, ln] = POLY[0, ri, leg, j, ln] + t * (a1 + t * a2)
+                    TH[0, ri, leg, j, ln] = _theta0(POLY, ri, leg, j, ln, tt[ln])
                 for ln in range(n):
-                    t = tt[ln]
-                    a1, a2 = POLY[1, ri, leg, j, ln], POLY[2, ri, leg, j, ln]
-                    TH[1, ri, leg, j, ln] = a1 + 2.0 * t * a2
-                    TH[2, ri, leg, j, ln] = a2
+                    TH[1, ri, leg, j, ln] = _theta1(POLY, ri, leg, j, ln, tt[ln])
+                    TH[2, ri, leg, j, ln] = POLY[2, ri, leg, j, ln]
 
 
 @njit(inline="always", **_O)
@@ -254,11 +263,9 @@ def theta_c(POLY, tt, TH, n):
     for ri in range(2):
         for leg in range(6):
             for ln in range(n):
-                t = tt[ln]
-                a1, a2 = POLY[1, ri, leg, 0, ln], POLY[2, ri, leg, 0, ln]
-                TH[0, ri, leg, 0, ln] = POLY[0, ri, leg, 0, ln] + t * (a1 + t * a2)
-                TH[1, ri, leg, 0, ln] = a1 + 2.0 * t * a2
-                TH[2, ri, leg, 0, ln] = a2
+                TH[0, ri, leg, 0, ln] = _theta0(POLY, ri, leg, 0, ln, tt[ln])
+                TH[1, ri, leg, 0, ln] = _theta1(POLY, ri, leg, 0, ln, tt[ln])
+                TH[2, ri, leg, 0, ln] = POLY[2, ri, leg, 0, ln]
 
 
 @njit(inline="always", **_O)
@@ -275,12 +282,10 @@ def theta_step(POLY, tt, TH, moving, n):
 def _lane_constants(POLY, TH, ln):
     """Lane ``ln``'s coefficients other than the leg constants at ``t = 0`` (:func:`theta`'s
     expression), for the steps of a fibre (:func:`theta_c`)."""
-    t = 0.0
     for ri in range(2):
         for leg in range(6):
             for j in range(1, NTH):
-                a1, a2 = POLY[1, ri, leg, j, ln], POLY[2, ri, leg, j, ln]
-                TH[0, ri, leg, j, ln] = POLY[0, ri, leg, j, ln] + t * (a1 + t * a2)
+                TH[0, ri, leg, j, ln] = _theta0(POLY, ri, leg, j, ln, 0.0)
 
 
 # ------------------------------------------------------------------------------ features

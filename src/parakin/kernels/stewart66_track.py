@@ -411,8 +411,8 @@ def _reality(target, x, beta, alpha, keep, iters: int, threads: int):
     """The certified reality test of every kept solution: ``(y (n, M, 8), decision (n, M))``
     (0 where not kept). A solution far from every real point (:func:`_far_from_real`) is not
     real (-1; its ``y`` is NaN); the others are refined by Newton in the real chart of their
-    largest coordinate and decided by :func:`_decide`. (On random platforms most of the 40 are far:
-    the Newton runs on the few near, a tenth of a single call's time.)"""
+    largest coordinate and decided by :func:`_decide`. (On random platforms most of the 40 are far,
+    and the Newton runs on the few near ones.)"""
     n, M = keep.shape
     flat = np.flatnonzero(keep.ravel())
     xf = x.reshape(-1, 8)
