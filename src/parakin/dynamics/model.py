@@ -285,6 +285,12 @@ class BodyMotion:
         return jet.vmatvec(r, jet.vmatvec(i, local))
 
 
+def free_platform(origin: Jet, rotation: Jet) -> BodyGroup:
+    """The moving platform: one free body hung from the world, its frame at ``origin``
+    (..., 1, 3) with ``rotation`` (..., 1, 3, 3) (a group of one)."""
+    return BodyGroup("platform", ("platform",), ("world",), "free", origin, rotation=rotation)
+
+
 def frame_with_z(axis: Array) -> Array:
     """A rotation (..., 3, 3) whose third column is the unit ``axis`` (..., 3) (its turn about the
     axis is arbitrary: for bodies whose spin is idle)."""
@@ -377,14 +383,7 @@ def hexapod(origin: Jet, rotation: Jet, base: ArrayLike, top_local: ArrayLike) -
     )
     count = top.shape[-2]
     (cylinders, pistons), closure, lengths = strut(base, top, ("platform",) * count)
-    platform = BodyGroup(
-        "platform",
-        ("platform",),
-        ("world",),
-        "free",
-        origin[..., None, :],
-        rotation=rotation[..., None, :, :],
-    )
+    platform = free_platform(origin[..., None, :], rotation[..., None, :, :])
     return Bodies((platform, cylinders, pistons), lengths, pistons.names, (closure,))
 
 

@@ -1176,20 +1176,11 @@ class Described(Mechanism, register=False):
         its arm), and the rods of both, S-S links to the platform (:func:`rods`). The joints are
         the IK's, on each leg's branch, as jets."""
         import parakin.dynamics.jet as dj
-        from parakin.dynamics.model import Bodies, BodyGroup
+        from parakin.dynamics.model import Bodies, free_platform
 
         origin, rotation = self._platform_jets(pose)
         tops = origin[..., None, :] + dj.matvec(rotation[..., None, :, :], self.anchor_points)
-        groups = [
-            BodyGroup(
-                "platform",
-                ("platform",),
-                ("world",),
-                "free",
-                origin[..., None, :],
-                rotation=rotation[..., None, :, :],
-            )  # fmt: skip
-        ]
+        groups = [free_platform(origin[..., None, :], rotation[..., None, :, :])]
         closures = []
         drives: _Drives = {}
         ends: _Ends = []
@@ -1200,18 +1191,16 @@ class Described(Mechanism, register=False):
             groups += struts
             closures.append(closure)
             drives.update(more)
-        slider = np.flatnonzero(types == "slider-rod")
-        if slider.size:
-            group, more, lower = self._slider_bodies(pose, tops, slider)
-            groups.append(group)
-            drives.update(more)
-            ends += lower
-        crank = np.flatnonzero(types == "crank-rod")
-        if crank.size:
-            group, more, lower = self._crank_bodies(pose, tops, crank)
-            groups.append(group)
-            drives.update(more)
-            ends += lower
+        # the legs whose rods end on a driven body: that body's group, its joints and the rods'
+        # lower ends (the rods themselves are one group, below)
+        driven = {"slider-rod": self._slider_bodies, "crank-rod": self._crank_bodies}
+        for kind, bodies in driven.items():
+            legs = np.flatnonzero(types == kind)
+            if legs.size:
+                group, more, lower = bodies(pose, tops, legs)
+                groups.append(group)
+                drives.update(more)
+                ends += lower
         if ends:
             rod_group, closure = self._rod_bodies(tops, ends)
             groups.append(rod_group)

@@ -370,7 +370,7 @@ class P3P4S(Mechanism):
         of each parallelogram, from ``c_i +- (d/2) t_i`` on the slider to ``d_i +- (d/2) t_i`` on
         the platform (``t_i`` the horizontal edge direction): S-S links."""
         import parakin.dynamics.jet as dj
-        from parakin.dynamics.model import Bodies, BodyGroup, rods
+        from parakin.dynamics.model import Bodies, BodyGroup, free_platform, rods
 
         w = pose[..., None, :] - self.delta * self.e
         b = dj.dot(w, self.m)
@@ -388,9 +388,7 @@ class P3P4S(Mechanism):
         )
         eye = lambda k: dj.constant_like(np.broadcast_to(np.eye(3), (*batch, k, 3, 3)), pose)  # noqa: E731
         groups = (
-            BodyGroup(
-                "platform", ("platform",), ("world",), "free", pose[..., None, :], rotation=eye(1)
-            ),
+            free_platform(pose[..., None, :], eye(1)),
             BodyGroup(
                 "slider",
                 names,

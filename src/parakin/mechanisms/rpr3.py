@@ -27,7 +27,14 @@ from numpy.typing import ArrayLike
 
 import parakin.dynamics.jet as dj
 from parakin.dynamics.jet import Jet
-from parakin.dynamics.model import Bodies, BodyGroup, Closure, MassModel, hexapod_masses
+from parakin.dynamics.model import (
+    Bodies,
+    BodyGroup,
+    Closure,
+    MassModel,
+    free_platform,
+    hexapod_masses,
+)
 from parakin.kernels import Kernel, evaluate
 from parakin.kernels import rpr3 as kernels
 from parakin.mechanisms.base import Array, Mechanism, Skeleton, as_batch
@@ -210,7 +217,7 @@ class RPR3(Mechanism):
         pistons = tuple(f"piston{k}" for k in (1, 2, 3))
         base = dj.constant_like(np.broadcast_to(self._in_space(self.base), (*batch, 3, 3)), pose)
         groups = (
-            BodyGroup("platform", ("platform",), ("world",), "free", origin, rotation=turn),
+            free_platform(origin, turn),
             BodyGroup(
                 "cylinder",
                 cylinders,

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Iterator
 
 import numpy as np
 
@@ -389,6 +390,13 @@ def _tri_centre(c: Tri) -> Tri:
     return getattr(c, "centre", c)
 
 
+def _gradients(ctx, a: Node, b: Node) -> Iterator[tuple[Interval, Interval]]:
+    """Per coordinate of the box, the gradient bounds of ``a`` and ``b`` (0 for a node without)."""
+    zero = Interval(0.0)
+    for k in range(len(ctx.half)):
+        yield (a.d[k] if a.d else zero), (b.d[k] if b.d else zero)
+
+
 def _where(cond, a, b) -> Node:
     nodes = [v for v in (a, b) if isinstance(v, Node)]
     if not nodes:
@@ -400,11 +408,8 @@ def _where(cond, a, b) -> Node:
     cv = _pick(Tri.of(_tri_centre(cond)), a.cv, b.cv)
     if a.d is None and b.d is None:
         return Node(val, cv, None, ctx)
-    zero = Interval(0.0)
     grad = []
-    for k in range(len(ctx.half)):
-        da = a.d[k] if a.d else zero
-        db = b.d[k] if b.d else zero
+    for da, db in _gradients(ctx, a, b):
         g = _pick(c, da, db)
         # a branch switch inside the box: no gradient bound (a jump, or a NaN side)
         switch = c.maybe & ~c.yes
@@ -424,11 +429,8 @@ def _maximum(a, b) -> Node:
     cv = Interval(np.maximum(a.cv.lo, b.cv.lo), np.maximum(a.cv.hi, b.cv.hi))
     if a.d is None and b.d is None:
         return Node(val, cv, None, ctx)
-    zero = Interval(0.0)
     grad = []
-    for k in range(len(ctx.half)):
-        da = a.d[k] if a.d else zero
-        db = b.d[k] if b.d else zero
+    for da, db in _gradients(ctx, a, b):
         h = _hull(da, db)
         grad.append(Interval(np.where(first.yes, da.lo, np.where(second.yes, db.lo, h.lo)),
                              np.where(first.yes, da.hi, np.where(second.yes, db.hi, h.hi))))  # fmt: skip

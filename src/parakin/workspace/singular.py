@@ -98,9 +98,10 @@ def _pairs(shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _bisect(region: Region, p0: np.ndarray, p1: np.ndarray, test) -> tuple[np.ndarray, ...]:
-    """Bisect the segments ``p0 -> p1`` ``(K, dim)`` on ``test(values) -> (side, defined)``
-    (``side`` True on p0's side; a bracket whose midpoint is not ``defined`` is dropped). Returns
-    both ends of the final brackets and whether each stayed well defined."""
+    """Bisect the segments ``p0 -> p1`` ``(K, dim)`` on ``test(values, rows) -> (side, defined)``
+    (the values at the midpoints of brackets ``rows``; ``side`` True on p0's side; a bracket whose
+    midpoint is not ``defined`` is dropped). Returns both ends of the final brackets and whether
+    each stayed well defined."""
     a, b = p0.copy(), p1.copy()
     alive = np.ones(len(a), dtype=bool)
     for _ in range(_STEPS):
@@ -108,8 +109,8 @@ def _bisect(region: Region, p0: np.ndarray, p1: np.ndarray, test) -> tuple[np.nd
         moving = alive & np.any((mid != a) & (mid != b), axis=-1)
         if not np.any(moving):
             break
-        side, defined = test(_evaluate(region, mid[moving]))
         rows = np.flatnonzero(moving)
+        side, defined = test(_evaluate(region, mid[rows]), rows)
         alive[rows[~defined]] = False
         keep = rows[defined]
         s = side[defined]
@@ -169,7 +170,7 @@ def locate(region: Region, pts: np.ndarray, values: dict[str, np.ndarray] | None
         inside = np.where(ok[ia[edge]], ia[edge], ib[edge])
         outside = np.where(ok[ia[edge]], ib[edge], ia[edge])
 
-        def test(e):
+        def test(e, rows):
             return e["ok"], np.ones(len(e["ok"]), dtype=bool)
 
         a, b, alive = _bisect(region, flat[inside], flat[outside], test)
@@ -181,20 +182,9 @@ def locate(region: Region, pts: np.ndarray, values: dict[str, np.ndarray] | None
 def _bisect_det(region: Region, p0, p1, m: str, s0: np.ndarray):
     """:func:`_bisect` on the sign of det ``m`` (``s0`` its sign at ``p0``), keeping both ends in
     the IK's domain (a midpoint without an IK drops the bracket)."""
-    a, b = p0.copy(), p1.copy()
-    alive = np.ones(len(a), dtype=bool)
-    for _ in range(_STEPS):
-        mid = 0.5 * (a + b)
-        moving = alive & np.any((mid != a) & (mid != b), axis=-1)
-        if not np.any(moving):
-            break
-        rows = np.flatnonzero(moving)
-        e = _evaluate(region, mid[rows])
+
+    def test(e, rows):
         d = e[f"det_{m}"]
-        defined = e["ok"] & np.isfinite(d)
-        alive[rows[~defined]] = False
-        keep = rows[defined]
-        same = np.sign(d[defined]) == s0[keep]  # det 0 exactly: counted on b's side
-        a[keep[same]] = mid[keep[same]]
-        b[keep[~same]] = mid[keep[~same]]
-    return a, b, alive
+        return np.sign(d) == s0[rows], e["ok"] & np.isfinite(d)  # det 0 exactly: on b's side
+
+    return _bisect(region, p0, p1, test)
