@@ -136,6 +136,19 @@ def _range(text: str, where: str, unit: str = "") -> tuple[float, float]:
     return a, b
 
 
+def _ranges(mech, values, option: str, lo, hi, axes, not_there: str) -> tuple:
+    """Copies of ``lo, hi`` with the ``option KEY=LO:HI`` ranges set, each ``KEY`` one of the
+    coordinates ``axes`` (indices of the pose); another coordinate is an error (``not_there``)."""
+    names = mech.pose_names
+    lo, hi = lo.copy(), hi.copy()
+    for key, text in _pairs(values, option, names, "pose coordinate").items():
+        k = names.index(key)
+        if k not in axes:
+            raise ValueError(f"{option} {key}: {not_there}")
+        lo[axes.index(k)], hi[axes.index(k)] = _range(text, f"{option} {key}", mech.pose_units[k])
+    return lo, hi
+
+
 def region_of(args, mech):
     """The :class:`parakin.workspace.Region` the options describe."""
     from parakin.workspace import make_region
@@ -161,29 +174,14 @@ def region_of(args, mech):
                 f"--at {key}: an axis of the workspace ({', '.join(region.axis_names)}), not a "
                 "held coordinate; set its range with --box"
             )
-    boxed = _pairs(args.box, "--box", names, "pose coordinate")
-    lo, hi = region.lo.copy(), region.hi.copy()
-    for key, text in boxed.items():
-        k = names.index(key)
-        if k not in region.axes:
-            raise ValueError(
-                f"--box {key}: not an axis of the workspace ({', '.join(region.axis_names)})"
-            )
-        lo[region.axes.index(k)], hi[region.axes.index(k)] = _range(
-            text, f"--box {key}", mech.pose_units[k]
-        )
-    olo, ohi = region.orient_lo.copy(), region.orient_hi.copy()
-    for key, text in _pairs(
-        args.orientation_box, "--orientation-box", names, "pose coordinate"
-    ).items():
-        k = names.index(key)
-        if k not in region.others:
-            raise ValueError(
-                f"--orientation-box {key}: an axis of the workspace, not a held coordinate"
-            )
-        olo[region.others.index(k)], ohi[region.others.index(k)] = _range(
-            text, f"--orientation-box {key}", mech.pose_units[k]
-        )
+    lo, hi = _ranges(
+        mech, args.box, "--box", region.lo, region.hi, region.axes,
+        f"not an axis of the workspace ({', '.join(region.axis_names)})",
+    )  # fmt: skip
+    olo, ohi = _ranges(
+        mech, args.orientation_box, "--orientation-box", region.orient_lo, region.orient_hi,
+        region.others, "an axis of the workspace, not a held coordinate",
+    )  # fmt: skip
     joints = _pairs(args.joint_limit, "--joint-limit", mech.joint_names, "joint")
     changes = {"lo": lo, "hi": hi, "orient_lo": olo, "orient_hi": ohi}
     if joints:
@@ -195,7 +193,7 @@ def region_of(args, mech):
             k = mech.joint_names.index(key)
             jlo[k], jhi[k] = _range(text, f"--joint-limit {key}", mech.joint_units[k])
         changes.update(joint_lo=jlo, joint_hi=jhi, limits_source="given")
-    return region.replace(**changes), bool(boxed)
+    return region.replace(**changes), bool(args.box)
 
 
 def cmd_workspace(args) -> int:

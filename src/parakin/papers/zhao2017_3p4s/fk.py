@@ -1131,6 +1131,14 @@ def hybrid_speed_claims(t: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
     saved = b["median_time_us"] - (parts["median_time_us"] - guess["median_time_us"])
     quantity = "hybrid.time_ratio_vs_quasi_newton"
     printed = printed_value(ref, "conclusion", quantity)
+
+    def time_reading(ratio: float, meaning: str, reason: str) -> Claim:
+        """One reading of the time ratio (both carry the same evidence)."""
+        return Claim(
+            KEY, "conclusion", quantity, printed, float(ratio), "1", meaning, reason=reason,
+            evidence=evidence,
+        )  # fmt: skip
+
     return [
         Claim(
             KEY,
@@ -1145,33 +1153,21 @@ def hybrid_speed_claims(t: pd.DataFrame, ref: pd.DataFrame) -> list[Claim]:
             "iterations; on time per solve the claim does not survive (hybrid.time_ratio_vs_quasi_newton)",
             evidence=evidence,
         ),
-        Claim(
-            KEY,
-            "conclusion",
-            quantity,
-            printed,
-            float(b["median_time_us"] / h["median_time_us"]),
-            "1",
+        time_reading(
+            b["median_time_us"] / h["median_time_us"],
             "median time per solve, Broyden from home / the hybrid as run (its reachability check "
             "included), timed in turns in one run",
-            reason=f"{measured}: most of the hybrid's time is its reachability check and call "
+            f"{measured}: most of the hybrid's time is its reachability check and call "
             "overhead, which the like-for-like reading leaves out",
-            evidence=evidence,
         ),
-        Claim(
-            KEY,
-            "conclusion",
-            quantity,
-            printed,
-            float(b["median_time_us"] / parts["median_time_us"]),
-            "1",
+        time_reading(
+            b["median_time_us"] / parts["median_time_us"],
             "like for like: median time per solve, Broyden from home / the network's guess then "
             "Broyden (no reachability check), timed in turns in one run",
-            reason=f"{measured}: the saved iterations are worth about as much as the guess (they "
+            f"{measured}: the saved iterations are worth about as much as the guess (they "
             f"save about {saved:.0f} µs of the Broyden call, the guess costs "
             f"{guess['median_time_us']:.0f} µs), so the ratio sits near 1 and on which side depends "
             "on the machine; the paper does not give its implementation's costs",
-            evidence=evidence,
         ),
     ]
 
