@@ -17,7 +17,7 @@ from parakin.solvers.gauss_newton import jacobian_init, secant_step
 from parakin.solvers.newton import newton_direction, solve_linear
 from parakin.solvers.result import Evaluator, Plan, State, StepInfo, inf_norm, iterative
 
-__all__ = ["BROYDEN_UPDATES", "bfgs", "broyden"]
+__all__ = ["BROYDEN_UPDATES", "bfgs", "bfgs_step", "broyden", "gradient_jtr"]
 
 
 def _dot(a: Array, b: Array) -> Array:
@@ -160,7 +160,19 @@ def _backtrack(
     return alpha, x, r, found
 
 
-def _bfgs_step(c1: float, shrink: float, maxls: int) -> Callable[..., tuple[State, StepInfo]]:
+def gradient_jtr(ev: Evaluator, x: Array, rows: NDArray[np.intp], r: Array) -> Array:
+    """The gradient ``J^T r`` of ``|r|^2 / 2`` at ``x`` (one Jacobian evaluation)."""
+    return _matvec(np.swapaxes(ev.jacobian(x, rows), -1, -2), r)
+
+
+def bfgs_step(
+    c1: float, shrink: float, maxls: int, gradient: Callable[..., Array] = gradient_jtr
+) -> Callable[..., tuple[State, StepInfo]]:
+    """One batched BFGS iteration (direction ``-H g``, steepest descent where that is not
+    downhill, Armijo backtracking, the inverse update), the new gradient by
+    ``gradient(ev, x, rows, r)`` (the library's: :func:`gradient_jtr`; the paper's variants in
+    :mod:`parakin.papers.zhao2017_3p4s.bfgs_variants` also take finite differences)."""
+
     def step(ev: Evaluator, rows: NDArray[np.intp], s: State) -> tuple[State, StepInfo]:
         g, h = s["g"], s["H"]
         p = -_matvec(h, g)
@@ -170,11 +182,10 @@ def _bfgs_step(c1: float, shrink: float, maxls: int) -> Callable[..., tuple[Stat
         slope[uphill] = -_dot(g[uphill], g[uphill])
         alpha, x, r, found = _backtrack(ev, rows, s, p, slope, c1, shrink, maxls)
         d = np.where(found[:, None], alpha[:, None] * p, 0.0)
-        # gradient at the new iterate (one Jacobian evaluation where a step was taken)
+        # gradient at the new iterate (where a step was taken)
         g_new = g.copy()
         if found.any():
-            jac = ev.jacobian(x[found], rows[found])
-            g_new[found] = _matvec(np.swapaxes(jac, -1, -2), r[found])
+            g_new[found] = gradient(ev, x[found], rows[found], r[found])
         # inverse update, N&W eq. (6.17), skipped unless y^T d > sqrt(eps) |y| |d| (curvature)
         y = g_new - g
         yd = _dot(y, d)
@@ -229,4 +240,4 @@ def bfgs(
     "iteration error") or gradient inf-norm ``<= gtol`` (both off at 0). ``xtol``/``gtol``
     accept a stationary point as success, as scipy does: check ``residual`` where it matters.
     """
-    return Plan(_bfgs_step(c1, shrink, maxls), init=_bfgs_init(reg))
+    return Plan(bfgs_step(c1, shrink, maxls), init=_bfgs_init(reg))

@@ -25,7 +25,8 @@ from numpy.typing import NDArray
 
 from parakin.kernels.methods import DEFAULTS
 from parakin.mechanisms.base import Array, Mechanism
-from parakin.solvers.result import Evaluator, FKResult, StepInfo, inf_norm, iterate
+from parakin.solvers.quasi_newton import bfgs_step, gradient_jtr
+from parakin.solvers.result import Evaluator, FKResult, iterate
 from parakin.solvers.verify import default_joint_tol, verify
 
 __all__ = ["FD_STEP", "GRADIENTS", "STARTS", "bfgs_variant", "numerical_gradient"]
@@ -45,14 +46,6 @@ FD_STEP = {
 
 def _dot(a: Array, b: Array) -> Array:
     return np.einsum("...i,...i->...", a, b)
-
-
-def _matvec(a: Array, b: Array) -> Array:
-    return np.einsum("...ij,...j->...i", a, b)
-
-
-def _outer(a: Array, b: Array) -> Array:
-    return a[..., :, None] * b[..., None, :]
 
 
 def numerical_gradient(
@@ -80,11 +73,7 @@ def numerical_gradient(
 
 def _gradient(gradient: str):
     if gradient == "analytic":
-
-        def analytic(ev: Evaluator, x: Array, rows: NDArray[np.intp], r: Array) -> Array:
-            return _matvec(np.swapaxes(ev.jacobian(x, rows), -1, -2), r)
-
-        return analytic
+        return gradient_jtr
     return lambda ev, x, rows, r: numerical_gradient(ev, x, rows, r, gradient)
 
 
@@ -101,52 +90,6 @@ def _init(start: str, grad, reg: float):
         return {"g": grad(ev, s["x"], rows, s["r"]), "H": h}
 
     return init
-
-
-def _step(grad, c1: float, shrink: float, maxls: int):
-    def step(ev: Evaluator, rows: NDArray[np.intp], s: dict):
-        g, h = s["g"], s["H"]
-        p = -_matvec(h, g)
-        slope = _dot(g, p)
-        uphill = ~(slope < 0)  # H lost positive definiteness to rounding: steepest descent
-        p[uphill] = -g[uphill]
-        slope[uphill] = -_dot(g[uphill], g[uphill])
-        f0 = 0.5 * _dot(s["r"], s["r"])
-        alpha = np.ones(len(rows))
-        x, r = s["x"].copy(), s["r"].copy()
-        found = np.zeros(len(rows), dtype=bool)
-        todo = np.arange(len(rows))
-        for _ in range(maxls):  # Armijo backtracking (N&W Alg. 3.1), as the library's BFGS
-            xt = s["x"][todo] + alpha[todo, None] * p[todo]
-            rt = ev.residual(xt, rows[todo])
-            ok = 0.5 * _dot(rt, rt) <= f0[todo] + c1 * alpha[todo] * slope[todo]
-            x[todo[ok]], r[todo[ok]], found[todo[ok]] = xt[ok], rt[ok], True
-            todo = todo[~ok]
-            if todo.size == 0:
-                break
-            alpha[todo] *= shrink
-        d = np.where(found[:, None], alpha[:, None] * p, 0.0)
-        g_new = g.copy()
-        if found.any():
-            g_new[found] = grad(ev, x[found], rows[found], r[found])
-        y = g_new - g
-        yd = _dot(y, d)
-        update = yd > np.sqrt(np.finfo(float).eps) * np.linalg.norm(y, axis=-1) * np.linalg.norm(
-            d, axis=-1
-        )
-        rho = np.where(update, 1.0 / np.where(update, yd, 1.0), 0.0)
-        hy = _matvec(h, y)
-        h_new = (
-            h
-            - rho[:, None, None] * (_outer(d, hy) + _outer(hy, d))
-            + (rho**2 * _dot(y, hy) + rho)[:, None, None] * _outer(d, d)
-        )
-        return (
-            {"x": x, "r": r, "g": g_new, "H": h_new},
-            StepInfo(step=inf_norm(alpha[:, None] * p), grad=inf_norm(g_new), stalled=~found),
-        )
-
-    return step
 
 
 def bfgs_variant(
@@ -175,7 +118,7 @@ def bfgs_variant(
         mech,
         q,
         x,
-        step=_step(grad, DEFAULTS["c1"], DEFAULTS["shrink"], int(DEFAULTS["maxls"])),
+        step=bfgs_step(DEFAULTS["c1"], DEFAULTS["shrink"], int(DEFAULTS["maxls"]), gradient=grad),
         init=_init(start, grad, DEFAULTS["reg"]),
         tol=tol,
         maxiter=maxiter,
