@@ -151,6 +151,7 @@ def check_drawing(draw, frame: pd.DataFrame, path: Path) -> list[str]:
     return [p for texts in figures for p in text_problems(texts, width, height)]
 
 
+@pytest.mark.slow  # a figure comparison: every figure of the record drawn again (about 30 CPU-s)
 @pytest.mark.parametrize("folder, png, csv, draw", DRAWN)
 def test_committed_figure_is_drawn_from_its_table_with_readable_text(
     tmp_path, folder, png, csv, draw

@@ -543,6 +543,7 @@ print(int(ok.sum()), int(m36.on_assembly(np.array([s.x for s in r])[ok], q[ok]).
 """
 
 
+@pytest.mark.slow  # fresh processes that compile
 def test_kernels_sharing_functions_keep_their_own_entries():
     """The 6-6's kernel takes the 3-6's functions but not its assembly test: a process that loads
     both kernels' cached entries (the second run here) verifies each solve by its own kernel (once,

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 import pandas as pd
+import pytest
 
 from parakin import registry
 from parakin.check import compare_file
@@ -172,6 +173,7 @@ def _workdir(tmp_path: Path) -> Path:
     return tmp_path
 
 
+@pytest.mark.slow  # snakemake in a fresh process
 def test_fresh_clone_schedules_every_artefact(tmp_path):
     """Nothing counts as done because it is committed: a dry run on a fresh tree plans every rule."""
     work = _workdir(tmp_path)
@@ -217,6 +219,7 @@ def test_every_artefact_is_made_by_one_job_and_small_ones_share_their_module_s()
     assert [j.items for j in jobs if heavy in j.items] == [(heavy,)]
 
 
+@pytest.mark.slow  # a pipeline run: snakemake in a fresh process
 def test_a_toy_study_runs_from_one_registration_line(tmp_path):
     """A new mechanism with its own paper: one line in the config's `studies`, nothing else shared."""
     work = _workdir(tmp_path)
