@@ -386,9 +386,16 @@ CELLS = [
 ]
 
 
-#: one scratch folder for the whole module, removed at exit (a folder per example used to be
-#: left in the temporary directory: thousands after a few suite runs)
+#: one scratch folder for the whole module, removed when its tests end (a folder per example used
+#: to be left in the temporary directory: thousands after a few suite runs; removed at exit, it
+#: added a second to the end of the run)
 _SCRATCH = tempfile.TemporaryDirectory(prefix="parakin-fuzz-")
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _scratch_removed_after_the_module():
+    yield
+    _SCRATCH.cleanup()
 
 
 @st.composite
