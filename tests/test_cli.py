@@ -374,3 +374,21 @@ def test_fk_json_says_when_wall_time_includes_compiling(capsys, monkeypatch):
     assert (
         "startup" in out and out["startup_note"] is None
     )  # numpy path (few inputs): nothing loaded
+
+
+def test_the_parser_is_built_once_and_a_patched_command_still_runs(capsys, monkeypatch):
+    """``main`` builds its parser once per process and looks each command's function up by name
+    when it runs: a command replaced after the parser was built is the one that runs, and the
+    original again once the replacement is undone."""
+    from parakin import cli
+    from parakin.cli import kinematics
+
+    argv = ["ik", "3p4s", "--pose", "0", "0", "0.592"]
+    assert main(argv) == 0
+    assert cli._parser() is cli._parser()
+    monkeypatch.setattr(kinematics, "cmd_ik", lambda args: 7)
+    assert main(argv) == 7
+    monkeypatch.undo()
+    capsys.readouterr()
+    assert main(argv) == 0
+    assert "l1 = 0.4315827775 m" in capsys.readouterr().out
