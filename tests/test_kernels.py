@@ -555,3 +555,47 @@ def test_kernels_sharing_functions_keep_their_own_entries():
         )
         successes, on_assembly = map(int, out.stdout.split())
         assert successes > 0 and on_assembly == successes
+
+
+def test_functions_declared_at_an_llvm_level_compile_at_it_and_others_at_numbas(monkeypatch):
+    """``store.share_compiles(..., llvm_level=)`` (the 6-6 tracker's modules declare 2): such a
+    function compiles at that level, and a function it calls, or that calls it, at numba's own;
+    numba's level is restored after."""
+    numba = pytest.importorskip("numba")
+    from numba.core import config, event
+
+    from parakin.kernels import store
+
+    monkeypatch.delenv("NUMBA_OPT", raising=False)
+
+    @numba.njit
+    def theirs(x):
+        return x + 1.0
+
+    @numba.njit
+    def ours(x):
+        return theirs(x) * 2.0
+
+    @numba.njit
+    def outer(x):
+        return ours(x) - 1.0
+
+    store.share_compiles({"ours": ours}, llvm_level=1)
+    numba_level = int(config.OPT)
+    seen = {}
+
+    class Probe(event.Listener):
+        def on_start(self, ev):
+            seen[ev.data["dispatcher"].py_func.__name__] = int(config.OPT)
+
+        def on_end(self, ev):
+            pass
+
+    probe = Probe()
+    event.register("numba:compile", probe)
+    try:
+        assert outer(1.0) == 3.0
+    finally:
+        event.unregister("numba:compile", probe)
+    assert seen == {"outer": numba_level, "ours": 1, "theirs": numba_level}
+    assert int(config.OPT) == numba_level

@@ -55,6 +55,7 @@ import stat
 import sys
 import threading
 import uuid
+import weakref
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from functools import cache
@@ -396,6 +397,34 @@ def numba_cache(path: Path) -> Iterator[None]:
             numba.config.CACHE_DIR = old
 
 
+#: numba functions compiled at an LLVM optimisation level of their own (:func:`share_compiles`)
+_LEVELS: weakref.WeakKeyDictionary[Any, int] = weakref.WeakKeyDictionary()
+
+
+@cache
+def _compile_levels() -> None:
+    """Compile each function of :data:`_LEVELS` at its LLVM level, every other at numba's own.
+    numba reads its level (``numba.config.OPT``) each time it builds LLVM's passes, so a listener
+    of its compile events sets the level for the compile of such a function and restores it
+    after. A compile runs under numba's compiler lock, one at a time; a function compiled inside
+    another's compile (a callee) gets its own level, or numba's."""
+    import numba.core.event as ev
+    from numba.core import config
+
+    saved: list[Any] = []
+
+    class Level(ev.Listener):
+        def on_start(self, event: Any) -> None:
+            saved.append(config.OPT)
+            level = _LEVELS.get(event.data["dispatcher"])
+            config.OPT = saved[0] if level is None else type(config.OPT)(level)
+
+        def on_end(self, event: Any) -> None:
+            config.OPT = saved.pop()
+
+    ev.register("numba:compile", Level())
+
+
 class CacheMismatch(Exception):
     """A cached function's file is not the one asked for: another kernel's, group's or
     function's (copied or renamed into place), or one written without the tags."""
@@ -550,15 +579,22 @@ def _shared_cache() -> type:
     return SharedCache
 
 
-def share_compiles(namespace: dict[str, Any]) -> None:
+def share_compiles(namespace: dict[str, Any], *, llvm_level: int | None = None) -> None:
     """Let every ``cache=True`` numba function of ``namespace`` (a module's ``vars()``) that lies
     in numba's part of the cache be compiled by one process at a time (:func:`_shared_cache`):
     the pipeline's jobs and the test workers start on an empty cache together, and the 6-6
-    tracker alone takes over a CPU-minute to compile."""
+    tracker alone takes over a CPU-minute to compile. ``llvm_level``: LLVM's optimisation level
+    for the numba functions of ``namespace`` (numba's is 3), unless ``NUMBA_OPT`` says otherwise;
+    a level that leaves the same bits and runs as fast but compiles faster (docs/kernels.md)."""
     from numba.core.caching import FunctionCache
     from numba.core.dispatcher import Dispatcher
 
     shared = _shared_cache()
+    if llvm_level is not None and "NUMBA_OPT" not in os.environ:
+        _compile_levels()
+        for disp in namespace.values():
+            if isinstance(disp, Dispatcher):
+                _LEVELS[disp] = llvm_level
     for disp in namespace.values():
         if isinstance(disp, Dispatcher) and type(getattr(disp, "_cache", None)) is FunctionCache:
             disp._cache.__class__ = shared  # same fields, same files: only a miss changes
