@@ -42,7 +42,9 @@ before any parakin module decorates a function, so no cache lands beside the sou
 One process compiles a thing at a time: the first calls of a build's entry group
 (:func:`first_call`) and each function of numba's part (:func:`share_compiles`) hold a lock, so a
 process that needs what another is compiling waits and loads it, rather than compiling it beside
-it (the pipeline's jobs and the test workers start on an empty cache together).
+it (the pipeline's jobs and the test workers start on an empty cache together). A module may
+name the LLVM optimisation level its functions compile at (:func:`share_compiles`, the 6-6
+tracker's 2), set for their compiles only: every other function keeps numba's.
 """
 
 from __future__ import annotations
@@ -416,7 +418,10 @@ def _compile_levels() -> None:
     class Level(ev.Listener):
         def on_start(self, event: Any) -> None:
             saved.append(config.OPT)
-            level = _LEVELS.get(event.data["dispatcher"])
+            try:
+                level = _LEVELS.get(event.data.get("dispatcher"))
+            except TypeError:  # a compiler of another kind (not weakly referable): not ours
+                level = None
             config.OPT = saved[0] if level is None else type(config.OPT)(level)
 
         def on_end(self, event: Any) -> None:
