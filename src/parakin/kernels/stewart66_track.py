@@ -614,7 +614,5 @@ def _bends(retries: int) -> np.ndarray:
 
 
 # one process at a time compiles each of these functions; the others wait and load it
-# LLVM level 2 (numba's is 3): the tracker's first solve on an empty cache 51-52 against 62-66
-# CPU-s, a solve afterwards as fast (0.83-0.86 against 0.87-0.90 ms), the same bits
-# (docs/kernels.md)
+# at LLVM level 2, as the tracker's lanes (parakin.kernels.stewart66_lanes, docs/kernels.md)
 store.share_compiles(vars(), llvm_level=2)
