@@ -99,6 +99,7 @@ def _without_builds(warm: Path, tmp_path: Path) -> Path:
     return cache
 
 
+@pytest.mark.slow  # fresh processes that compile (the warm cache)
 def test_warm_cache_is_used_and_lives_in_one_directory(warm, tmp_path):
     """The second process solves from the cache; every compiled file is under the cache directory
     (kernel builds named by their hash, numba's own part in numba/), none beside the sources."""
@@ -159,6 +160,7 @@ def test_no_writable_location_runs_the_numpy_path(tmp_path, monkeypatch, caplog)
         store.root.cache_clear()
 
 
+@pytest.mark.slow  # fresh processes that compile (the warm cache)
 def test_read_only_filled_cache_falls_back_with_a_notice(warm, tmp_path):
     cache = _copy(warm, tmp_path)
     for p in [cache, *cache.rglob("*")]:
@@ -227,6 +229,7 @@ def test_a_kernel_edited_on_disk_is_never_served_stale(warm, tmp_path):
     assert len(builds) == 1 and builds[0] not in {p.name for p in warm.iterdir()}
 
 
+@pytest.mark.slow  # fresh processes that compile (the warm cache)
 def test_cli_kernels_status_and_clear(warm, tmp_path):
     cache = _copy(warm, tmp_path)
     env = _env(cache)
