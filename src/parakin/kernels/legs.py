@@ -34,6 +34,7 @@ never on the pose: the functions stay elementwise on a batch (docs/kernels.md, r
 from __future__ import annotations
 
 from parakin.kernels._math import Layout, atan2, cos, floor, kernel, nan, pi, sin, sqrt, where
+from parakin.kernels.frames import rotation_zyx
 
 #: platform types (``p[PARAMS.platform]``) and their pose sizes
 SPATIAL, TRANSLATIONAL, PLANAR = 0.0, 1.0, 2.0
@@ -79,23 +80,7 @@ def _frame(p, x):
     """``t`` (3) and the nine entries of ``R``, row by row, of pose ``x``."""
     kind = p[_PLATFORM]
     if kind == SPATIAL:
-        ca, sa = cos(x[3]), sin(x[3])
-        cb, sb = cos(x[4]), sin(x[4])
-        cc, sc = cos(x[5]), sin(x[5])
-        return (
-            x[0],
-            x[1],
-            x[2],
-            ca * cb,
-            ca * sb * sc - sa * cc,
-            ca * sb * cc + sa * sc,
-            sa * cb,
-            sa * sb * sc + ca * cc,
-            sa * sb * cc - ca * sc,
-            -sb,
-            cb * sc,
-            cb * cc,
-        )
+        return (x[0], x[1], x[2]) + rotation_zyx(x[3], x[4], x[5])
     if kind == PLANAR:
         c, s = cos(x[2]), sin(x[2])
         return x[0], x[1], 0.0 * x[0], c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0

@@ -12,6 +12,7 @@ frame (``p[0:3n]``, n x 3), then the base points (``p[3n:6n]``, n x 3).
 from __future__ import annotations
 
 from parakin.kernels._math import kernel, nan, sqrt, where
+from parakin.kernels.frames import leg_vector
 
 
 @kernel
@@ -38,19 +39,8 @@ def _rotation(x):
 @kernel
 def _leg(p, x, r, k):
     """``w = R p_j(k)`` and the leg vector ``v = M + w - b_k`` (six scalars), eq (2)."""
-    nb = 3 * (len(p) // 6)
-    a0, a1, a2 = p[3 * k], p[3 * k + 1], p[3 * k + 2]
-    w0 = r[0] * a0 + r[1] * a1 + r[2] * a2
-    w1 = r[3] * a0 + r[4] * a1 + r[5] * a2
-    w2 = r[6] * a0 + r[7] * a1 + r[8] * a2
-    return (
-        w0,
-        w1,
-        w2,
-        x[0] + w0 - p[nb + 3 * k],
-        x[1] + w1 - p[nb + 3 * k + 1],
-        x[2] + w2 - p[nb + 3 * k + 2],
-    )
+    a, b = 3 * k, 3 * (len(p) // 6) + 3 * k
+    return leg_vector(r, p[a], p[a + 1], p[a + 2], x[0], x[1], x[2], p[b], p[b + 1], p[b + 2])
 
 
 @kernel

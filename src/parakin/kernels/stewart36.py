@@ -10,6 +10,7 @@ base points (``base``, 6 x 3).
 from __future__ import annotations
 
 from parakin.kernels._math import Layout, cos, kernel, sin, sqrt
+from parakin.kernels.frames import leg_vector, rotation_zyx
 
 #: the parameter vector, by name (``Stewart36.kernel_params`` packs it; its length is checked once)
 PARAMS = Layout(platform=(6, 3), base=(6, 3))
@@ -19,37 +20,14 @@ _PLATFORM, _BASE = PARAMS.platform, PARAMS.base
 @kernel
 def _rotation(x):
     """The nine entries of ``T = Rz(alpha) Ry(beta) Rx(gamma)`` (eq 1), row by row."""
-    ca, sa = cos(x[0]), sin(x[0])
-    cb, sb = cos(x[1]), sin(x[1])
-    cc, sc = cos(x[2]), sin(x[2])
-    return (
-        ca * cb,
-        ca * sb * sc - sa * cc,
-        ca * sb * cc + sa * sc,
-        sa * cb,
-        sa * sb * sc + ca * cc,
-        sa * sb * cc - ca * sc,
-        -sb,
-        cb * sc,
-        cb * cc,
-    )
+    return rotation_zyx(x[0], x[1], x[2])
 
 
 @kernel
 def _leg(p, x, t, i):
     """``w = T a_i`` and the leg vector ``v = O_A + w - B_i`` of leg ``i`` (six scalars)."""
-    a0, a1, a2 = p[_PLATFORM + 3 * i], p[_PLATFORM + 3 * i + 1], p[_PLATFORM + 3 * i + 2]
-    w0 = t[0] * a0 + t[1] * a1 + t[2] * a2
-    w1 = t[3] * a0 + t[4] * a1 + t[5] * a2
-    w2 = t[6] * a0 + t[7] * a1 + t[8] * a2
-    return (
-        w0,
-        w1,
-        w2,
-        x[3] + w0 - p[_BASE + 3 * i],
-        x[4] + w1 - p[_BASE + 3 * i + 1],
-        x[5] + w2 - p[_BASE + 3 * i + 2],
-    )
+    a, b = _PLATFORM + 3 * i, _BASE + 3 * i
+    return leg_vector(t, p[a], p[a + 1], p[a + 2], x[3], x[4], x[5], p[b], p[b + 1], p[b + 2])
 
 
 @kernel

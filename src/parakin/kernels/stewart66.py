@@ -10,9 +10,20 @@ assembly modes apart (all 40 are answers), where the 3-6 asks for the one above 
 from __future__ import annotations
 
 from parakin.kernels._math import kernel
+from parakin.kernels.frames import leg_vector, rotation_zyx
 from parakin.kernels.stewart36 import _leg, _rotation, ik, in_domain, jacobian, residual
 
-__all__ = ["_leg", "_rotation", "ik", "in_domain", "jacobian", "on_assembly", "residual"]
+__all__ = [
+    "_leg",
+    "_rotation",
+    "ik",
+    "in_domain",
+    "jacobian",
+    "leg_vector",
+    "on_assembly",
+    "residual",
+    "rotation_zyx",
+]
 
 
 @kernel
