@@ -595,13 +595,15 @@ def share_compiles(namespace: dict[str, Any], *, llvm_level: int | None = None) 
     from numba.core.dispatcher import Dispatcher
 
     shared = _shared_cache()
-    if llvm_level is not None and "NUMBA_OPT" not in os.environ:
+    leveled = llvm_level is not None and "NUMBA_OPT" not in os.environ
+    if leveled:
         _compile_levels()
-        for disp in namespace.values():
-            if isinstance(disp, Dispatcher):
-                _LEVELS[disp] = llvm_level
     for disp in namespace.values():
-        if isinstance(disp, Dispatcher) and type(getattr(disp, "_cache", None)) is FunctionCache:
+        if not isinstance(disp, Dispatcher):
+            continue
+        if leveled:
+            _LEVELS[disp] = llvm_level
+        if type(getattr(disp, "_cache", None)) is FunctionCache:
             disp._cache.__class__ = shared  # same fields, same files: only a miss changes
 
 
