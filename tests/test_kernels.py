@@ -557,6 +557,59 @@ def test_kernels_sharing_functions_keep_their_own_entries():
         assert successes > 0 and on_assembly == successes
 
 
+def test_the_garbage_collector_pauses_while_numba_compiles_and_comes_back():
+    """``store.no_gc_while_compiling``: during a compile (its callees' included) Python's cyclic
+    collector is off; after it, on again, also after a compile that raised; a collector the user
+    turned off stays off."""
+    import gc
+
+    numba = pytest.importorskip("numba")
+    from numba.core import event
+
+    store.no_gc_while_compiling()
+    seen = []
+
+    class Probe(event.Listener):  # registered after the store's: it sees the state it left
+        def on_start(self, ev):
+            seen.append((ev.data["dispatcher"].py_func.__name__, gc.isenabled()))
+
+        def on_end(self, ev):
+            pass
+
+    @numba.njit
+    def inner(x):
+        return x + 1.0
+
+    @numba.njit
+    def outer(x):
+        return inner(x) * 2.0
+
+    @numba.njit
+    def broken(x):
+        return x.no_such_attribute
+
+    @numba.njit
+    def later(x):
+        return x - 1.0
+
+    probe = Probe()
+    event.register("numba:compile", probe)
+    was_on = gc.isenabled()
+    try:
+        gc.enable()
+        assert outer(1.0) == 4.0
+        assert seen == [("outer", False), ("inner", False)] and gc.isenabled()
+        with pytest.raises(numba.core.errors.TypingError):
+            broken(1.0)
+        assert gc.isenabled()
+        gc.disable()
+        assert later(1.0) == 0.0
+        assert not gc.isenabled()
+    finally:
+        event.unregister("numba:compile", probe)
+        (gc.enable if was_on else gc.disable)()
+
+
 def test_functions_declared_at_an_llvm_level_compile_at_it_and_others_at_numbas(monkeypatch):
     """``store.share_compiles(..., llvm_level=)`` (the 6-6 tracker's modules declare 2): such a
     function compiles at that level, and a function it calls, or that calls it, at numba's own;
