@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from contextlib import contextmanager
 
 import numpy as np
 import pandas as pd
@@ -557,69 +558,10 @@ def test_kernels_sharing_functions_keep_their_own_entries():
         assert successes > 0 and on_assembly == successes
 
 
-def test_the_garbage_collector_pauses_while_numba_compiles_and_comes_back():
-    """``store.no_gc_while_compiling``: during a compile (its callees' included) Python's cyclic
-    collector is off; after it, on again, also after a compile that raised; a collector the user
-    turned off stays off."""
-    import gc
-
+def _fresh_chain():
+    """Three numba functions not compiled yet, each calling the next: ``(theirs, ours, outer)``,
+    ``outer(x) = 2 (x + 1) - 1``."""
     numba = pytest.importorskip("numba")
-    from numba.core import event
-
-    store.no_gc_while_compiling()
-    seen = []
-
-    class Probe(event.Listener):  # registered after the store's: it sees the state it left
-        def on_start(self, ev):
-            seen.append((ev.data["dispatcher"].py_func.__name__, gc.isenabled()))
-
-        def on_end(self, ev):
-            pass
-
-    @numba.njit
-    def inner(x):
-        return x + 1.0
-
-    @numba.njit
-    def outer(x):
-        return inner(x) * 2.0
-
-    @numba.njit
-    def broken(x):
-        return x.no_such_attribute
-
-    @numba.njit
-    def later(x):
-        return x - 1.0
-
-    probe = Probe()
-    event.register("numba:compile", probe)
-    was_on = gc.isenabled()
-    try:
-        gc.enable()
-        assert outer(1.0) == 4.0
-        assert seen == [("outer", False), ("inner", False)] and gc.isenabled()
-        with pytest.raises(numba.core.errors.TypingError):
-            broken(1.0)
-        assert gc.isenabled()
-        gc.disable()
-        assert later(1.0) == 0.0
-        assert not gc.isenabled()
-    finally:
-        event.unregister("numba:compile", probe)
-        (gc.enable if was_on else gc.disable)()
-
-
-def test_functions_declared_at_an_llvm_level_compile_at_it_and_others_at_numbas(monkeypatch):
-    """``store.share_compiles(..., llvm_level=)`` (the 6-6 tracker's modules declare 2): such a
-    function compiles at that level, and a function it calls, or that calls it, at numba's own;
-    numba's level is restored after."""
-    numba = pytest.importorskip("numba")
-    from numba.core import config, event
-
-    from parakin.kernels import store
-
-    monkeypatch.delenv("NUMBA_OPT", raising=False)
 
     @numba.njit
     def theirs(x):
@@ -633,13 +575,20 @@ def test_functions_declared_at_an_llvm_level_compile_at_it_and_others_at_numbas(
     def outer(x):
         return ours(x) - 1.0
 
-    store.share_compiles({"ours": ours}, llvm_level=1)
-    numba_level = int(config.OPT)
-    seen = {}
+    return theirs, ours, outer
+
+
+@contextmanager
+def _at_compile_start(state):
+    """While the block runs, ``(function name, state())`` at the start of every numba compile (a
+    listener registered after parakin's: it sees what they set)."""
+    from numba.core import event
+
+    seen = []
 
     class Probe(event.Listener):
         def on_start(self, ev):
-            seen[ev.data["dispatcher"].py_func.__name__] = int(config.OPT)
+            seen.append((ev.data["dispatcher"].py_func.__name__, state()))
 
         def on_end(self, ev):
             pass
@@ -647,8 +596,57 @@ def test_functions_declared_at_an_llvm_level_compile_at_it_and_others_at_numbas(
     probe = Probe()
     event.register("numba:compile", probe)
     try:
-        assert outer(1.0) == 3.0
+        yield seen
     finally:
         event.unregister("numba:compile", probe)
-    assert seen == {"outer": numba_level, "ours": 1, "theirs": numba_level}
+
+
+def test_the_garbage_collector_pauses_while_numba_compiles_and_comes_back():
+    """``store.no_gc_while_compiling``: during a compile (its callees' included) Python's cyclic
+    collector is off; after it, on again, also after a compile that raised; a collector the user
+    turned off stays off."""
+    import gc
+
+    numba = pytest.importorskip("numba")
+    store.no_gc_while_compiling()
+    outer = _fresh_chain()[-1]
+
+    @numba.njit
+    def broken(x):
+        return x.no_such_attribute
+
+    @numba.njit
+    def later(x):
+        return x - 1.0
+
+    was_on = gc.isenabled()
+    try:
+        with _at_compile_start(gc.isenabled) as seen:
+            gc.enable()
+            assert outer(1.0) == 3.0
+            assert seen == [("outer", False), ("ours", False), ("theirs", False)]
+            assert gc.isenabled()
+            with pytest.raises(numba.core.errors.TypingError):
+                broken(1.0)
+            assert gc.isenabled()
+            gc.disable()
+            assert later(1.0) == 0.0
+            assert not gc.isenabled()
+    finally:
+        (gc.enable if was_on else gc.disable)()
+
+
+def test_functions_declared_at_an_llvm_level_compile_at_it_and_others_at_numbas(monkeypatch):
+    """``store.share_compiles(..., llvm_level=)`` (the 6-6 tracker's modules declare 2): such a
+    function compiles at that level, and a function it calls, or that calls it, at numba's own;
+    numba's level is restored after."""
+    from numba.core import config
+
+    monkeypatch.delenv("NUMBA_OPT", raising=False)
+    _, ours, outer = _fresh_chain()
+    store.share_compiles({"ours": ours}, llvm_level=1)
+    numba_level = int(config.OPT)
+    with _at_compile_start(lambda: int(config.OPT)) as seen:
+        assert outer(1.0) == 3.0
+    assert dict(seen) == {"outer": numba_level, "ours": 1, "theirs": numba_level}
     assert int(config.OPT) == numba_level
