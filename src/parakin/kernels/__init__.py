@@ -135,7 +135,6 @@ def _numba() -> types.ModuleType:
 
     if "NUMBA_THREADING_LAYER" not in os.environ:
         numba.config.THREADING_LAYER = "workqueue"  # no effect once a layer is running
-    _store.no_gc_while_compiling()
     return numba
 
 

@@ -440,8 +440,9 @@ def no_gc_while_compiling() -> None:
     walks the whole heap each time it grows by a quarter (27 of them in a pipeline job's first 6-6
     solve). The cycles made meanwhile are freed by the first collection after it; the peak memory
     of that solve is about 0.3 GB higher (1.04 against 0.73 GB), its compile 14 % shorter, and
-    every result the same. Registered once per process, for every numba compile in it
-    (docs/kernels.md)."""
+    every result the same. Registered once per process by :func:`share_compiles` (which every
+    compiled module of parakin, the solvers' shared drivers included, goes through), for every
+    numba compile in it (docs/kernels.md)."""
     import gc
 
     import numba.core.event as ev
