@@ -217,6 +217,13 @@ def _package(i, x, alpha, keep, y, decision, joints, geo, out):
     ``1e-8 max(1, size)``), sorted by Z descending; undecided ones (``decision`` 0, or real with a
     pose that misses the IK tolerance) counted apart."""
     poses, study, rot, trn, is_real, al, counts, ik_err = out
+    cnan = complex(np.nan, np.nan)
+    poses[i] = np.nan  # the empty slots
+    study[i] = cnan
+    rot[i] = cnan
+    trn[i] = cnan
+    is_real[i] = False
+    al[i] = np.nan
     bc, pc, s = geo[0][i], geo[1][i], geo[2][i]
     geo_i = (bc, pc, s, geo[3][i], geo[4][i])
     M = x.shape[1]
@@ -315,12 +322,12 @@ def _real_charts(x, keep_idx, out_y, out_chart):
 
 
 @njit(**_O)
-def _decide(y, beta, jn, qn, decision):
+def _decide(y, beta, jn, qn, idx, decision):
     """alphaCertified's local reality test (:func:`parakin.mechanisms.stewart66_homotopy.
     real_decision`) from Newton's refinement in a real chart: ``gamma = |J^-1|_F qn``, ``beta``
     plus a bound of the rounding error of evaluating ``F``; -1 (not real) where
     ``|Im y| > 2 beta``, +1 (real) where ``alpha <= 0.03`` and ``|Im y| <= 1/(20 gamma)``, else 0
-    (undecided, also where the Jacobian is singular)."""
+    (undecided, also where the Jacobian is singular), into ``decision[idx[p]]``."""
     for p in range(len(y)):
         im = 0.0
         yy = 0.0
@@ -331,13 +338,13 @@ def _decide(y, beta, jn, qn, decision):
         gamma = jn[p] * qn[p]
         b = beta[p] + EVAL_ULPS * gamma * yy
         if not (math.isfinite(b) and math.isfinite(gamma)):
-            decision[p] = 0
+            decision[idx[p]] = 0
         elif im > 2 * b:
-            decision[p] = -1
+            decision[idx[p]] = -1
         elif b * gamma <= ALPHA_ROBUST and 20 * gamma * im <= 1:
-            decision[p] = 1
+            decision[idx[p]] = 1
         else:
-            decision[p] = 0
+            decision[idx[p]] = 0
 
 
 # ------------------------------------------------------------------------------ the batch
@@ -384,8 +391,8 @@ def track_solutions(par, starts, patch, target, opts, moving, iters, threads):
     (K,), reached (K, M))``, ``x`` in the common ``patch``."""
     K, M = len(par), len(starts)
     P = K * M
-    item_k = np.repeat(np.arange(K), M)
-    item_j = np.tile(np.arange(M), K)
+    item = np.arange(P)
+    item_k, item_j = item // M, item % M
     x = np.empty((P, 8), np.complex128)
     ok = np.zeros(P, np.bool_)
     steps = np.zeros(P, np.int64)
@@ -424,12 +431,11 @@ def _reality(target, x, beta, alpha, keep, iters: int, threads: int):
     charts = np.empty((P, 8), np.complex128)
     _real_charts(xf, near, y0, charts)
     yk, b, jn, qn = _newton(target, y0, near // M, charts, iters, threads)
-    dk = np.zeros(P, np.int64)
-    _decide(yk, b, jn, qn, dk)
-    y = np.full((n * M, 8), complex(np.nan, np.nan))
     decision = np.zeros(n * M, np.int64)
-    decision[flat[far]] = -1
-    y[near], decision[near] = yk, dk
+    decision[flat] = -1  # far ones stay not real; :func:`_decide` decides the near ones
+    _decide(yk, b, jn, qn, near, decision)
+    y = np.empty((n * M, 8), np.complex128)  # read only where decided real (near)
+    y[near] = yk
     return y.reshape(n, M, 8), decision.reshape(n, M)
 
 
@@ -439,17 +445,23 @@ def geometry(bs, ps, c0, starts, patch, bc, pc, size, base, platform) -> tuple:
     common ``patch`` (8,), the anchors' centroids ``bc, pc`` (3,), ``size``, ``base`` and
     ``platform`` (6, 3) (metres)."""
     f8, c16 = np.float64, np.complex128
+    bc, pc = np.ascontiguousarray(bc, dtype=f8), np.ascontiguousarray(pc, dtype=f8)
+    base = np.ascontiguousarray(base, dtype=f8)
+    platform = np.ascontiguousarray(platform, dtype=f8)
     return {
         "bs": np.ascontiguousarray(bs, dtype=f8),
         "ps": np.ascontiguousarray(ps, dtype=f8),
         "c0": np.ascontiguousarray(c0, dtype=c16),
         "starts": np.ascontiguousarray(starts, dtype=c16),
         "patch": np.ascontiguousarray(patch, dtype=c16),
-        "bc": np.ascontiguousarray(bc, dtype=f8),
-        "pc": np.ascontiguousarray(pc, dtype=f8),
+        "bc": bc,
+        "pc": pc,
         "size": float(size),
-        "base": np.ascontiguousarray(base, dtype=f8),
-        "platform": np.ascontiguousarray(platform, dtype=f8),
+        "base": base,
+        "platform": platform,
+        # what :func:`package_all` reads per input, for one input (a call of one input, the
+        # common case, takes it as it is; a batch repeats it)
+        "geo1": tuple(np.array(g, dtype=f8)[None] for g in (bc, pc, size, base, platform)),
     }
 
 
@@ -488,10 +500,7 @@ def fk_all(
     n = len(c1)
     target = _target(G["bs"], G["ps"], c1)
     # the geometry repeated per input (np.repeat: a tenth of np.broadcast_to's cost in Python)
-    geo = tuple(
-        np.repeat(np.asarray(G[k], dtype=np.float64)[None], n, axis=0)
-        for k in ("bc", "pc", "size", "base", "platform")
-    )
+    geo = G["geo1"] if n == 1 else tuple(np.repeat(g, n, axis=0) for g in G["geo1"])
 
     def paths(rows, bend):
         return _fibre_paths(G, c1[rows], bend), target[rows]
@@ -546,12 +555,12 @@ def _solve(paths, starts, patch, moving, n, joints, geo, alpha0, retries, option
     parameter paths and target systems."""
     _loaded()
     joints = np.ascontiguousarray(joints, dtype=np.float64)
-    # copies, always writable: a read-only argument (one input's broadcast view is already
-    # contiguous, so ``ascontiguousarray`` kept it read-only) is another type to numba, and
+    # writable C arrays: a read-only argument (one input's broadcast view is already contiguous,
+    # so ``ascontiguousarray`` kept it read-only) is another type to numba, and
     # :func:`package_all` was compiled twice, once for single inputs and once for batches
-    geo = tuple(np.array(g, dtype=np.float64, order="C") for g in geo)
+    geo = tuple(g if _writable_f8(g) else np.array(g, dtype=np.float64, order="C") for g in geo)
     threads = numba.get_num_threads() if threads is None else max(1, int(threads))
-    opts = options_vector(options)
+    opts = _default_options() if options is None else options_vector(options)
     M = len(starts)
     rows = np.arange(n)
     par, target = paths(rows, np.zeros((n, 6), np.complex128))
@@ -572,16 +581,16 @@ def _solve(paths, starts, patch, moving, n, joints, geo, alpha0, retries, option
         steps[bad] += s2
         retried[bad] += 1
     y, decision = _reality(target, x, beta, alpha, keep, iters, threads)
-    cnan = complex(np.nan, np.nan)
-    out = (
-        np.full((n, 40, 6), np.nan),
-        np.full((n, 40, 8), cnan),
-        np.full((n, 40, 3, 3), cnan),
-        np.full((n, 40, 3), cnan),
-        np.zeros((n, 40), np.bool_),
-        np.full((n, 40), np.nan),
-        np.zeros((n, 3), np.int64),
-        np.full(n, np.nan),
+    c16 = np.complex128
+    out = (  # every slot written by package_all
+        np.empty((n, 40, 6)),
+        np.empty((n, 40, 8), c16),
+        np.empty((n, 40, 3, 3), c16),
+        np.empty((n, 40, 3), c16),
+        np.empty((n, 40), np.bool_),
+        np.empty((n, 40)),
+        np.empty((n, 3), np.int64),
+        np.empty(n),
     )
     package_all(x, alpha, keep, y, decision, joints, geo, out)
     names = ("poses", "study", "rotation", "translation", "is_real", "alpha")
@@ -595,6 +604,17 @@ def _solve(paths, starts, patch, moving, n, joints, geo, alpha0, retries, option
         retries=retried,
     )
     return res
+
+
+def _writable_f8(a: np.ndarray) -> bool:
+    """A writable, C-contiguous float64 array (numba's type for :func:`package_all`'s ``geo``)."""
+    return a.dtype == np.float64 and a.flags.c_contiguous and a.flags.writeable
+
+
+@lru_cache(maxsize=1)
+def _default_options() -> np.ndarray:
+    """:func:`options_vector` of the defaults, made once (the compiled code only reads it)."""
+    return options_vector()
 
 
 @lru_cache(maxsize=1)

@@ -544,33 +544,29 @@ class Stewart66(SixLegs):
         Real solutions (real up to the patch scale) are turned into poses and kept where
         ``max |IK(pose) - L| <= 1e-8 size``."""
         q = as_batch(joints, 6, "joints")
-        self.check_joints(q)
+        self._check_positive(q)  # :meth:`check_joints` of a batch already checked by as_batch
         batch = q.shape[:-1]
         qf = q.reshape(-1, 6)
         compiled = _compiled_kernel()
         if compiled is not None and self._new_geometry_path(len(qf)):
-            info = self._fk_all_new(compiled, qf, retries)
+            fields = self._fk_all_new(compiled, qf, retries)
         elif compiled is not None:  # the geometry's own start system, then every input's fibre
             kernel, prepared = self._kernel
-            res = kernel.fk_all(prepared, self._target_c(qf), qf, retries=retries, alpha0=hc.ALPHA0)
-            n_found = res.pop("n_found")
-            info = FKAll(
-                **res,
-                n_found=n_found,
-                n_expected=self.expected_count,
-                complete=n_found == self.expected_count,
-            )
+            fields = kernel.fk_all(prepared, self._target_c(qf), qf, retries=retries, alpha0=hc.ALPHA0)  # fmt: skip
+            fields.update(n_expected=self.expected_count)
         else:
             info = self._fk_all_numpy(qf, retries)
-        if return_info:  # the fields reshaped (not dataclasses.asdict: it deep-copies every array)
+            # the fields (not dataclasses.asdict: it deep-copies every array)
             fields = {f.name: getattr(info, f.name) for f in dataclasses.fields(info)}
-            return FKAll(
-                **{
-                    k: (v.reshape(batch + v.shape[1:]) if isinstance(v, np.ndarray) else v)
-                    for k, v in fields.items()
-                }
-            )
-        return info.poses.reshape(batch + info.poses.shape[1:])
+        if not return_info:
+            return fields["poses"].reshape(batch + fields["poses"].shape[1:])
+        fields["complete"] = fields["n_found"] == fields["n_expected"]
+        if len(batch) != 1:  # the arrays in the batch's shape
+            fields = {
+                k: (v.reshape(batch + v.shape[1:]) if isinstance(v, np.ndarray) else v)
+                for k, v in fields.items()
+            }
+        return FKAll(**fields)
 
     def _new_geometry_path(self, n: int) -> bool:
         """Whether :meth:`fk_all` takes the new-geometry path for ``n`` inputs: a general layout
@@ -594,10 +590,11 @@ class Stewart66(SixLegs):
         tol = 1e-9 * max(np.ptp(b, axis=0).max(), np.ptp(p, axis=0).max())
         return self.allow_coincident and bool(_coincident(b, tol) or _coincident(p, tol))
 
-    def _fk_all_new(self, kernel, qf: Array, retries: int) -> FKAll:
+    def _fk_all_new(self, kernel, qf: Array, retries: int) -> dict[str, Any]:
         """:meth:`fk_all` on the new-geometry path: one homotopy per input from the stored
         generic start (:func:`parakin.kernels.stewart66_track.fk_all_new`); an input still
-        incomplete after its retries is solved again from this geometry's own start system."""
+        incomplete after its retries is solved again from this geometry's own start system.
+        Returns :class:`FKAll`'s fields but ``complete``."""
         bs, ps, bc, pc, s = self._scaled
         n = len(qf)
         geo = (
@@ -623,8 +620,8 @@ class Stewart66(SixLegs):
             again = k.fk_all(prepared, self._target_c(qf[bad]), qf[bad], retries=retries, alpha0=hc.ALPHA0)  # fmt: skip
             for key, value in again.items():
                 res[key][bad] = value
-        n_found = res.pop("n_found")
-        return FKAll(**res, n_found=n_found, n_expected=40, complete=n_found == 40)
+        res["n_expected"] = 40
+        return res
 
     def _fk_all_numpy(self, qf: Array, retries: int) -> FKAll:
         """:meth:`fk_all` on flat inputs with the numpy tracker (kernels off or unavailable)."""
