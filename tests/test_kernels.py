@@ -513,6 +513,30 @@ def test_kernel_goals_report_success_beside_speed():
     assert f"| {single:.1%} |" in table
 
 
+def test_the_machine_line_names_what_tells_two_machines_apart():
+    """Timings name their machine (``parakin bench --peers``): the model name alone ("AMD EPYC")
+    is the same for processors twice apart in speed, so the line carries the compiler's target,
+    the SIMD width and the CPUs, each read here from the source the function must have used."""
+    import os
+    from pathlib import Path
+
+    import llvmlite.binding as llvm
+
+    from parakin.timing import machine
+
+    line = machine()
+    assert f"{len(os.sched_getaffinity(0))} CPUs" in line
+    assert llvm.get_host_cpu_name() in line
+    if Path("/proc/cpuinfo").exists():
+        flags = next(
+            ln for ln in Path("/proc/cpuinfo").read_text().splitlines() if ln.startswith("flags")
+        )
+        widest = "AVX-512" if " avx512f" in flags else "AVX2" if " avx2" in flags else None
+        if widest:
+            assert f", {widest})" in line
+            assert ("AVX-512" in line) == (" avx512f" in flags)
+
+
 def test_one_input_latency_runs_on_one_thread():
     """The 6-6's ``<= 1 ms`` goal is one input per call on one thread (issue 29): the timed calls
     see numba's pool at one thread, and the caller's setting comes back after."""

@@ -54,7 +54,7 @@ from parakin.mechanisms.stewart66 import (
     random_platform,
     random_pose,
 )
-from parakin.timing import one_thread
+from parakin.timing import machine, one_thread
 
 __all__ = [
     "bertini_available",
@@ -339,16 +339,6 @@ def _ratio_row(case, inputs_from, solver, times, agree, note) -> dict:
     }
 
 
-def _machine() -> str:
-    """The processor's model name and the number of CPUs this process may use."""
-    model = ""
-    with contextlib.suppress(OSError):
-        with open("/proc/cpuinfo") as fh:
-            model = next((ln.split(":", 1)[1].strip() for ln in fh if ln.startswith("model name")), "")  # fmt: skip
-    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    return f"{model or 'unknown CPU'}, {cpus} CPUs"
-
-
 # ------------------------------------------------------------------------------ the benchmark
 def _our_inputs(n: int, seed: int) -> tuple[list, list]:
     """Our inputs: on Dietmaier's platform, his leg lengths and ``n - 1`` random poses (the same
@@ -432,7 +422,7 @@ def bench_peers(
     rows += _batch_rows(dietmaier, same_in, new_in, peer_in)
     df = pd.DataFrame(rows)
     df.attrs.update(
-        machine=_machine(),
+        machine=machine(),
         load_before=tuple(round(v, 2) for v in load0),
         load_after=tuple(round(v, 2) for v in os.getloadavg()) if hasattr(os, "getloadavg") else (),
         blas_set_to_one_thread=blas,
