@@ -125,6 +125,17 @@ def test_no_process_outlives_the_run(quick_run):
 
 
 @pytest.mark.slow  # the quick pipeline (about 2-4 min of two cores)
+def test_timing_tables_name_their_machine(quick_run):
+    """A speed table says which machine it was measured on, by what tells two machines of one
+    model name apart (:func:`parakin.timing.machine`): the jobs ran on this one."""
+    from parakin.timing import machine
+
+    figures, _ = quick_run
+    for name in ("benchmarks.md", "extra_kernel_goals.md"):
+        assert machine() in (figures / name).read_text(), name
+
+
+@pytest.mark.slow  # the quick pipeline (about 2-4 min of two cores)
 def test_pipeline_writes_table1_and_report(quick_run):
     figures, _ = quick_run
     for name in (
